@@ -1,0 +1,182 @@
+// The scene: one YAML file that describes a simulation completely, resolved into plain structs.
+//
+// A scene is loaded and validated once (load_scene_file / load_scene_text), with every default filled
+// in, and is constant afterwards. Builders read it and build, or do not build, each component; the
+// effects below are the single place where a scene says what is simulated. Defaults are the member
+// initialisers of these structs and nowhere else. SI units throughout; radians inside.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace rail::core {
+
+// How the track is represented (effects.track_model).
+enum class TrackModel {
+  kRigid,     // "rigid": vehicle alone on the rigid track geometry (the standard approach)
+  kRigidFe,   // "rigid_fe": co-simulation with the FE nodal displacements neglected (no FE integration)
+  kFlexible,  // "flexible": co-simulation with the flexible finite-element track
+};
+enum class CreepLaw { kPolach };
+enum class Transport { kService, kTopic, kShm };
+enum class SegmentType { kStraight, kTransition, kCircular };
+enum class Direction { kNone, kLeft, kRight };
+enum class IrregularitySource { kNone, kFile, kPsd };
+enum class VehicleMethod { kAuto, kBdf, kAdams };
+enum class EndKind { kTime, kArcLength };
+enum class LoadRail { kBoth, kLeft, kRight };
+
+// A data file named by the scene: the path as the user wrote it and the path it resolves to (relative
+// paths are taken from the scene file's directory).
+struct DataFile {
+  std::string as_written;
+  std::string path;
+  bool empty() const { return as_written.empty(); }
+};
+
+// One piece of the track's centre line.
+struct Segment {
+  SegmentType type = SegmentType::kStraight;
+  double length = 0.0;             // [m]
+  Direction direction = Direction::kNone;  // curving to the left or right; none on a straight
+  double radius = 0.0;             // circular: [m]
+  double radius_start = 0.0;       // transition: radius at its start [m], 0 = straight (infinite)
+  double radius_end = 0.0;         // transition: radius at its end [m], 0 = straight (infinite)
+  double cant = 0.0;               // straight, circular: superelevation of the outer rail [m]
+  double cant_start = 0.0;         // transition: cant at its start [m]
+  double cant_end = 0.0;           // transition: cant at its end [m]
+  double gradient = 0.0;           // rise over run [-]
+  bool jump_allowed = false;       // the scene accepts a curvature or cant jump at this segment's start
+
+  // Signed values used by the geometry: curvature > 0 curves left; cant > 0 raises the right rail.
+  double curvature_at_start() const;
+  double curvature_at_end() const;
+  double signed_cant_at_start() const;
+  double signed_cant_at_end() const;
+};
+
+struct Irregularities {
+  IrregularitySource source = IrregularitySource::kNone;
+  DataFile file;                   // source: file; CSV of s, alignment, level, cross level, gauge [m]
+  std::string psd;                 // source: psd; a published spectrum, e.g. "fra_class_4"
+  std::uint64_t seed = 1;          // source: psd; realisation seed
+  double wavelength_min = 1.0;     // source: psd; shortest wavelength generated [m]
+  double wavelength_max = 120.0;   // source: psd; longest wavelength generated [m]
+};
+
+struct Track {
+  double gauge = 1.435;                  // between the rails' gauge faces [m]
+  double gauge_measuring_depth = 0.014;  // below the running surface, EN 13848-1 [m]
+  double cant_reference_width = 0.0;     // base of the cant [m]; 0 in the file = gauge + 0.065
+  std::string rail_profile = "uic60";    // a built-in profile name or a profile file (see profiles.md)
+  DataFile rail_profile_file;            // set when rail_profile names a file
+  double rail_inclination = 0.05;        // tan of the rails' tilt toward the track centre (1/20)
+  double sleeper_spacing = 0.6;          // [m]
+  int rail_elements_between_sleepers = 6;
+  double start_arc_length = 0.0;         // s at the start of the first segment [m]
+  DataFile data;                         // track materials (Tables 1 and 2 of the paper)
+  std::vector<Segment> segments;
+  Irregularities irregularities;
+
+  double length() const;                 // sum of the segment lengths [m]
+  double end_arc_length() const { return start_arc_length + length(); }
+};
+
+struct Vehicle {
+  DataFile data;                         // bodies, joints and suspension
+  double start_arc_length = 0.0;         // s of the leading wheelset at t = 0 [m]
+  double speed = 0.0;                    // forward speed [m/s]
+  std::string wheel_profile = "s1002";   // a built-in profile name or a profile file
+  DataFile wheel_profile_file;           // set when wheel_profile names a file
+  double nominal_radius = 0.445;         // nominal rolling radius r0 [m]
+  double back_to_back = 1.360;           // distance between the wheels' inner (back) faces [m]
+  int wheelsets = 4;                     // must match the vehicle data file
+};
+
+// Standalone track scenario: prescribed loads travelling along the track (no vehicle).
+struct MovingLoad {
+  double offset = 0.0;                   // behind the first load [m]
+  LoadRail rail = LoadRail::kBoth;
+  double vertical = 0.0;                 // [N] per rail, downward positive
+  double lateral = 0.0;                  // [N] per rail, toward the field side positive
+};
+struct MovingLoads {
+  bool present = false;
+  double start_arc_length = 0.0;         // s of the first load at t = 0 [m]
+  double speed = 0.0;                    // [m/s], >= 0 (0 = static load)
+  std::vector<MovingLoad> loads;
+};
+
+// What is simulated. An effect that is off is not built and costs nothing.
+struct Effects {
+  TrackModel track_model = TrackModel::kFlexible;
+  bool irregularities = false;           // apply track.irregularities to the rails
+  bool flange_contact = true;            // flange-rail contact searched besides tread-rail
+  bool spin_creepage = true;             // spin in the creep forces
+  CreepLaw creep_law = CreepLaw::kPolach;
+  bool track_damping = true;             // Rayleigh damping of the beams and the dampers of pads/ballast
+  bool absorbing_ends = true;            // dashpots at both track ends
+  bool rail_deflection_output = true;    // publish rail deflections at output.deflection_sections
+  bool contact_point_output = true;      // publish contact points
+  bool rviz_markers = false;             // publish visualization markers
+};
+
+struct End {
+  EndKind kind = EndKind::kArcLength;
+  double value = 0.0;                    // [s] or [m]; arc length 0 in the file = track end
+};
+
+struct Solver {
+  double track_step = 2.0e-5;            // Newmark fixed step [s] (the paper's converged value)
+  double vehicle_rtol = 1.0e-6;          // CVODE relative tolerance
+  double vehicle_atol = 1.0e-8;          // CVODE absolute tolerance
+  double vehicle_max_step = 2.0e-5;      // CVODE maximum step [s]; <= track_step in co-simulation
+  VehicleMethod vehicle_method = VehicleMethod::kAuto;
+  Transport transport = Transport::kShm;
+  double exchange_timeout = 10.0;        // longest wait for the peer during a run [s]
+  double handshake_timeout = 30.0;       // longest wait for the peer to appear [s]
+  End end;
+};
+
+struct Output {
+  std::string bag;                       // bag file; empty = no bag; relative = under the run's output dir
+  double rate = 1000.0;                  // publishing rate of the outputs [Hz]
+  std::vector<std::string> topics;       // which topics go to the bag (see kKnownTopics)
+  std::vector<double> deflection_sections;  // arc lengths where rail deflections are published [m]
+};
+
+// The resolved scene.
+struct Scene {
+  std::string file;                      // the scene file as given (names it in messages)
+  std::string name;                      // scene.name, or the file's stem
+  std::string description;
+  Track track;
+  bool has_vehicle = false;
+  Vehicle vehicle;
+  MovingLoads moving_loads;
+  Effects effects;
+  Solver solver;
+  Output output;
+  std::uint64_t hash = 0;                // of the resolved scene and the contents of its data files
+
+  int wheel_count() const { return has_vehicle ? 2 * vehicle.wheelsets : 0; }
+  bool cosimulation() const { return has_vehicle && effects.track_model != TrackModel::kRigid; }
+  bool needs_track_node() const { return effects.track_model != TrackModel::kRigid; }
+  bool runs_fe_integration() const { return effects.track_model == TrackModel::kFlexible; }
+};
+
+// Topics a scene may record (output.topics).
+extern const std::vector<std::string> kKnownTopics;
+
+const char* to_string(TrackModel v);
+const char* to_string(Transport v);
+const char* to_string(CreepLaw v);
+const char* to_string(SegmentType v);
+const char* to_string(Direction v);
+const char* to_string(IrregularitySource v);
+const char* to_string(VehicleMethod v);
+const char* to_string(EndKind v);
+const char* to_string(LoadRail v);
+
+}  // namespace rail::core

@@ -1,0 +1,43 @@
+// Loading, validating, printing and summarising scenes. ROS-free.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+#include "rail_core/scene.hpp"
+
+namespace rail::core {
+
+// A scene (or one of its data files) that cannot be used. The message names the file and the field:
+//   "scene.yaml: track.segments[2].radius: must be > 0, got -500 (line 23)".
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Reads, validates and resolves a scene file. Throws SceneError.
+Scene load_scene_file(const std::string& path);
+
+// The same from the file's text (e.g. handed over the ROS parameter server): `file` names the scene in
+// messages and `base_dir` is where relative data-file paths start.
+Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir);
+
+// The same, for a scene handed over as text with the path it was read from (relative data files are taken
+// from that path's directory).
+Scene load_scene_handed_over(const std::string& text, const std::string& file);
+
+// The fully resolved scene as YAML (every default filled in). Loading this text again gives the same
+// scene (same hash).
+std::string to_yaml(const Scene& scene);
+
+// Which process a summary is for.
+enum class Role { kVehicle, kTrack, kValidator };
+
+// What a run of this scene simulates, from one node's side: the effects that are on and the components
+// it builds. Human-readable, several lines.
+std::string describe(const Scene& scene, Role role);
+
+// 64-bit FNV-1a, for the scene hash.
+std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t seed = 14695981039346656037ULL);
+
+}  // namespace rail::core

@@ -1,0 +1,377 @@
+// Scene helpers: signed curvature and cant, names of the choices, the resolved YAML form and the
+// human-readable summary of what a run simulates.
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "rail_core/scene.hpp"
+#include "rail_core/scene_loader.hpp"
+#include "yaml_reader.hpp"
+
+namespace rail::core {
+
+using detail::format_double;
+
+namespace {
+double side_sign(Direction d) { return d == Direction::kRight ? -1.0 : 1.0; }
+double curvature_of(double radius, Direction d) { return radius > 0.0 ? side_sign(d) / radius : 0.0; }
+}  // namespace
+
+double Segment::curvature_at_start() const {
+  switch (type) {
+    case SegmentType::kStraight: return 0.0;
+    case SegmentType::kCircular: return curvature_of(radius, direction);
+    case SegmentType::kTransition: return curvature_of(radius_start, direction);
+  }
+  return 0.0;
+}
+double Segment::curvature_at_end() const {
+  return type == SegmentType::kTransition ? curvature_of(radius_end, direction) : curvature_at_start();
+}
+// The outer rail of a left curve is the right rail: positive cant raises the right rail.
+double Segment::signed_cant_at_start() const {
+  return side_sign(direction) * (type == SegmentType::kTransition ? cant_start : cant);
+}
+double Segment::signed_cant_at_end() const {
+  return side_sign(direction) * (type == SegmentType::kTransition ? cant_end : cant);
+}
+
+double Track::length() const {
+  double l = 0.0;
+  for (const auto& s : segments) l += s.length;
+  return l;
+}
+
+const char* to_string(TrackModel v) {
+  switch (v) {
+    case TrackModel::kRigid: return "rigid";
+    case TrackModel::kRigidFe: return "rigid_fe";
+    case TrackModel::kFlexible: return "flexible";
+  }
+  return "?";
+}
+const char* to_string(Transport v) {
+  switch (v) {
+    case Transport::kService: return "service";
+    case Transport::kTopic: return "topic";
+    case Transport::kShm: return "shm";
+  }
+  return "?";
+}
+const char* to_string(CreepLaw) { return "polach"; }
+const char* to_string(SegmentType v) {
+  switch (v) {
+    case SegmentType::kStraight: return "straight";
+    case SegmentType::kTransition: return "transition";
+    case SegmentType::kCircular: return "circular";
+  }
+  return "?";
+}
+const char* to_string(Direction v) {
+  switch (v) {
+    case Direction::kNone: return "none";
+    case Direction::kLeft: return "left";
+    case Direction::kRight: return "right";
+  }
+  return "?";
+}
+const char* to_string(IrregularitySource v) {
+  switch (v) {
+    case IrregularitySource::kNone: return "none";
+    case IrregularitySource::kFile: return "file";
+    case IrregularitySource::kPsd: return "psd";
+  }
+  return "?";
+}
+const char* to_string(VehicleMethod v) {
+  switch (v) {
+    case VehicleMethod::kAuto: return "auto";
+    case VehicleMethod::kBdf: return "bdf";
+    case VehicleMethod::kAdams: return "adams";
+  }
+  return "?";
+}
+const char* to_string(EndKind v) { return v == EndKind::kTime ? "time" : "arc_length"; }
+const char* to_string(LoadRail v) {
+  switch (v) {
+    case LoadRail::kBoth: return "both";
+    case LoadRail::kLeft: return "left";
+    case LoadRail::kRight: return "right";
+  }
+  return "?";
+}
+
+namespace {
+
+// Emits numbers in their shortest exact form so the resolved scene reads back bit for bit.
+YAML::Emitter& num(YAML::Emitter& e, const char* key, double v) {
+  return e << YAML::Key << key << YAML::Value << format_double(v);
+}
+template <typename T>
+YAML::Emitter& kv(YAML::Emitter& e, const char* key, const T& v) {
+  return e << YAML::Key << key << YAML::Value << v;
+}
+
+void emit_segment(YAML::Emitter& e, const Segment& s) {
+  e << YAML::BeginMap;
+  kv(e, "type", to_string(s.type));
+  num(e, "length", s.length);
+  if (s.direction != Direction::kNone) kv(e, "direction", to_string(s.direction));
+  switch (s.type) {
+    case SegmentType::kStraight: num(e, "cant", s.cant); break;
+    case SegmentType::kCircular:
+      num(e, "radius", s.radius);
+      num(e, "cant", s.cant);
+      break;
+    case SegmentType::kTransition:
+      num(e, "radius_start", s.radius_start);
+      num(e, "radius_end", s.radius_end);
+      num(e, "cant_start", s.cant_start);
+      num(e, "cant_end", s.cant_end);
+      break;
+  }
+  num(e, "gradient", s.gradient);
+  kv(e, "jump_allowed", s.jump_allowed);
+  e << YAML::EndMap;
+}
+
+}  // namespace
+
+std::string to_yaml(const Scene& s) {
+  YAML::Emitter e;
+  e << YAML::BeginMap;
+  kv(e, "name", s.name);
+  if (!s.description.empty()) kv(e, "description", s.description);
+
+  const Track& t = s.track;
+  e << YAML::Key << "track" << YAML::Value << YAML::BeginMap;
+  num(e, "gauge", t.gauge);
+  num(e, "gauge_measuring_depth", t.gauge_measuring_depth);
+  num(e, "cant_reference_width", t.cant_reference_width);
+  kv(e, "rail_profile", t.rail_profile);
+  num(e, "rail_inclination", t.rail_inclination);
+  num(e, "sleeper_spacing", t.sleeper_spacing);
+  kv(e, "rail_elements_between_sleepers", t.rail_elements_between_sleepers);
+  num(e, "start_arc_length", t.start_arc_length);
+  if (!t.data.empty()) kv(e, "data", t.data.as_written);
+  e << YAML::Key << "segments" << YAML::Value << YAML::BeginSeq;
+  for (const auto& seg : t.segments) emit_segment(e, seg);
+  e << YAML::EndSeq;
+  const Irregularities& irr = t.irregularities;
+  e << YAML::Key << "irregularities" << YAML::Value << YAML::BeginMap;
+  kv(e, "source", to_string(irr.source));
+  if (irr.source == IrregularitySource::kFile) kv(e, "file", irr.file.as_written);
+  if (irr.source == IrregularitySource::kPsd) {
+    kv(e, "psd", irr.psd);
+    kv(e, "seed", irr.seed);
+    num(e, "wavelength_min", irr.wavelength_min);
+    num(e, "wavelength_max", irr.wavelength_max);
+  }
+  e << YAML::EndMap << YAML::EndMap;
+
+  if (s.has_vehicle) {
+    const Vehicle& v = s.vehicle;
+    e << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
+    kv(e, "data", v.data.as_written);
+    num(e, "start_arc_length", v.start_arc_length);
+    num(e, "speed", v.speed);
+    kv(e, "wheel_profile", v.wheel_profile);
+    num(e, "nominal_radius", v.nominal_radius);
+    num(e, "back_to_back", v.back_to_back);
+    kv(e, "wheelsets", v.wheelsets);
+    e << YAML::EndMap;
+  } else {
+    const MovingLoads& m = s.moving_loads;
+    e << YAML::Key << "moving_loads" << YAML::Value << YAML::BeginMap;
+    num(e, "start_arc_length", m.start_arc_length);
+    num(e, "speed", m.speed);
+    e << YAML::Key << "loads" << YAML::Value << YAML::BeginSeq;
+    for (const auto& l : m.loads) {
+      e << YAML::BeginMap;
+      num(e, "offset", l.offset);
+      kv(e, "rail", to_string(l.rail));
+      num(e, "vertical", l.vertical);
+      num(e, "lateral", l.lateral);
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq << YAML::EndMap;
+  }
+
+  const Effects& f = s.effects;
+  e << YAML::Key << "effects" << YAML::Value << YAML::BeginMap;
+  kv(e, "track_model", to_string(f.track_model));
+  kv(e, "irregularities", f.irregularities);
+  kv(e, "flange_contact", f.flange_contact);
+  kv(e, "spin_creepage", f.spin_creepage);
+  kv(e, "creep_law", to_string(f.creep_law));
+  kv(e, "track_damping", f.track_damping);
+  kv(e, "absorbing_ends", f.absorbing_ends);
+  kv(e, "rail_deflection_output", f.rail_deflection_output);
+  kv(e, "contact_point_output", f.contact_point_output);
+  kv(e, "rviz_markers", f.rviz_markers);
+  e << YAML::EndMap;
+
+  const Solver& v = s.solver;
+  e << YAML::Key << "solver" << YAML::Value << YAML::BeginMap;
+  num(e, "track_step", v.track_step);
+  num(e, "vehicle_rtol", v.vehicle_rtol);
+  num(e, "vehicle_atol", v.vehicle_atol);
+  num(e, "vehicle_max_step", v.vehicle_max_step);
+  kv(e, "vehicle_method", to_string(v.vehicle_method));
+  kv(e, "transport", to_string(v.transport));
+  num(e, "exchange_timeout", v.exchange_timeout);
+  num(e, "handshake_timeout", v.handshake_timeout);
+  e << YAML::Key << "end" << YAML::Value << YAML::BeginMap;
+  num(e, to_string(v.end.kind), v.end.value);
+  e << YAML::EndMap << YAML::EndMap;
+
+  const Output& o = s.output;
+  e << YAML::Key << "output" << YAML::Value << YAML::BeginMap;
+  kv(e, "bag", o.bag);
+  num(e, "rate", o.rate);
+  e << YAML::Key << "topics" << YAML::Value << YAML::Flow << o.topics;
+  e << YAML::Key << "deflection_sections" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (double d : o.deflection_sections) e << format_double(d);
+  e << YAML::EndSeq;
+  e << YAML::EndMap;
+
+  e << YAML::EndMap;
+  return std::string(e.c_str()) + "\n";
+}
+
+namespace {
+
+std::string fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", digits, v);
+  return buf;
+}
+
+std::string segment_line(const Segment& s) {
+  std::string out = std::string(to_string(s.type)) + " " + fixed(s.length, 1) + " m";
+  switch (s.type) {
+    case SegmentType::kStraight:
+      if (s.cant > 0) out += ", cant " + fixed(s.cant * 1e3, 0) + " mm";
+      break;
+    case SegmentType::kCircular:
+      out += ", R " + fixed(s.radius, 0) + " m " + to_string(s.direction) + ", cant " + fixed(s.cant * 1e3, 0) + " mm";
+      break;
+    case SegmentType::kTransition: {
+      auto r = [](double x) { return x > 0 ? "R " + fixed(x, 0) + " m" : std::string("straight"); };
+      out += ", " + r(s.radius_start) + " -> " + r(s.radius_end);
+      if (s.direction != Direction::kNone) out += std::string(" ") + to_string(s.direction);
+      out += ", cant " + fixed(s.cant_start * 1e3, 0) + " -> " + fixed(s.cant_end * 1e3, 0) + " mm";
+      break;
+    }
+  }
+  if (s.gradient != 0.0) out += ", gradient " + fixed(s.gradient * 1e3, 1) + " per mille";
+  return out;
+}
+
+}  // namespace
+
+std::string describe(const Scene& s, Role role) {
+  std::ostringstream o;
+  const Track& t = s.track;
+  const Effects& f = s.effects;
+  char hash[32];
+  std::snprintf(hash, sizeof(hash), "%016llx", static_cast<unsigned long long>(s.hash));
+  o << "scene '" << s.name << "' (" << s.file << "), hash " << hash << "\n";
+  o << "track: " << fixed(t.length(), 1) << " m from s = " << fixed(t.start_arc_length, 1) << " m, gauge "
+    << fixed(t.gauge * 1e3, 0) << " mm, rail " << t.rail_profile << " at 1/" << fixed(1.0 / t.rail_inclination, 0)
+    << ", sleepers every " << fixed(t.sleeper_spacing, 2) << " m\n";
+  for (std::size_t i = 0; i < t.segments.size(); ++i) {
+    o << "  segment " << i << ": " << segment_line(t.segments[i]) << "\n";
+  }
+  if (s.has_vehicle) {
+    const Vehicle& v = s.vehicle;
+    o << "vehicle: " << v.data.as_written << ", " << v.wheelsets << " wheelsets, " << fixed(v.speed * 3.6, 1)
+      << " km/h from s = " << fixed(v.start_arc_length, 1) << " m, wheel " << v.wheel_profile << " r0 = "
+      << fixed(v.nominal_radius, 3) << " m\n";
+  } else {
+    o << "moving loads: " << s.moving_loads.loads.size() << " load(s) at " << fixed(s.moving_loads.speed, 2)
+      << " m/s from s = " << fixed(s.moving_loads.start_arc_length, 1) << " m\n";
+  }
+  std::vector<std::string> on{std::string("track_model=") + to_string(f.track_model)}, off;
+  auto flag = [&](const char* name, bool v) { (v ? on : off).push_back(name); };
+  flag("irregularities", f.irregularities);
+  // Contact exists only with a vehicle (moving loads are prescribed forces).
+  flag("flange_contact", f.flange_contact && s.has_vehicle);
+  flag("spin_creepage", f.spin_creepage && s.has_vehicle);
+  if (s.has_vehicle) on.push_back(std::string("creep_law=") + to_string(f.creep_law));
+  // The track's own effects exist only where the FE track is integrated.
+  flag("track_damping", f.track_damping && s.runs_fe_integration());
+  flag("absorbing_ends", f.absorbing_ends && s.runs_fe_integration());
+  flag("rail_deflection_output", f.rail_deflection_output && s.runs_fe_integration());
+  flag("contact_point_output", f.contact_point_output && s.has_vehicle);
+  flag("rviz_markers", f.rviz_markers);
+  o << "effects on: " << detail::join(on) << "\n";
+  o << "effects off: " << (off.empty() ? "none" : detail::join(off)) << "\n";
+  const Solver& v = s.solver;
+  o << "solver: " << (v.end.kind == EndKind::kTime ? "until t = " + fixed(v.end.value, 3) + " s"
+                                                   : "until s = " + fixed(v.end.value, 1) + " m");
+  if (s.needs_track_node()) o << ", track step " << format_double(v.track_step) << " s";
+  if (s.has_vehicle) {
+    o << ", vehicle rtol " << format_double(v.vehicle_rtol) << " atol " << format_double(v.vehicle_atol)
+      << " max step " << format_double(v.vehicle_max_step) << " s (" << to_string(v.vehicle_method) << ")";
+  }
+  if (s.cosimulation()) o << ", transport " << to_string(v.transport) << ", timeout " << fixed(v.exchange_timeout, 1) << " s";
+  o << "\n";
+
+  // Components this process builds (the FE sizes follow the mesh rules of the track model).
+  const long sleepers = static_cast<long>(std::floor(t.length() / t.sleeper_spacing + 1e-9)) + 1;
+  const long rail_nodes = (sleepers - 1) * t.rail_elements_between_sleepers + 1;
+  const long free_nodes = 2 * rail_nodes + 6 * sleepers;
+  std::string builds;
+  auto add = [&](const std::string& x) { builds += "  - " + x + "\n"; };
+  const bool vehicle_side = role == Role::kVehicle || role == Role::kValidator;
+  const bool track_side = role == Role::kTrack || role == Role::kValidator;
+  if (vehicle_side && s.has_vehicle) {
+    add("vehicle: multibody model from " + s.vehicle.data.as_written + ", " + std::to_string(s.wheel_count()) +
+        " wheels, integrated by CVODE");
+    if (f.track_model == TrackModel::kRigid) {
+      add(std::string("wheel-rail contact on the rigid track geometry: tread") +
+          (f.flange_contact ? " and flange" : " only") + ", Hertz normal force, Polach creep forces" +
+          (f.spin_creepage ? " with spin" : " without spin"));
+    } else {
+      add(std::string("wheel-centre wrenches from the track node over ") + to_string(v.transport) +
+          ", extrapolated between track steps");
+    }
+  }
+  if (track_side && s.needs_track_node()) {
+    if (s.runs_fe_integration()) {
+      add("FE track: " + std::to_string(sleepers) + " sleepers, " + std::to_string(2 * rail_nodes) +
+          " rail nodes, about " + std::to_string(6 * free_nodes) + " DOF, Newmark step " +
+          format_double(v.track_step) + " s, CHOLMOD factor");
+      add(std::string("track damping ") + (f.track_damping ? "on" : "off") + ", absorbing ends " +
+          (f.absorbing_ends ? "on" : "off"));
+    } else {
+      add("rigid FE rails: contact on the undeformed rails, no FE integration");
+    }
+    if (s.has_vehicle) {
+      add(std::string("wheel-rail contact on the ") + (s.runs_fe_integration() ? "deformed" : "undeformed") +
+          " rails: tread" + (f.flange_contact ? " and flange" : " only") + ", Polach" +
+          (f.spin_creepage ? " with spin" : " without spin"));
+    } else {
+      add(std::to_string(s.moving_loads.loads.size()) + " prescribed moving load(s)");
+    }
+    if (f.rail_deflection_output && s.runs_fe_integration()) {
+      add("rail deflection output at " + std::to_string(s.output.deflection_sections.size()) + " section(s)");
+    }
+  }
+  if (role == Role::kTrack && !s.needs_track_node()) add("nothing: track_model is rigid, the vehicle runs alone");
+  if (role == Role::kVehicle && !s.has_vehicle) add("nothing: the scene has no vehicle");
+  if (!builds.empty()) o << "builds:\n" << builds;
+  o << "output: " << (s.output.bag.empty() ? "no bag" : "bag " + s.output.bag) << ", "
+    << fixed(s.output.rate, 0) << " Hz";
+  if (!s.output.topics.empty()) {
+    o << ", topics";
+    for (const auto& tp : s.output.topics) o << " " << tp;
+  }
+  o << "\n";
+  return o.str();
+}
+
+}  // namespace rail::core

@@ -1,0 +1,541 @@
+// Scene loading and validation: YAML text -> resolved Scene, one clear error per bad input.
+#include "rail_core/scene_loader.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "yaml_reader.hpp"
+
+namespace rail::core {
+
+using detail::fail_at;
+using detail::format_double;
+using detail::join;
+using detail::MapReader;
+
+const std::vector<std::string> kKnownTopics = {
+    "wheel_states", "contact_wrenches", "contact_points", "rail_deflection", "wheelset_kinematics",
+    "markers",      "tf",               "clock"};
+
+// Built-in profiles (everything else names a profile file).
+static const std::vector<std::string> kBuiltinRailProfiles = {"uic60"};
+static const std::vector<std::string> kBuiltinWheelProfiles = {"s1002"};
+// Published track-irregularity spectra a realisation can be drawn from (see rail_contact's geometry
+// notes for their sources).
+static const std::vector<std::string> kKnownPsds = {"fra_class_1", "fra_class_2", "fra_class_3",
+                                                    "fra_class_4", "fra_class_5", "fra_class_6"};
+
+namespace {
+
+bool contains(const std::vector<std::string>& v, const std::string& s) {
+  for (const auto& x : v)
+    if (x == s) return true;
+  return false;
+}
+
+std::string got(double v) { return ", got " + format_double(v); }
+
+// Value checks: each names the rule and the offending value.
+void positive(MapReader& r, const char* key, double v) {
+  if (!(v > 0.0)) r.fail(key, "must be > 0" + got(v));
+}
+void non_negative(MapReader& r, const char* key, double v) {
+  if (!(v >= 0.0)) r.fail(key, "must be >= 0" + got(v));
+}
+void in_range(MapReader& r, const char* key, double v, double lo, double hi, const char* unit) {
+  if (!(v >= lo && v <= hi)) {
+    r.fail(key, "must be between " + format_double(lo) + " and " + format_double(hi) + " " + unit + got(v));
+  }
+}
+
+std::string dir_of(const std::string& path) {
+  const auto pos = path.find_last_of('/');
+  if (pos == std::string::npos) return ".";
+  return pos == 0 ? "/" : path.substr(0, pos);
+}
+
+std::string stem_of(const std::string& path) {
+  std::string base = path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
+  const auto dot = base.find_last_of('.');
+  return dot == std::string::npos ? base : base.substr(0, dot);
+}
+
+struct Context {
+  std::string file;
+  std::string base_dir;
+};
+
+// A data file named by the scene must exist and be readable.
+DataFile resolve_file(MapReader& r, const char* key, const std::string& as_written, const Context& ctx) {
+  DataFile f;
+  f.as_written = as_written;
+  f.path = (!as_written.empty() && as_written[0] == '/') ? as_written : ctx.base_dir + "/" + as_written;
+  std::ifstream in(f.path, std::ios::binary);
+  if (!in) {
+    r.fail(key, "cannot read '" + as_written + "' (resolved to " + f.path + "): " + std::strerror(errno));
+  }
+  return f;
+}
+
+DataFile read_file_key(MapReader& r, const char* key, bool required, const Context& ctx) {
+  if (required) r.require(key);
+  std::string s;
+  r.string(key, s);
+  if (s.empty()) return {};
+  return resolve_file(r, key, s, ctx);
+}
+
+void read_direction(MapReader& r, Segment& seg, bool required) {
+  if (required) r.require("direction");
+  r.choice("direction", seg.direction, {{"left", Direction::kLeft}, {"right", Direction::kRight}});
+}
+
+Segment read_segment(const YAML::Node& node, const std::string& path, const Context& ctx) {
+  MapReader r(node, path, ctx.file);
+  Segment seg;
+  r.require("type");
+  r.choice("type", seg.type,
+           {{"straight", SegmentType::kStraight},
+            {"transition", SegmentType::kTransition},
+            {"circular", SegmentType::kCircular}});
+  r.require("length");
+  r.number("length", seg.length);
+  positive(r, "length", seg.length);
+  r.number("gradient", seg.gradient);
+  in_range(r, "gradient", seg.gradient, -0.1, 0.1, "(rise over run)");
+  r.boolean("jump_allowed", seg.jump_allowed);
+  switch (seg.type) {
+    case SegmentType::kStraight:
+      r.number("cant", seg.cant);
+      in_range(r, "cant", seg.cant, 0.0, 0.25, "m");
+      read_direction(r, seg, seg.cant != 0.0);
+      break;
+    case SegmentType::kCircular:
+      read_direction(r, seg, true);
+      r.require("radius");
+      r.number("radius", seg.radius);
+      positive(r, "radius", seg.radius);
+      r.number("cant", seg.cant);
+      in_range(r, "cant", seg.cant, 0.0, 0.25, "m");
+      break;
+    case SegmentType::kTransition:
+      r.number("radius_start", seg.radius_start);
+      non_negative(r, "radius_start", seg.radius_start);
+      r.number("radius_end", seg.radius_end);
+      non_negative(r, "radius_end", seg.radius_end);
+      r.number("cant_start", seg.cant_start);
+      in_range(r, "cant_start", seg.cant_start, 0.0, 0.25, "m");
+      r.number("cant_end", seg.cant_end);
+      in_range(r, "cant_end", seg.cant_end, 0.0, 0.25, "m");
+      read_direction(r, seg,
+                     seg.radius_start > 0 || seg.radius_end > 0 || seg.cant_start > 0 || seg.cant_end > 0);
+      if (seg.radius_start == 0.0 && seg.radius_end == 0.0 && seg.cant_start == seg.cant_end) {
+        r.fail_here("a transition must change the curvature or the cant (both ends straight and equal cant)");
+      }
+      break;
+  }
+  r.finish();
+  return seg;
+}
+
+void check_chain(const Track& t, const YAML::Node& seq, const std::string& file) {
+  for (std::size_t i = 1; i < t.segments.size(); ++i) {
+    const Segment& a = t.segments[i - 1];
+    const Segment& b = t.segments[i];
+    if (b.jump_allowed) continue;
+    const std::string path = "track.segments[" + std::to_string(i) + "]";
+    const std::string prev = "track.segments[" + std::to_string(i - 1) + "]";
+    const int line = seq[i].Mark().line >= 0 ? seq[i].Mark().line + 1 : 0;
+    const double k0 = a.curvature_at_end(), k1 = b.curvature_at_start();
+    if (std::abs(k0 - k1) > 1e-9) {
+      fail_at(file, path,
+              "curvature jumps at its start from " + format_double(k0) + " to " + format_double(k1) +
+                  " 1/m (" + prev + " ends there); make the chain continuous (a transition) or mark the "
+                  "jump with jump_allowed: true",
+              line);
+    }
+    const double c0 = a.signed_cant_at_end(), c1 = b.signed_cant_at_start();
+    if (std::abs(c0 - c1) > 1e-6) {
+      fail_at(file, path,
+              "cant jumps at its start from " + format_double(std::abs(c0)) + " to " +
+                  format_double(std::abs(c1)) + " m (" + prev +
+                  " ends there); make the chain continuous (a cant ramp) or mark the jump with "
+                  "jump_allowed: true",
+              line);
+    }
+  }
+}
+
+double parse_inclination(MapReader& r, const char* key, double fallback) {
+  if (!r.has(key)) {
+    r.child(key);  // mark as read
+    return fallback;
+  }
+  std::string text;
+  r.string(key, text);
+  const auto slash = text.find('/');
+  if (slash != std::string::npos) {
+    double num = 0, den = 0;
+    std::istringstream a(text.substr(0, slash)), b(text.substr(slash + 1));
+    if (!(a >> num) || !(b >> den) || !a.eof() || !b.eof() || den == 0.0) {
+      r.fail(key, "must be a ratio such as 1/20 or a number, got '" + text + "'");
+    }
+    return num / den;
+  }
+  double v = 0.0;
+  r.number(key, v);
+  return v;
+}
+
+void read_track(MapReader& root, Scene& s, const Context& ctx) {
+  MapReader r(root.require_child("track"), "track", ctx.file);
+  Track& t = s.track;
+  r.number("gauge", t.gauge);
+  in_range(r, "gauge", t.gauge, 0.6, 2.0, "m");
+  r.number("gauge_measuring_depth", t.gauge_measuring_depth);
+  in_range(r, "gauge_measuring_depth", t.gauge_measuring_depth, 0.0, 0.03, "m");
+  r.number("cant_reference_width", t.cant_reference_width);
+  if (t.cant_reference_width == 0.0) t.cant_reference_width = t.gauge + 0.065;
+  in_range(r, "cant_reference_width", t.cant_reference_width, t.gauge, t.gauge + 0.2, "m");
+  r.string("rail_profile", t.rail_profile);
+  if (!contains(kBuiltinRailProfiles, t.rail_profile)) {
+    t.rail_profile_file = resolve_file(r, "rail_profile", t.rail_profile, ctx);
+  }
+  t.rail_inclination = parse_inclination(r, "rail_inclination", t.rail_inclination);
+  in_range(r, "rail_inclination", t.rail_inclination, 0.0, 0.1, "(tan of the tilt, e.g. 1/20)");
+  r.number("sleeper_spacing", t.sleeper_spacing);
+  in_range(r, "sleeper_spacing", t.sleeper_spacing, 0.3, 1.5, "m");
+  r.integer("rail_elements_between_sleepers", t.rail_elements_between_sleepers);
+  if (t.rail_elements_between_sleepers < 1 || t.rail_elements_between_sleepers > 50) {
+    r.fail("rail_elements_between_sleepers",
+           "must be between 1 and 50, got " + std::to_string(t.rail_elements_between_sleepers));
+  }
+  r.number("start_arc_length", t.start_arc_length);
+  t.data = read_file_key(r, "data", s.needs_track_node() || s.moving_loads.present, ctx);
+
+  const YAML::Node seq = r.require_child("segments");
+  if (!seq.IsSequence() || seq.size() == 0) r.fail("segments", "must be a non-empty list of segments");
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    t.segments.push_back(read_segment(seq[i], "track.segments[" + std::to_string(i) + "]", ctx));
+  }
+  check_chain(t, seq, ctx.file);
+  if (t.length() < 2.0 * t.sleeper_spacing) {
+    r.fail("segments", "the track must be at least two sleeper spacings long, got " +
+                           format_double(t.length()) + " m");
+  }
+
+  Irregularities& irr = t.irregularities;
+  if (const YAML::Node n = r.child("irregularities")) {
+    MapReader ir(n, "track.irregularities", ctx.file);
+    ir.choice("source", irr.source,
+              {{"none", IrregularitySource::kNone},
+               {"file", IrregularitySource::kFile},
+               {"psd", IrregularitySource::kPsd}});
+    if (irr.source == IrregularitySource::kFile) {
+      irr.file = read_file_key(ir, "file", true, ctx);
+    } else if (irr.source == IrregularitySource::kPsd) {
+      ir.require("psd");
+      ir.string("psd", irr.psd);
+      if (!contains(kKnownPsds, irr.psd)) {
+        ir.fail("psd", "must be one of " + join(kKnownPsds) + ", got '" + irr.psd + "'");
+      }
+      ir.unsigned64("seed", irr.seed);
+      ir.number("wavelength_min", irr.wavelength_min);
+      positive(ir, "wavelength_min", irr.wavelength_min);
+      ir.number("wavelength_max", irr.wavelength_max);
+      if (!(irr.wavelength_max > irr.wavelength_min)) {
+        ir.fail("wavelength_max", "must be > wavelength_min (" + format_double(irr.wavelength_min) + ")" +
+                                      got(irr.wavelength_max));
+      }
+    }
+    ir.finish();
+  }
+  r.finish();
+}
+
+void read_vehicle(MapReader& root, Scene& s, const Context& ctx) {
+  MapReader r(root.child("vehicle"), "vehicle", ctx.file);
+  Vehicle& v = s.vehicle;
+  v.data = read_file_key(r, "data", true, ctx);
+  r.require("start_arc_length");
+  r.number("start_arc_length", v.start_arc_length);
+  if (v.start_arc_length < s.track.start_arc_length || v.start_arc_length >= s.track.end_arc_length()) {
+    r.fail("start_arc_length", "must lie on the track [" + format_double(s.track.start_arc_length) + ", " +
+                                   format_double(s.track.end_arc_length()) + ") m" + got(v.start_arc_length));
+  }
+  r.require("speed");
+  r.number("speed", v.speed);
+  in_range(r, "speed", v.speed, 0.0, 150.0, "m/s");
+  r.string("wheel_profile", v.wheel_profile);
+  if (!contains(kBuiltinWheelProfiles, v.wheel_profile)) {
+    v.wheel_profile_file = resolve_file(r, "wheel_profile", v.wheel_profile, ctx);
+  }
+  r.number("nominal_radius", v.nominal_radius);
+  in_range(r, "nominal_radius", v.nominal_radius, 0.2, 0.7, "m");
+  r.number("back_to_back", v.back_to_back);
+  if (!(v.back_to_back > s.track.gauge - 0.2 && v.back_to_back < s.track.gauge)) {
+    r.fail("back_to_back", "must be between track.gauge - 0.2 and track.gauge (" +
+                               format_double(s.track.gauge) + ") m" + got(v.back_to_back));
+  }
+  r.integer("wheelsets", v.wheelsets);
+  if (v.wheelsets < 1 || v.wheelsets > 16) {
+    r.fail("wheelsets", "must be between 1 and 16, got " + std::to_string(v.wheelsets));
+  }
+  r.finish();
+}
+
+void read_moving_loads(MapReader& root, Scene& s, const Context& ctx) {
+  MapReader r(root.child("moving_loads"), "moving_loads", ctx.file);
+  MovingLoads& m = s.moving_loads;
+  r.number("start_arc_length", m.start_arc_length);
+  if (m.start_arc_length < s.track.start_arc_length || m.start_arc_length > s.track.end_arc_length()) {
+    r.fail("start_arc_length", "must lie on the track" + got(m.start_arc_length));
+  }
+  r.number("speed", m.speed);
+  in_range(r, "speed", m.speed, 0.0, 150.0, "m/s");
+  const YAML::Node seq = r.require_child("loads");
+  if (!seq.IsSequence() || seq.size() == 0) r.fail("loads", "must be a non-empty list of loads");
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    MapReader lr(seq[i], "moving_loads.loads[" + std::to_string(i) + "]", ctx.file);
+    MovingLoad l;
+    lr.number("offset", l.offset);
+    non_negative(lr, "offset", l.offset);
+    lr.choice("rail", l.rail, {{"both", LoadRail::kBoth}, {"left", LoadRail::kLeft}, {"right", LoadRail::kRight}});
+    lr.number("vertical", l.vertical);
+    in_range(lr, "vertical", l.vertical, -1e6, 1e6, "N");
+    lr.number("lateral", l.lateral);
+    in_range(lr, "lateral", l.lateral, -1e6, 1e6, "N");
+    lr.finish();
+    m.loads.push_back(l);
+  }
+  r.finish();
+}
+
+void read_effects(MapReader& root, Scene& s) {
+  const YAML::Node n = root.child("effects");
+  if (!n) return;
+  MapReader r(n, "effects", root.file());
+  Effects& e = s.effects;
+  r.choice("track_model", e.track_model,
+           {{"rigid", TrackModel::kRigid}, {"rigid_fe", TrackModel::kRigidFe}, {"flexible", TrackModel::kFlexible}});
+  r.boolean("irregularities", e.irregularities);
+  r.boolean("flange_contact", e.flange_contact);
+  r.boolean("spin_creepage", e.spin_creepage);
+  r.choice("creep_law", e.creep_law, {{"polach", CreepLaw::kPolach}});
+  r.boolean("track_damping", e.track_damping);
+  r.boolean("absorbing_ends", e.absorbing_ends);
+  r.boolean("rail_deflection_output", e.rail_deflection_output);
+  r.boolean("contact_point_output", e.contact_point_output);
+  r.boolean("rviz_markers", e.rviz_markers);
+  r.finish();
+}
+
+void read_solver(MapReader& root, Scene& s) {
+  const YAML::Node n = root.child("solver");
+  Solver& v = s.solver;
+  if (!n) return;
+  MapReader r(n, "solver", root.file());
+  r.number("track_step", v.track_step);
+  in_range(r, "track_step", v.track_step, 1e-7, 1e-2, "s");
+  r.number("vehicle_rtol", v.vehicle_rtol);
+  in_range(r, "vehicle_rtol", v.vehicle_rtol, 1e-12, 1e-1, "");
+  r.number("vehicle_atol", v.vehicle_atol);
+  in_range(r, "vehicle_atol", v.vehicle_atol, 1e-15, 1e-1, "");
+  r.number("vehicle_max_step", v.vehicle_max_step);
+  in_range(r, "vehicle_max_step", v.vehicle_max_step, 1e-8, 1e-1, "s");
+  r.choice("vehicle_method", v.vehicle_method,
+           {{"auto", VehicleMethod::kAuto}, {"bdf", VehicleMethod::kBdf}, {"adams", VehicleMethod::kAdams}});
+  r.choice("transport", v.transport,
+           {{"service", Transport::kService}, {"topic", Transport::kTopic}, {"shm", Transport::kShm}});
+  r.number("exchange_timeout", v.exchange_timeout);
+  in_range(r, "exchange_timeout", v.exchange_timeout, 0.01, 3600.0, "s");
+  r.number("handshake_timeout", v.handshake_timeout);
+  in_range(r, "handshake_timeout", v.handshake_timeout, 0.01, 3600.0, "s");
+  if (const YAML::Node en = r.child("end")) {
+    MapReader er(en, "solver.end", root.file());
+    const bool has_time = er.has("time"), has_s = er.has("arc_length");
+    if (has_time == has_s) er.fail_here("give exactly one of time [s] or arc_length [m]");
+    if (has_time) {
+      v.end.kind = EndKind::kTime;
+      er.number("time", v.end.value);
+      positive(er, "time", v.end.value);
+    } else {
+      v.end.kind = EndKind::kArcLength;
+      er.number("arc_length", v.end.value);
+    }
+    er.finish();
+  }
+  r.finish();
+}
+
+void read_output(MapReader& root, Scene& s) {
+  const YAML::Node n = root.child("output");
+  if (!n) return;
+  MapReader r(n, "output", root.file());
+  Output& o = s.output;
+  r.string("bag", o.bag);
+  r.number("rate", o.rate);
+  in_range(r, "rate", o.rate, 0.1, 1e5, "Hz");
+  r.string_list("topics", o.topics);
+  for (std::size_t i = 0; i < o.topics.size(); ++i) {
+    const std::string key = "topics[" + std::to_string(i) + "]";
+    const std::string& name = o.topics[i];
+    if (!contains(kKnownTopics, name)) {
+      r.fail(key.c_str(), "unknown topic '" + name + "' (known: " + join(kKnownTopics) + ")");
+    }
+    for (std::size_t j = 0; j < i; ++j)
+      if (o.topics[j] == name) r.fail(key.c_str(), "'" + name + "' is listed twice");
+  }
+  r.number_list("deflection_sections", o.deflection_sections);
+  for (std::size_t i = 0; i < o.deflection_sections.size(); ++i) {
+    const double sec = o.deflection_sections[i];
+    if (sec < s.track.start_arc_length || sec > s.track.end_arc_length()) {
+      const std::string key = "deflection_sections[" + std::to_string(i) + "]";
+      r.fail(key.c_str(), "must lie on the track [" + format_double(s.track.start_arc_length) + ", " +
+                              format_double(s.track.end_arc_length()) + "] m" + got(sec));
+    }
+  }
+  r.finish();
+}
+
+// Rules that involve more than one section.
+void check_consistency(MapReader& root, Scene& s, const YAML::Node& doc) {
+  const std::string& file = root.file();
+  auto line_of = [&](const char* a, const char* b) {
+    const YAML::Node n = doc[a][b];
+    return n.IsDefined() && n.Mark().line >= 0 ? n.Mark().line + 1 : 0;
+  };
+  if (s.moving_loads.present && s.effects.track_model != TrackModel::kFlexible) {
+    fail_at(file, "effects.track_model",
+            std::string("moving_loads need the finite-element track (flexible), got ") +
+                to_string(s.effects.track_model),
+            line_of("effects", "track_model"));
+  }
+  if (s.effects.irregularities && s.track.irregularities.source == IrregularitySource::kNone) {
+    fail_at(file, "effects.irregularities",
+            "is on but track.irregularities gives no source (file or psd)", line_of("effects", "irregularities"));
+  }
+  if (s.cosimulation() && s.solver.vehicle_max_step > s.solver.track_step) {
+    fail_at(file, "solver.vehicle_max_step",
+            "must be <= solver.track_step (" + format_double(s.solver.track_step) +
+                " s) in co-simulation" + got(s.solver.vehicle_max_step),
+            line_of("solver", "vehicle_max_step"));
+  }
+  // End condition: default is the track's end, reached by the leading wheelset (or first load).
+  Solver& sol = s.solver;
+  if (sol.end.kind == EndKind::kArcLength) {
+    const double start = s.has_vehicle ? s.vehicle.start_arc_length : s.moving_loads.start_arc_length;
+    const double speed = s.has_vehicle ? s.vehicle.speed : s.moving_loads.speed;
+    if (sol.end.value == 0.0) sol.end.value = s.track.end_arc_length();
+    if (sol.end.value <= start || sol.end.value > s.track.end_arc_length()) {
+      fail_at(file, "solver.end.arc_length",
+              "must lie after the start (" + format_double(start) + " m) and on the track (end " +
+                  format_double(s.track.end_arc_length()) + " m)" + got(sol.end.value),
+              0);
+    }
+    if (speed <= 0.0) {
+      fail_at(file, s.has_vehicle ? "vehicle.speed" : "moving_loads.speed",
+              "must be > 0 when solver.end is an arc length (the run would never end), got 0", 0);
+    }
+  }
+  const Output& o = s.output;
+  for (std::size_t i = 0; i < o.topics.size(); ++i) {
+    const std::string key = "output.topics[" + std::to_string(i) + "]";
+    const std::string& t = o.topics[i];
+    const char* needs = nullptr;
+    if (t == "rail_deflection" && !s.effects.rail_deflection_output) needs = "effects.rail_deflection_output: true";
+    if (t == "contact_points" && !s.effects.contact_point_output) needs = "effects.contact_point_output: true";
+    if (t == "markers" && !s.effects.rviz_markers) needs = "effects.rviz_markers: true";
+    if (needs) fail_at(file, key, "'" + t + "' is recorded only with " + needs, 0);
+    if (t == "rail_deflection" && !s.runs_fe_integration()) {
+      fail_at(file, key, "'rail_deflection' needs effects.track_model: flexible", 0);
+    }
+    if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches") && !s.has_vehicle) {
+      fail_at(file, key, "'" + t + "' needs a vehicle in the scene", 0);
+    }
+  }
+}
+
+std::string read_all(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t seed) {
+  std::uint64_t h = seed;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir) {
+  YAML::Node doc;
+  try {
+    doc = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    fail_at(file, "", "not valid YAML: " + e.msg, e.mark.line >= 0 ? e.mark.line + 1 : 0);
+  }
+  if (!doc.IsDefined() || doc.IsNull()) fail_at(file, "", "is empty", 0);
+  const Context ctx{file, base_dir.empty() ? "." : base_dir};
+  MapReader root(doc, "", file);
+  Scene s;
+  s.file = file;
+  s.name = stem_of(file);
+  root.string("name", s.name);
+  root.string("description", s.description);
+
+  // Effects first: they decide which other parts are required.
+  read_effects(root, s);
+  s.has_vehicle = root.has("vehicle");
+  s.moving_loads.present = root.has("moving_loads");
+  if (s.has_vehicle == s.moving_loads.present) {
+    fail_at(file, "", "a scene has exactly one of vehicle (a run with a train) or moving_loads (the track alone)", 0);
+  }
+  read_track(root, s, ctx);
+  if (s.has_vehicle) {
+    root.child("moving_loads");  // known, absent
+    read_vehicle(root, s, ctx);
+  } else {
+    root.child("vehicle");
+    read_moving_loads(root, s, ctx);
+  }
+  read_solver(root, s);
+  read_output(root, s);
+  root.finish();
+  check_consistency(root, s, doc);
+
+  // The hash covers the resolved scene and the bytes of every data file it names, so two nodes agree
+  // only when they would build the same models.
+  std::uint64_t h = fnv1a64(to_yaml(s));
+  for (const DataFile* f : {&s.track.data, &s.track.rail_profile_file, &s.track.irregularities.file,
+                            &s.vehicle.data, &s.vehicle.wheel_profile_file}) {
+    if (!f->empty()) h = fnv1a64(read_all(f->path), h);
+  }
+  s.hash = h;
+  return s;
+}
+
+Scene load_scene_handed_over(const std::string& text, const std::string& file) {
+  return load_scene_text(text, file, dir_of(file));
+}
+
+Scene load_scene_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path + ": cannot read the scene file: " + std::strerror(errno));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return load_scene_text(ss.str(), path, dir_of(path));
+}
+
+}  // namespace rail::core

@@ -1,0 +1,225 @@
+// Scene loading: shipped scenes load and round-trip; each class of malformed scene gets its message.
+#include <gtest/gtest.h>
+
+#include <dirent.h>
+
+#include <string>
+#include <vector>
+
+#include "rail_core/scene_loader.hpp"
+
+using namespace rail::core;
+
+namespace {
+
+const std::string kData = RAILSIM_TEST_DATA_DIR;
+const std::string kConfig = RAILSIM_CONFIG_DIR;
+
+// A small valid scene; each malformed case below changes one thing in it.
+const std::string kBase = R"(name: base
+track:
+  gauge: 1.668
+  data: track_data.yaml
+  segments:
+    - {type: straight, length: 50.0}
+    - {type: transition, length: 40.0, direction: left, radius_start: 0, radius_end: 500.0, cant_start: 0.0, cant_end: 0.1}
+    - {type: circular, length: 60.0, direction: left, radius: 500.0, cant: 0.1}
+vehicle:
+  data: vehicle_data.yaml
+  start_arc_length: 25.0
+  speed: 30.0
+  back_to_back: 1.592
+effects:
+  track_model: rigid_fe
+solver:
+  track_step: 2.0e-5
+  vehicle_max_step: 1.0e-5
+output:
+  topics: [wheel_states]
+)";
+
+Scene load(const std::string& text) { return load_scene_text(text, "scene.yaml", kData); }
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << "test set-up: '" << from << "' not in the base scene";
+  if (pos != std::string::npos) text.replace(pos, from.size(), to);
+  return text;
+}
+
+// The error message of loading `text`, or "" when it loads.
+std::string error_of(const std::string& text) {
+  try {
+    load(text);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::vector<std::string> shipped_scenes() {
+  std::vector<std::string> out;
+  const std::string dir = kConfig + "/scenes";
+  if (DIR* d = opendir(dir.c_str())) {
+    while (dirent* e = readdir(d)) {
+      const std::string n = e->d_name;
+      if (n.size() > 5 && n.substr(n.size() - 5) == ".yaml") out.push_back(dir + "/" + n);
+    }
+    closedir(d);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(Scene, BaseSceneLoadsWithDefaults) {
+  const Scene s = load(kBase);
+  EXPECT_EQ(s.name, "base");
+  EXPECT_DOUBLE_EQ(s.track.gauge, 1.668);
+  EXPECT_DOUBLE_EQ(s.track.cant_reference_width, 1.668 + 0.065);  // default: gauge + 65 mm
+  EXPECT_DOUBLE_EQ(s.track.rail_inclination, 0.05);                // default 1/20
+  EXPECT_EQ(s.track.segments.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.track.length(), 150.0);
+  EXPECT_EQ(s.effects.track_model, TrackModel::kRigidFe);
+  EXPECT_TRUE(s.effects.flange_contact);                           // default on
+  EXPECT_EQ(s.solver.end.kind, EndKind::kArcLength);
+  EXPECT_DOUBLE_EQ(s.solver.end.value, 150.0);                     // default: the track's end
+  EXPECT_EQ(s.wheel_count(), 8);
+  EXPECT_TRUE(s.cosimulation());
+  EXPECT_FALSE(s.runs_fe_integration());
+  // Left curve: positive curvature, the right (outer) rail raised: positive cant.
+  EXPECT_DOUBLE_EQ(s.track.segments[2].curvature_at_start(), 1.0 / 500.0);
+  EXPECT_DOUBLE_EQ(s.track.segments[2].signed_cant_at_start(), 0.1);
+}
+
+TEST(Scene, EveryShippedSceneLoadsAndRoundTrips) {
+  const auto scenes = shipped_scenes();
+  ASSERT_GE(scenes.size(), 3u) << "expected the paper, straight and tight-curve scenes in config/scenes";
+  for (const auto& path : scenes) {
+    SCOPED_TRACE(path);
+    Scene a;
+    ASSERT_NO_THROW(a = load_scene_file(path));
+    const std::string resolved = to_yaml(a);
+    // The resolved form loads again to the same scene: same text, same hash.
+    const Scene b = load_scene_text(resolved, path, kConfig + "/scenes");
+    EXPECT_EQ(to_yaml(b), resolved);
+    EXPECT_EQ(a.hash, b.hash);
+    EXPECT_FALSE(describe(a, Role::kValidator).empty());
+  }
+}
+
+TEST(Scene, ThePaperSceneIsTheOneTheIssueDescribes) {
+  const Scene s = load_scene_file(kConfig + "/scenes/paper_demo.yaml");
+  EXPECT_DOUBLE_EQ(s.track.length(), 500.0);
+  EXPECT_DOUBLE_EQ(s.track.gauge, 1.668);
+  EXPECT_NEAR(s.vehicle.speed * 3.6, 110.0, 1e-3);
+  ASSERT_EQ(s.track.segments.size(), 5u);
+  EXPECT_EQ(s.track.segments[2].type, SegmentType::kCircular);
+  EXPECT_DOUBLE_EQ(s.track.segments[2].radius, 500.0);
+  EXPECT_EQ(s.track.segments[2].direction, Direction::kLeft);
+  EXPECT_EQ(s.output.deflection_sections, (std::vector<double>{66.0, 255.0}));
+}
+
+TEST(Scene, HashChangesWithTheSceneAndNotWithComments) {
+  const Scene a = load(kBase);
+  const Scene b = load(kBase + "# a comment changes nothing\n");
+  const Scene c = load(replaced(kBase, "speed: 30.0", "speed: 31.0"));
+  EXPECT_EQ(a.hash, b.hash);
+  EXPECT_NE(a.hash, c.hash);
+}
+
+TEST(Scene, InclinationAcceptsARatioOrANumber) {
+  EXPECT_DOUBLE_EQ(load(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 1/40"))
+                       .track.rail_inclination, 0.025);
+  EXPECT_DOUBLE_EQ(load(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 0.025"))
+                       .track.rail_inclination, 0.025);
+  EXPECT_EQ(error_of(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 1/zero")),
+            "scene.yaml: track.rail_inclination: must be a ratio such as 1/20 or a number, got '1/zero' (line 4)");
+}
+
+// Each class of malformed scene, with the exact message a user sees.
+struct Malformed {
+  const char* what;
+  std::string text;
+  std::string message;
+};
+
+TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
+  const std::vector<Malformed> cases = {
+      {"negative radius", replaced(kBase, "radius: 500.0, cant: 0.1}", "radius: -500, cant: 0.1}"),
+       "scene.yaml: track.segments[2].radius: must be > 0, got -500.0 (line 8)"},
+      {"unknown key", kBase + "effects2: 1\n",
+       "scene.yaml: effects2: unknown key (known here: description, effects, moving_loads, name, output, "
+       "solver, track, vehicle) (line 21)"},
+      {"misspelt effect", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  flange_contat: true"),
+       "scene.yaml: effects.flange_contat: unknown key (known here: absorbing_ends, contact_point_output, "
+       "creep_law, flange_contact, irregularities, rail_deflection_output, rviz_markers, spin_creepage, "
+       "track_damping, track_model) (line 16)"},
+      {"missing field", replaced(kBase, "  speed: 30.0\n", ""),
+       "scene.yaml: vehicle.speed: missing (required) (line 10)"},
+      {"wrong type", replaced(kBase, "speed: 30.0", "speed: fast"),
+       "scene.yaml: vehicle.speed: must be a number, got 'fast' (line 12)"},
+      {"wrong type: map for a number", replaced(kBase, "gauge: 1.668", "gauge: {value: 1.668}"),
+       "scene.yaml: track.gauge: must be a single value, got a map (line 3)"},
+      {"not finite", replaced(kBase, "speed: 30.0", "speed: .nan"),
+       "scene.yaml: vehicle.speed: must be a finite number, got .nan (line 12)"},
+      {"negative length", replaced(kBase, "length: 50.0", "length: -50.0"),
+       "scene.yaml: track.segments[0].length: must be > 0, got -50.0 (line 6)"},
+      {"zero speed where one is needed", replaced(kBase, "speed: 30.0", "speed: 0"),
+       "scene.yaml: vehicle.speed: must be > 0 when solver.end is an arc length (the run would never end), got 0"},
+      {"bad choice", replaced(kBase, "track_model: rigid_fe", "track_model: elastic"),
+       "scene.yaml: effects.track_model: must be one of rigid, rigid_fe, flexible, got 'elastic' (line 15)"},
+      {"curvature jump", replaced(kBase, "radius_end: 500.0", "radius_end: 400.0"),
+       "scene.yaml: track.segments[2]: curvature jumps at its start from 0.0025 to 0.002 1/m (track.segments[1] "
+       "ends there); make the chain continuous (a transition) or mark the jump with jump_allowed: true (line 8)"},
+      {"cant jump", replaced(kBase, "radius: 500.0, cant: 0.1}", "radius: 500.0, cant: 0.12}"),
+       "scene.yaml: track.segments[2]: cant jumps at its start from 0.1 to 0.12 m (track.segments[1] ends there); "
+       "make the chain continuous (a cant ramp) or mark the jump with jump_allowed: true (line 8)"},
+      {"missing data file", replaced(kBase, "data: vehicle_data.yaml", "data: no_such_coach.yaml"),
+       "scene.yaml: vehicle.data: cannot read 'no_such_coach.yaml' (resolved to " + kData +
+           "/no_such_coach.yaml): No such file or directory (line 10)"},
+      {"missing profile file", replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_profile: worn.prr"),
+       "scene.yaml: track.rail_profile: cannot read 'worn.prr' (resolved to " + kData +
+           "/worn.prr): No such file or directory (line 4)"},
+      {"vehicle step above the track step", replaced(kBase, "vehicle_max_step: 1.0e-5", "vehicle_max_step: 5.0e-5"),
+       "scene.yaml: solver.vehicle_max_step: must be <= solver.track_step (2e-05 s) in co-simulation, got 5e-05 "
+       "(line 18)"},
+      {"output needs an effect", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, rail_deflection]"),
+       "scene.yaml: output.topics[1]: 'rail_deflection' needs effects.track_model: flexible"},
+      {"unknown topic", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_state]"),
+       "scene.yaml: output.topics[0]: unknown topic 'wheel_state' (known: wheel_states, contact_wrenches, "
+       "contact_points, rail_deflection, wheelset_kinematics, markers, tf, clock) (line 20)"},
+      {"vehicle off the track", replaced(kBase, "start_arc_length: 25.0", "start_arc_length: 150.0"),
+       "scene.yaml: vehicle.start_arc_length: must lie on the track [0.0, 150.0) m, got 150.0 (line 11)"},
+      {"irregularities on without a source", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  irregularities: true"),
+       "scene.yaml: effects.irregularities: is on but track.irregularities gives no source (file or psd) (line 16)"},
+      {"not YAML", "track: [unclosed\n", "scene.yaml: not valid YAML: end of sequence flow not found (line 2)"},
+      {"vehicle and moving loads", kBase + "moving_loads: {speed: 1.0}\n",
+       "scene.yaml: a scene has exactly one of vehicle (a run with a train) or moving_loads (the track alone)"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    EXPECT_EQ(error_of(c.text), c.message);
+  }
+}
+
+TEST(Scene, MissingSceneFileNamesIt) {
+  try {
+    load_scene_file("/nonexistent/scene.yaml");
+    FAIL() << "a missing scene file was accepted";
+  } catch (const SceneError& e) {
+    EXPECT_EQ(std::string(e.what()), "/nonexistent/scene.yaml: cannot read the scene file: No such file or directory");
+  }
+}
+
+TEST(Scene, DescribeListsEffectsAndComponents) {
+  const Scene s = load(kBase);
+  const std::string v = describe(s, Role::kVehicle);
+  EXPECT_NE(v.find("effects on: track_model=rigid_fe, flange_contact, spin_creepage, creep_law=polach"),
+            std::string::npos) << v;
+  EXPECT_NE(v.find("effects off: irregularities, track_damping, absorbing_ends, rail_deflection_output"),
+            std::string::npos) << v;
+  EXPECT_NE(v.find("wheel-centre wrenches from the track node over shm"), std::string::npos) << v;
+  const std::string t = describe(s, Role::kTrack);
+  EXPECT_NE(t.find("rigid FE rails: contact on the undeformed rails, no FE integration"), std::string::npos) << t;
+}
