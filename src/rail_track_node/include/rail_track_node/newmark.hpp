@@ -1,0 +1,89 @@
+// Newmark trapezoidal rule (average acceleration: gamma = 1/2, beta = 1/4) with a fixed step for
+// M a + C v + K d = f (paper section 3.3), and the static equilibrium K d = f.
+// The model (LinearSystem) is separate from the integrator state (NewmarkState).
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "rail_track_node/sparse_cholesky.hpp"
+#include "rail_track_node/track_mesh.hpp"
+#include "rail_track_node/track_model.hpp"
+
+namespace rail {
+namespace track {
+
+/// External nodal loads of one step: a sparse vector (free DOF index, value) with capacity fixed at
+/// construction. Values on the same index add up.
+class NodalLoads {
+ public:
+  explicit NodalLoads(int capacity) : index_(capacity), value_(capacity) {}
+  void clear() { count_ = 0; }
+  /// Adds value (N or N m) on free DOF i; ignored if i < 0 (fixed DOF). Returns false if full.
+  bool add(int i, double value) {
+    if (i < 0) return true;
+    if (count_ >= static_cast<int>(index_.size())) return false;
+    index_[count_] = i;
+    value_[count_] = value;
+    ++count_;
+    return true;
+  }
+  int size() const { return count_; }
+  int index(int k) const { return index_[k]; }
+  double value(int k) const { return value_[k]; }
+
+ private:
+  std::vector<int> index_;
+  std::vector<double> value_;
+  int count_ = 0;
+};
+
+/// Adds the equivalent nodal loads (paper eq. 16) of a force f_world (N) and moment m_world (N m) applied on
+/// the centre line of rail `rail` (RailSide) at centre-line arc length s. Returns false if s is off the
+/// rails or the load vector is full. No allocation.
+bool addRailPointLoad(const TrackMesh& mesh, int rail, double s, const Eigen::Vector3d& f_world,
+                      const Eigen::Vector3d& m_world, NodalLoads& loads);
+
+/// Integrator state: displacement d (m, rad), velocity v, acceleration a over the free DOFs; time t (s).
+struct NewmarkState {
+  Eigen::VectorXd d, v, a;
+  double t = 0.0;
+};
+
+/// Fixed-step Newmark trapezoidal integrator. Factorises K_eff = K + 4/dt^2 M + 2/dt C once (CHOLMOD);
+/// each step builds one right-hand side in preallocated vectors and does one solve.
+class NewmarkIntegrator {
+ public:
+  /// sys must outlive the integrator. include_gravity: add sys.f_gravity to the load of every step.
+  NewmarkIntegrator(const LinearSystem& sys, double dt, bool include_gravity = true);
+
+  /// State at rest at displacement d0 (zero velocity); the acceleration is solved from
+  /// M a0 = f - C v0 - K d0 with f = gravity (if included) + loads. Allocates: call at set-up.
+  NewmarkState initialState(const Eigen::VectorXd& d0, const NodalLoads* loads = nullptr) const;
+
+  /// Advances state by dt with the external loads at the end of the step (t + dt). No allocation.
+  void step(NewmarkState& state, const NodalLoads& loads);
+
+  double dt() const { return dt_; }
+  const SparseCholesky& factor() const { return *factor_; }
+
+ private:
+  const LinearSystem& sys_;
+  double dt_;
+  bool include_gravity_;
+  std::unique_ptr<SparseCholesky> factor_;
+  Eigen::VectorXd rhs_, x1_, x2_, d_new_, a_new_;  // per-step work vectors
+};
+
+/// Static equilibrium d = K^{-1} f (factorises K; call at set-up).
+Eigen::VectorXd solveStatic(const LinearSystem& sys, const Eigen::VectorXd& f);
+
+/// Static equilibrium under gravity, K d = f_g: the initial state of a simulation.
+Eigen::VectorXd staticGravityDeflection(const LinearSystem& sys);
+
+/// Mechanical energy 1/2 v' M v + 1/2 d' K d, J.
+double mechanicalEnergy(const LinearSystem& sys, const NewmarkState& state);
+
+}  // namespace track
+}  // namespace rail

@@ -1,0 +1,61 @@
+// Benchmark of the track Newmark integrator (not a test): for straight tracks of 100 m and 500 m built from
+// a track data file, prints the free DOF count, the assembly and factorisation times and the median wall
+// time of one step (moving 100 kN wheel loads on both rails).
+// Usage: bench_newmark [track.yaml] [steps]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "rail_track_node/newmark.hpp"
+#include "rail_track_node/track_data.hpp"
+#include "rail_track_node/track_model.hpp"
+
+namespace rt = rail::track;
+using Clock = std::chrono::steady_clock;
+
+static double seconds(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+int main(int argc, char** argv) {
+  std::string path = argc > 1 ? argv[1] : "";
+  if (path.empty()) {
+    const std::string here = __FILE__;
+    path = here.substr(0, here.rfind("/src/rail_track_node/")) + "/config/track/paper_track.yaml";
+  }
+  const int steps = argc > 2 ? std::atoi(argv[2]) : 200;
+  const double dt = 1e-4;
+  const rt::TrackData data = rt::loadTrackData(path);
+  std::printf("track data: %s, dt = %g s, %d steps per case\n", path.c_str(), dt, steps);
+  for (double length : {100.0, 500.0}) {
+    rt::MeshOptions opt;
+    opt.track_length = length;
+    const auto t0 = Clock::now();
+    const rt::TrackModel model = rt::buildTrackModel(data, opt, rt::straightTrackFrames());
+    const auto t1 = Clock::now();
+    rt::NewmarkIntegrator integ(model.system, dt);
+    const auto t2 = Clock::now();
+    rt::NewmarkState st = integ.initialState(rt::staticGravityDeflection(model.system));
+    rt::NodalLoads loads(64);
+    std::vector<double> times(steps);
+    for (int n = 0; n < steps; ++n) {
+      loads.clear();
+      const double s = 0.25 * length + 30.0 * (st.t + dt);
+      rt::addRailPointLoad(model.mesh, rt::kLeftRail, s, Eigen::Vector3d(0, 0, -1e5), Eigen::Vector3d::Zero(), loads);
+      rt::addRailPointLoad(model.mesh, rt::kRightRail, s, Eigen::Vector3d(0, 0, -1e5), Eigen::Vector3d::Zero(), loads);
+      const auto a = Clock::now();
+      integ.step(st, loads);
+      times[n] = seconds(a, Clock::now());
+    }
+    std::nth_element(times.begin(), times.begin() + steps / 2, times.end());
+    std::printf("%5.0f m: %d free DOFs, nnz(K) = %ld, nnz(L) = %.0f (%s), build+assembly %.3f s, "
+                "factorisation of K_eff %.3f s, median step %.3f ms\n",
+                length, model.system.size(), static_cast<long>(model.system.K.nonZeros()),
+                integ.factor().factorNonZeros(), integ.factor().isSupernodal() ? "supernodal" : "simplicial",
+                seconds(t0, t1), seconds(t1, t2), 1e3 * times[steps / 2]);
+  }
+  return 0;
+}

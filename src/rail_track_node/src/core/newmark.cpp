@@ -1,0 +1,92 @@
+#include "rail_track_node/newmark.hpp"
+
+#include <stdexcept>
+#include <string>
+
+#include "rail_contact/beam_shape.hpp"
+
+namespace rail {
+namespace track {
+
+bool addRailPointLoad(const TrackMesh& mesh, int rail, double s, const Eigen::Vector3d& f_world,
+                      const Eigen::Vector3d& m_world, NodalLoads& loads) {
+  int beam = 0;
+  double xi = 0.0;
+  if (!mesh.locateRail(rail, s, beam, xi)) return false;
+  const BeamElement& b = mesh.beams[beam];
+  const rail::contact::Vector12d F =
+      rail::contact::beamEquivalentNodalLoadsWorld(xi, b.length, b.R_local_to_world, f_world, m_world);
+  bool ok = true;
+  for (int d = 0; d < 6; ++d) {
+    ok = loads.add(mesh.dofIndex(b.node_i, d), F(d)) && ok;
+    ok = loads.add(mesh.dofIndex(b.node_j, d), F(6 + d)) && ok;
+  }
+  return ok;
+}
+
+NewmarkIntegrator::NewmarkIntegrator(const LinearSystem& sys, double dt, bool include_gravity)
+    : sys_(sys), dt_(dt), include_gravity_(include_gravity) {
+  if (!(dt > 0.0)) throw std::runtime_error("NewmarkIntegrator: time step must be positive, got " + std::to_string(dt));
+  const int n = sys.size();
+  if (sys.K.rows() != n || sys.C.rows() != n || (include_gravity && sys.f_gravity.size() != n))
+    throw std::runtime_error("NewmarkIntegrator: M, C, K and f_gravity sizes differ");
+  const Eigen::SparseMatrix<double> K_eff = sys.K + (4.0 / (dt * dt)) * sys.M + (2.0 / dt) * sys.C;
+  factor_.reset(new SparseCholesky(K_eff));
+  rhs_.setZero(n);
+  x1_.setZero(n);
+  x2_.setZero(n);
+  d_new_.setZero(n);
+  a_new_.setZero(n);
+}
+
+NewmarkState NewmarkIntegrator::initialState(const Eigen::VectorXd& d0, const NodalLoads* loads) const {
+  const int n = sys_.size();
+  NewmarkState st;
+  st.d = d0;
+  st.v = Eigen::VectorXd::Zero(n);
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(n);
+  if (include_gravity_) f += sys_.f_gravity;
+  if (loads)
+    for (int k = 0; k < loads->size(); ++k) f(loads->index(k)) += loads->value(k);
+  f -= sys_.K * d0;
+  SparseCholesky Mfac(sys_.M);
+  st.a.resize(n);
+  Mfac.solve(f, st.a);
+  st.t = 0.0;
+  return st;
+}
+
+void NewmarkIntegrator::step(NewmarkState& st, const NodalLoads& loads) {
+  const double h = dt_;
+  const double c0 = 4.0 / (h * h), c1 = 4.0 / h, c2 = 2.0 / h;
+  // K_eff d_{n+1} = f_{n+1} + M (c0 d + c1 v + a) + C (c2 d + v)
+  x1_ = c0 * st.d + c1 * st.v + st.a;
+  x2_ = c2 * st.d + st.v;
+  rhs_.noalias() = sys_.M * x1_;
+  rhs_.noalias() += sys_.C * x2_;
+  if (include_gravity_) rhs_ += sys_.f_gravity;
+  for (int k = 0; k < loads.size(); ++k) rhs_(loads.index(k)) += loads.value(k);
+  factor_->solve(rhs_, d_new_);
+  // a_{n+1} = c0 (d_{n+1} - d_n) - c1 v_n - a_n ;  v_{n+1} = v_n + h/2 (a_n + a_{n+1})
+  a_new_ = c0 * (d_new_ - st.d) - c1 * st.v - st.a;
+  st.v += (0.5 * h) * (st.a + a_new_);
+  st.a.swap(a_new_);
+  st.d.swap(d_new_);
+  st.t += h;
+}
+
+Eigen::VectorXd solveStatic(const LinearSystem& sys, const Eigen::VectorXd& f) {
+  SparseCholesky K(sys.K);
+  Eigen::VectorXd d(sys.size());
+  K.solve(f, d);
+  return d;
+}
+
+Eigen::VectorXd staticGravityDeflection(const LinearSystem& sys) { return solveStatic(sys, sys.f_gravity); }
+
+double mechanicalEnergy(const LinearSystem& sys, const NewmarkState& st) {
+  return 0.5 * st.v.dot(sys.M * st.v) + 0.5 * st.d.dot(sys.K * st.d);
+}
+
+}  // namespace track
+}  // namespace rail

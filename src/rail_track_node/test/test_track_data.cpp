@@ -1,0 +1,114 @@
+// Track data file: the shipped paper_track.yaml loads with the paper's Table 1 / Table 2 values, and bad
+// input throws with "<file>: <key.path>: <what>, got <value>".
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+#include "rail_track_node/track_data.hpp"
+
+namespace rt = rail::track;
+
+namespace {
+
+std::string paperTrackPath() {
+#ifdef RAIL_TRACK_CONFIG_DIR
+  return std::string(RAIL_TRACK_CONFIG_DIR) + "/paper_track.yaml";
+#else
+  // test/ -> rail_track_node/ -> src/ -> workspace root
+  const std::string here = __FILE__;
+  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config/track/paper_track.yaml";
+#endif
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Replaces the first occurrence of `from` (must exist) in text.
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto pos = text.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  if (pos != std::string::npos) text.replace(pos, from.size(), to);
+  return text;
+}
+
+std::string errorOf(const std::string& text) {
+  try {
+    rt::parseTrackData(text, "track.yaml");
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "no exception";
+}
+
+}  // namespace
+
+// Values must be the paper's tables exactly (as decimal literals): compared with == after parsing.
+TEST(TrackData, PaperFileHasTableValues) {
+  const rt::TrackData d = rt::loadTrackData(paperTrackPath());
+  EXPECT_EQ(d.rail.E, 2.10e11);
+  EXPECT_EQ(d.rail.G, 8.08e10);
+  EXPECT_EQ(d.rail.A, 7.67e-3);
+  EXPECT_EQ(d.rail.J, 3.55e-5);
+  EXPECT_EQ(d.rail.I_y, 3.04e-5);
+  EXPECT_EQ(d.rail.I_z, 5.12e-6);
+  EXPECT_EQ(d.rail.rho, 7860.0);
+  EXPECT_EQ(d.sleeper.E, 3.10e10);
+  EXPECT_EQ(d.sleeper.A, 5.6e-2);
+  EXPECT_EQ(d.sleeper.rho, 2750.0);
+  // Rayleigh coefficients: the physical (swapped) reading of Table 1, see doc/fe.md.
+  EXPECT_EQ(d.rail.rayleigh_alpha, 0.94);
+  EXPECT_EQ(d.rail.rayleigh_beta, 3.98e-4);
+  EXPECT_EQ(d.pad.k(2), 1.30e8);
+  EXPECT_EQ(d.pad.k_roll, 2.00e5);
+  EXPECT_EQ(d.pad.c(2), 1.50e5);
+  EXPECT_EQ(d.ballast.k(2), 6.19e7);
+  EXPECT_EQ(d.ballast.mass, 226.41);
+  EXPECT_EQ(d.sleeper_interaction.k(0), 3.92e7);
+  EXPECT_EQ(d.layout.rail_elements_between_sleepers, 6);
+  EXPECT_EQ(d.layout.ballast_nodes.size(), 4u);
+  EXPECT_TRUE(d.absorbing_ends.enabled);
+}
+
+TEST(TrackData, UnknownKeyThrows) {
+  const std::string text = readFile(paperTrackPath());
+  EXPECT_EQ(errorOf(text + "\nextra_section: 1\n"), "track.yaml: (root): unknown key, got 'extra_section'");
+  EXPECT_EQ(errorOf(replaced(text, "  mass: 226.41", "  mass: 226.41\n  colour: 3")),
+            "track.yaml: ballast: unknown key, got 'colour'");
+}
+
+TEST(TrackData, MissingKeyThrows) {
+  const std::string text = readFile(paperTrackPath());
+  EXPECT_EQ(errorOf(replaced(text, "  sleeper_spacing: 0.60", "")),
+            "track.yaml: layout.sleeper_spacing: missing key, got nothing");
+  // A misspelt key is reported as the missing required key first.
+  EXPECT_EQ(errorOf(replaced(text, "  k_roll:", "  k_rol:")), "track.yaml: pad.k_roll: missing key, got nothing");
+}
+
+TEST(TrackData, WrongTypeThrows) {
+  const std::string text = readFile(paperTrackPath());
+  EXPECT_EQ(errorOf(replaced(text, "  rho: 7860.0", "  rho: heavy")), "track.yaml: rail.rho: expected a number, got 'heavy'");
+  EXPECT_EQ(errorOf(replaced(text, "rail_elements_between_sleepers: 6", "rail_elements_between_sleepers: 6.5")),
+            "track.yaml: layout.rail_elements_between_sleepers: expected an integer, got '6.5'");
+  EXPECT_EQ(errorOf(replaced(text, "  enabled: true", "  enabled: [1]")),
+            "track.yaml: absorbing_ends.enabled: expected true or false, got a list");
+}
+
+TEST(TrackData, NonPositiveThrows) {
+  const std::string text = readFile(paperTrackPath());
+  EXPECT_EQ(errorOf(replaced(text, "  k_vertical: 6.19e7", "  k_vertical: -6.19e7")),
+            "track.yaml: ballast.k_vertical: must be positive, got -6.19e+07");
+  EXPECT_EQ(errorOf(replaced(text, "  E: 3.10e10", "  E: 0")), "track.yaml: sleeper.E: must be positive, got 0");
+  EXPECT_EQ(errorOf(replaced(text, "ballast_nodes: [0, 1, 4, 5]", "ballast_nodes: [0, 7]")),
+            "track.yaml: layout.ballast_nodes: entries must be distinct sleeper node indices 0..5, got 7");
+}
+
+TEST(TrackData, MissingFileThrows) {
+  EXPECT_THROW(rt::loadTrackData("/nonexistent/track.yaml"), std::runtime_error);
+}
