@@ -28,7 +28,8 @@ static const std::vector<std::string> kBuiltinWheelProfiles = {"s1002"};
 // Published track-irregularity spectra a realisation can be drawn from (see rail_contact's geometry
 // notes for their sources).
 static const std::vector<std::string> kKnownPsds = {"fra_class_1", "fra_class_2", "fra_class_3",
-                                                    "fra_class_4", "fra_class_5", "fra_class_6"};
+                                                    "fra_class_4", "fra_class_5", "fra_class_6",
+                                                    "german_low",  "german_high"};
 
 namespace {
 

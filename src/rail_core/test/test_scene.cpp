@@ -193,6 +193,9 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        "scene.yaml: vehicle.start_arc_length: must lie on the track [0.0, 150.0) m, got 150.0 (line 11)"},
       {"irregularities on without a source", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  irregularities: true"),
        "scene.yaml: effects.irregularities: is on but track.irregularities gives no source (file or psd) (line 16)"},
+      {"unknown spectrum", replaced(kBase, "  data: track_data.yaml\n", "  data: track_data.yaml\n  irregularities: {source: psd, psd: fra_class_9}\n"),
+       "scene.yaml: track.irregularities.psd: must be one of fra_class_1, fra_class_2, fra_class_3, fra_class_4, "
+       "fra_class_5, fra_class_6, german_low, german_high, got 'fra_class_9' (line 5)"},
       {"not YAML", "track: [unclosed\n", "scene.yaml: not valid YAML: end of sequence flow not found (line 2)"},
       {"vehicle and moving loads", kBase + "moving_loads: {speed: 1.0}\n",
        "scene.yaml: a scene has exactly one of vehicle (a run with a train) or moving_loads (the track alone)"},
