@@ -1,0 +1,71 @@
+// Per-step work state of a vehicle model (the "Data" of the Model/Data split).
+//
+// Sized once from a finalised VehicleModel and owned by the caller; the right-hand side, the constraint
+// evaluation and the projection only write into these preallocated members.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/LU>
+#include <vector>
+
+#include "rail_vehicle_node/rigid_math.hpp"
+
+namespace rail::vehicle {
+
+class VehicleModel;
+
+// World-frame kinematics of one body, evaluated from the state vector.
+struct BodyKinematics {
+  Vector3 r = Vector3::Zero();           // position of the centre of mass in the world [m]
+  Matrix3 A = Matrix3::Identity();       // rotation body -> world
+  Vector3 r_dot = Vector3::Zero();       // velocity of the centre of mass in the world [m/s]
+  Vector3 omega_body = Vector3::Zero();  // angular velocity in the body frame omega' [rad/s]
+  Vector3 omega_world = Vector3::Zero(); // A * omega' [rad/s]
+};
+
+// External wrench at one of the model's load points (e.g. a wheel centre), set by the caller.
+struct ExternalWrench {
+  Vector3 force_in_world = Vector3::Zero();   // [N]
+  Vector3 moment_in_world = Vector3::Zero();  // [N m], about the load point
+};
+
+class VehicleData {
+ public:
+  explicit VehicleData(const VehicleModel& model);
+
+  int n_bodies = 0;       // n
+  int n_velocities = 0;   // 6 n
+  int n_constraints = 0;  // m
+  double time = 0.0;      // time of the last right-hand side evaluation [s] (readable by force elements)
+
+  std::vector<BodyKinematics> bodies;        // per body
+  std::vector<ExternalWrench> external;      // per load point, set by the caller, held between calls
+
+  Eigen::VectorXd g;          // generalised forces g (6n): per body [f in world; n' in body frame]
+  Eigen::VectorXd phi;        // constraint values Phi (m)
+  Eigen::MatrixXd phi_v;      // Jacobian of Phi w.r.t. the velocities [r_dot; omega'] (m x 6n)
+  Eigen::VectorXd gamma;      // acceleration right-hand side gamma (m)
+  Eigen::VectorXd phi_dot;    // Phi_v * v (m)
+  Eigen::VectorXd rhs_c;      // gamma - 2 alpha Phi_dot - beta^2 Phi (m)
+  Eigen::VectorXd v_dot;      // accelerations [r_ddot; omega'_dot] (6n)
+  Eigen::VectorXd lambda;     // Lagrange multipliers (m)
+
+  // Augmented (KKT) solve: [M Phi_v^T; Phi_v 0].
+  Eigen::MatrixXd kkt;
+  Eigen::VectorXd kkt_rhs, kkt_sol;
+  Eigen::PartialPivLU<Eigen::MatrixXd> kkt_lu;
+
+  // Range-space solve: S = Phi_v M^-1 Phi_v^T.
+  Eigen::MatrixXd w;          // Phi_v M^-1 (m x 6n)
+  Eigen::MatrixXd s;          // (m x m)
+  Eigen::VectorXd s_rhs;      // (m)
+  Eigen::VectorXd tmp6n;      // (6n)
+  Eigen::LDLT<Eigen::MatrixXd> s_ldlt;
+
+  // Scratch for the projection.
+  Eigen::VectorXd dx;         // (6n)
+  Eigen::VectorXd zero6n;     // (6n), always zero
+};
+
+}  // namespace rail::vehicle

@@ -1,0 +1,132 @@
+// The constant multibody model of a vehicle (the "Model" of the Model/Data split): rigid bodies, joints,
+// force elements and named load points, built once and then only read.
+//
+// Coordinates, per body b of n: q_b = [r (world, m); p (Euler parameters, scalar first)] (7), velocities
+// v_b = [r_dot (world, m/s); omega' (body frame, rad/s)] (6). The state vector is y = [q (7n); v (6n)].
+// The equations of motion (paper eq. 1) are [M Phi_v^T; Phi_v 0][v_dot; lambda] = [g; gamma - 2 alpha
+// Phi_dot - beta^2 Phi], with M = diag(m_b I, J'_b), g the applied forces and Baumgarte terms alpha, beta.
+// World frame of the vehicle data: x forward, y to the left, z up.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rail_vehicle_node/force_element.hpp"
+#include "rail_vehicle_node/joint.hpp"
+#include "rail_vehicle_node/rigid_math.hpp"
+
+namespace rail::vehicle {
+
+// One rigid body: mass, inertia about its centre of mass and its reference pose.
+struct RigidBody {
+  std::string name;
+  double mass = 0.0;                                  // m [kg]
+  Matrix3 inertia_in_body = Matrix3::Identity();      // J' about the centre of mass, body frame [kg m^2]
+  Vector3 r_reference = Vector3::Zero();              // centre of mass at the reference configuration [m]
+  Vector4 p_reference = Vector4(1.0, 0.0, 0.0, 0.0);  // Euler parameters at the reference configuration
+};
+
+// A named body point where the caller applies an external wrench (e.g. a wheel centre).
+struct LoadPoint {
+  std::string name;
+  int body = 0;
+  Vector3 s_in_body = Vector3::Zero();  // from the centre of mass, body frame [m]
+};
+
+// How the augmented system is solved: the dense augmented matrix with partial-pivoting LU, or the
+// equivalent range-space form (Schur complement Phi_v M^-1 Phi_v^T with LDLT; M^-1 is block diagonal).
+enum class KktSolver { kAugmentedLu, kRangeSpace };
+
+class VehicleModel {
+ public:
+  VehicleModel() = default;
+  VehicleModel(VehicleModel&&) = default;
+  VehicleModel& operator=(VehicleModel&&) = default;
+
+  // ---- Building (before Finalize) ----
+  int AddBody(const RigidBody& body);  // returns the body index
+  int AddLoadPoint(const std::string& name, int body, const Vector3& s_in_body);
+  void AddJoint(std::unique_ptr<Joint> joint);
+  void AddForceElement(std::unique_ptr<ForceElement> element);
+
+  // Convenience builders from world-frame data at the reference configuration.
+  int AddLoadPointAtWorld(const std::string& name, int body, const Vector3& p_in_world);
+  void AddSphericalJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world);
+  void AddRevoluteJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+                          const Vector3& axis_in_world);
+  void AddFixedJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world);
+  // Bushing at one world point; R_bushing_to_world gives its local axes at the reference configuration.
+  void AddBushingAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+                    const Matrix3& R_bushing_to_world, const Bushing::Parameters& parameters);
+  // Point-to-point element; free_length < 0 takes the reference distance.
+  void AddPointToPointAt(const std::string& name, int body_i, int body_j, const Vector3& p_i_in_world,
+                         const Vector3& p_j_in_world, double stiffness, double damping, double free_length,
+                         double preload);
+  void AddBumpStopAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+                     const Vector3& axis_in_world, std::vector<double> deflections, std::vector<double> forces);
+
+  void SetGravity(const Vector3& gravity_in_world);        // [m/s^2], default (0, 0, -9.81)
+  void SetBaumgarte(double alpha, double beta);           // [1/s], default 10, 10
+  void SetKktSolver(KktSolver solver);                    // default kRangeSpace
+
+  // Checks the model and fixes its sizes; no change is accepted afterwards.
+  void Finalize();
+  bool finalized() const { return finalized_; }
+
+  // ---- Reading ----
+  int n_bodies() const { return static_cast<int>(bodies_.size()); }
+  int n_constraints() const { return n_constraints_; }
+  int n_positions() const { return 7 * n_bodies(); }
+  int n_velocities() const { return 6 * n_bodies(); }
+  int state_size() const { return 13 * n_bodies(); }
+  const std::vector<RigidBody>& bodies() const { return bodies_; }
+  const std::vector<LoadPoint>& load_points() const { return load_points_; }
+  const std::vector<std::unique_ptr<Joint>>& joints() const { return joints_; }
+  const std::vector<std::unique_ptr<ForceElement>>& force_elements() const { return forces_; }
+  const std::vector<int>& joint_rows() const { return joint_rows_; }  // first constraint row per joint
+  const Vector3& gravity() const { return gravity_; }
+  double baumgarte_alpha() const { return alpha_; }
+  double baumgarte_beta() const { return beta_; }
+  KktSolver kkt_solver() const { return kkt_solver_; }
+  const Matrix3& inverse_inertia(int body) const { return inverse_inertia_[static_cast<std::size_t>(body)]; }
+  double TotalMass() const;
+
+  // Index lookups by name (building/setup time only; throw std::runtime_error naming the missing name).
+  // BodyIndex("ground") is kGround unless a body has that name.
+  int BodyIndex(const std::string& name) const;
+  int LoadPointIndex(const std::string& name) const;
+
+  // State vector offsets of body b.
+  static int PositionOffset(int b) { return 7 * b; }
+  static int EulerOffset(int b) { return 7 * b + 3; }
+  int VelocityOffset(int b) const { return 7 * n_bodies() + 6 * b; }
+  int AngularVelocityOffset(int b) const { return 7 * n_bodies() + 6 * b + 3; }
+
+  // State at the reference configuration, at rest.
+  Eigen::VectorXd ReferenceState() const;
+
+  // A point given in the world at the reference configuration, in the body frame (ground: unchanged).
+  Vector3 WorldToBodyAtReference(int body, const Vector3& p_in_world) const;
+  Matrix3 ReferenceRotation(int body) const;  // body -> world at the reference (ground: identity)
+
+ private:
+  void RequireBuilding(const char* what) const;
+  void RequireBody(int body, bool ground_allowed, const std::string& what) const;
+
+  std::vector<RigidBody> bodies_;
+  std::vector<LoadPoint> load_points_;
+  std::vector<std::unique_ptr<Joint>> joints_;
+  std::vector<std::unique_ptr<ForceElement>> forces_;
+  std::vector<int> joint_rows_;
+  std::vector<Matrix3> inverse_inertia_;
+  Vector3 gravity_ = Vector3(0.0, 0.0, -9.81);
+  double alpha_ = 10.0;
+  double beta_ = 10.0;
+  KktSolver kkt_solver_ = KktSolver::kRangeSpace;
+  int n_constraints_ = 0;
+  bool finalized_ = false;
+};
+
+}  // namespace rail::vehicle

@@ -1,0 +1,225 @@
+#include "rail_vehicle_node/multibody_dynamics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace rail::vehicle {
+
+void ComputeKinematics(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y, VehicleData& data) {
+  const int n = model.n_bodies();
+  for (int b = 0; b < n; ++b) {
+    BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
+    k.r = y.segment<3>(VehicleModel::PositionOffset(b));
+    k.A = RotationFromEulerParameters(y.segment<4>(VehicleModel::EulerOffset(b)));
+    k.r_dot = y.segment<3>(model.VelocityOffset(b));
+    k.omega_body = y.segment<3>(model.AngularVelocityOffset(b));
+    k.omega_world = k.A * k.omega_body;
+  }
+}
+
+void ComputeAppliedForces(const VehicleModel& model, VehicleData& data) {
+  const int n = model.n_bodies();
+  const auto& bodies = model.bodies();
+  for (int b = 0; b < n; ++b) {
+    const RigidBody& body = bodies[static_cast<std::size_t>(b)];
+    const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
+    data.g.segment<3>(6 * b) = body.mass * model.gravity();
+    data.g.segment<3>(6 * b + 3) = -k.omega_body.cross(body.inertia_in_body * k.omega_body);
+  }
+  const auto& points = model.load_points();
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const LoadPoint& lp = points[p];
+    const BodyKinematics& k = data.bodies[static_cast<std::size_t>(lp.body)];
+    const Vector3 p_in_world = k.r + k.A * lp.s_in_body;
+    ForceElement::ApplyForceAt(data, lp.body, data.external[p].force_in_world, p_in_world, data.g);
+    ForceElement::ApplyMoment(data, lp.body, data.external[p].moment_in_world, data.g);
+  }
+  for (const auto& element : model.force_elements()) element->AddForces(data, data.g);
+}
+
+void ComputeConstraints(const VehicleModel& model, VehicleData& data) {
+  const auto& joints = model.joints();
+  const auto& rows = model.joint_rows();
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    const int row = rows[j];
+    const int size = joints[j]->size();
+    joints[j]->Evaluate(data, data.phi.segment(row, size), data.phi_v.middleRows(row, size),
+                        data.gamma.segment(row, size));
+  }
+}
+
+namespace {
+
+// x = M^-1 rhs with M = diag(m I, J') per body.
+void ApplyInverseMass(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& rhs,
+                      Eigen::Ref<Eigen::VectorXd> x) {
+  const auto& bodies = model.bodies();
+  for (int b = 0; b < model.n_bodies(); ++b) {
+    x.segment<3>(6 * b) = rhs.segment<3>(6 * b) / bodies[static_cast<std::size_t>(b)].mass;
+    x.segment<3>(6 * b + 3) = model.inverse_inertia(b) * rhs.segment<3>(6 * b + 3);
+  }
+}
+
+}  // namespace
+
+void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::Ref<const Eigen::VectorXd>& top,
+                    const Eigen::Ref<const Eigen::VectorXd>& bottom, Eigen::Ref<Eigen::VectorXd> x,
+                    Eigen::Ref<Eigen::VectorXd> mu) {
+  const int nv = model.n_velocities();
+  const int m = model.n_constraints();
+  if (m == 0) {
+    ApplyInverseMass(model, top, x);
+    return;
+  }
+  if (model.kkt_solver() == KktSolver::kAugmentedLu) {
+    data.kkt.bottomLeftCorner(m, nv) = data.phi_v;
+    data.kkt.topRightCorner(nv, m) = data.phi_v.transpose();
+    data.kkt_lu.compute(data.kkt);
+    data.kkt_rhs.head(nv) = top;
+    data.kkt_rhs.tail(m) = bottom;
+    data.kkt_sol = data.kkt_lu.solve(data.kkt_rhs);
+    x = data.kkt_sol.head(nv);
+    mu = data.kkt_sol.tail(m);
+    return;
+  }
+  // Range space: (Phi_v M^-1 Phi_v^T) mu = Phi_v M^-1 top - bottom; x = M^-1 (top - Phi_v^T mu).
+  const auto& bodies = model.bodies();
+  for (int b = 0; b < model.n_bodies(); ++b) {
+    data.w.middleCols<3>(6 * b) = data.phi_v.middleCols<3>(6 * b) / bodies[static_cast<std::size_t>(b)].mass;
+    data.w.middleCols<3>(6 * b + 3).noalias() = data.phi_v.middleCols<3>(6 * b + 3) * model.inverse_inertia(b);
+  }
+  data.s.noalias() = data.w * data.phi_v.transpose();
+  data.s_ldlt.compute(data.s);
+  data.s_rhs.noalias() = data.w * top;
+  data.s_rhs -= bottom;
+  mu = data.s_ldlt.solve(data.s_rhs);
+  data.tmp6n = top;
+  data.tmp6n.noalias() -= data.phi_v.transpose() * mu;
+  ApplyInverseMass(model, data.tmp6n, x);
+}
+
+void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
+  data.time = t;
+  ComputeKinematics(model, y, data);
+  const int n = model.n_bodies();
+  for (int b = 0; b < n; ++b) {
+    const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
+    y_dot.segment<3>(VehicleModel::PositionOffset(b)) = k.r_dot;
+    // p_dot = 1/2 p (x) (0, omega'), with the raw (unnormalised) p so that d|p|^2/dt = 0 exactly.
+    const Vector4 p = y.segment<4>(VehicleModel::EulerOffset(b));
+    Vector4 p_dot;
+    p_dot[0] = -0.5 * p.tail<3>().dot(k.omega_body);
+    p_dot.tail<3>() = 0.5 * (p[0] * k.omega_body + p.tail<3>().cross(k.omega_body));
+    y_dot.segment<4>(VehicleModel::EulerOffset(b)) = p_dot;
+  }
+  ComputeAppliedForces(model, data);
+  const int m = model.n_constraints();
+  if (m > 0) {
+    ComputeConstraints(model, data);
+    data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+    const double alpha = model.baumgarte_alpha();
+    const double beta = model.baumgarte_beta();
+    data.rhs_c = data.gamma - 2.0 * alpha * data.phi_dot - (beta * beta) * data.phi;
+  }
+  SolveAugmented(model, data, data.g, data.rhs_c, data.v_dot, data.lambda);
+  y_dot.tail(model.n_velocities()) = data.v_dot;
+}
+
+ConstraintViolation EvaluateViolation(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+                                      VehicleData& data) {
+  ConstraintViolation v;
+  for (int b = 0; b < model.n_bodies(); ++b) {
+    v.euler_norm = std::max(v.euler_norm, std::abs(y.segment<4>(VehicleModel::EulerOffset(b)).norm() - 1.0));
+  }
+  if (model.n_constraints() == 0) return v;
+  ComputeKinematics(model, y, data);
+  ComputeConstraints(model, data);
+  data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+  v.position = data.phi.lpNorm<Eigen::Infinity>();
+  v.velocity = data.phi_dot.lpNorm<Eigen::Infinity>();
+  return v;
+}
+
+int ProjectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, VehicleData& data, double tolerance,
+                 int max_iterations) {
+  const int n = model.n_bodies();
+  for (int b = 0; b < n; ++b) y.segment<4>(VehicleModel::EulerOffset(b)).normalize();
+  if (model.n_constraints() == 0) return 0;
+  int iterations = 0;
+  for (;;) {
+    ComputeKinematics(model, y, data);
+    ComputeConstraints(model, data);
+    const double violation = data.phi.lpNorm<Eigen::Infinity>();
+    if (violation <= tolerance) break;
+    if (iterations >= max_iterations || !std::isfinite(violation)) {
+      std::ostringstream os;
+      os << "constraint projection: max |Phi| = " << violation << " after " << iterations
+         << " iterations, tolerance " << tolerance;
+      throw std::runtime_error(os.str());
+    }
+    data.rhs_c = -data.phi;
+    SolveAugmented(model, data, data.zero6n, data.rhs_c, data.dx, data.lambda);
+    for (int b = 0; b < n; ++b) {
+      y.segment<3>(VehicleModel::PositionOffset(b)) += data.dx.segment<3>(6 * b);
+      const Vector4 p = y.segment<4>(VehicleModel::EulerOffset(b));
+      y.segment<4>(VehicleModel::EulerOffset(b)) =
+          QuaternionProduct(p, EulerParametersFromRotationVector(data.dx.segment<3>(6 * b + 3))).normalized();
+    }
+    ++iterations;
+  }
+  // Velocities: v <- v + dv with [M Phi_v^T; Phi_v 0][dv; mu] = [0; -Phi_v v] (kinetic-energy metric).
+  data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+  data.rhs_c = -data.phi_dot;
+  SolveAugmented(model, data, data.zero6n, data.rhs_c, data.dx, data.lambda);
+  y.tail(model.n_velocities()) += data.dx;
+  return iterations;
+}
+
+double KineticEnergy(const VehicleModel& model, const VehicleData& data) {
+  double energy = 0.0;
+  for (int b = 0; b < model.n_bodies(); ++b) {
+    const RigidBody& body = model.bodies()[static_cast<std::size_t>(b)];
+    const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
+    energy += 0.5 * body.mass * k.r_dot.squaredNorm() + 0.5 * k.omega_body.dot(body.inertia_in_body * k.omega_body);
+  }
+  return energy;
+}
+
+double PotentialEnergy(const VehicleModel& model, const VehicleData& data) {
+  double energy = 0.0;
+  for (int b = 0; b < model.n_bodies(); ++b) {
+    energy -= model.bodies()[static_cast<std::size_t>(b)].mass *
+              model.gravity().dot(data.bodies[static_cast<std::size_t>(b)].r);
+  }
+  for (const auto& element : model.force_elements()) energy += element->PotentialEnergy(data);
+  return energy;
+}
+
+Vector3 LinearMomentum(const VehicleModel& model, const VehicleData& data) {
+  Vector3 l = Vector3::Zero();
+  for (int b = 0; b < model.n_bodies(); ++b) {
+    l += model.bodies()[static_cast<std::size_t>(b)].mass * data.bodies[static_cast<std::size_t>(b)].r_dot;
+  }
+  return l;
+}
+
+Vector3 AngularMomentum(const VehicleModel& model, const VehicleData& data) {
+  Vector3 h = Vector3::Zero();
+  for (int b = 0; b < model.n_bodies(); ++b) {
+    const RigidBody& body = model.bodies()[static_cast<std::size_t>(b)];
+    const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
+    h += k.r.cross(body.mass * k.r_dot) + k.A * (body.inertia_in_body * k.omega_body);
+  }
+  return h;
+}
+
+void LoadPointState(const VehicleModel& model, const VehicleData& data, int k, Vector3& p_in_world,
+                    Vector3& v_in_world) {
+  const LoadPoint& lp = model.load_points()[static_cast<std::size_t>(k)];
+  ForceElement::PointState(data, lp.body, lp.s_in_body, p_in_world, v_in_world);
+}
+
+}  // namespace rail::vehicle

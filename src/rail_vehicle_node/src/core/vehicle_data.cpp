@@ -1,0 +1,48 @@
+#include "rail_vehicle_node/vehicle_data.hpp"
+
+#include <stdexcept>
+
+#include "rail_vehicle_node/vehicle_model.hpp"
+
+namespace rail::vehicle {
+
+VehicleData::VehicleData(const VehicleModel& model)
+    // Factorisations sized in place (a copy of a fresh LDLT would read its uninitialised status field).
+    : kkt_lu(model.n_velocities() + model.n_constraints()), s_ldlt(model.n_constraints()) {
+  if (!model.finalized()) throw std::runtime_error("vehicle data: the model must be finalised first");
+  n_bodies = model.n_bodies();
+  n_velocities = model.n_velocities();
+  n_constraints = model.n_constraints();
+  const int nv = n_velocities;
+  const int m = n_constraints;
+  bodies.assign(static_cast<std::size_t>(n_bodies), BodyKinematics{});
+  external.assign(model.load_points().size(), ExternalWrench{});
+  g = Eigen::VectorXd::Zero(nv);
+  phi = Eigen::VectorXd::Zero(m);
+  phi_v = Eigen::MatrixXd::Zero(m, nv);
+  gamma = Eigen::VectorXd::Zero(m);
+  phi_dot = Eigen::VectorXd::Zero(m);
+  rhs_c = Eigen::VectorXd::Zero(m);
+  v_dot = Eigen::VectorXd::Zero(nv);
+  lambda = Eigen::VectorXd::Zero(m);
+
+  // The mass-matrix block of the augmented matrix is constant: M = diag(m I, J').
+  kkt = Eigen::MatrixXd::Zero(nv + m, nv + m);
+  for (int b = 0; b < n_bodies; ++b) {
+    const RigidBody& body = model.bodies()[static_cast<std::size_t>(b)];
+    kkt.block<3, 3>(6 * b, 6 * b) = body.mass * Matrix3::Identity();
+    kkt.block<3, 3>(6 * b + 3, 6 * b + 3) = body.inertia_in_body;
+  }
+  kkt_rhs = Eigen::VectorXd::Zero(nv + m);
+  kkt_sol = Eigen::VectorXd::Zero(nv + m);
+
+  w = Eigen::MatrixXd::Zero(m, nv);
+  s = Eigen::MatrixXd::Zero(m, m);
+  s_rhs = Eigen::VectorXd::Zero(m);
+  tmp6n = Eigen::VectorXd::Zero(nv);
+
+  dx = Eigen::VectorXd::Zero(nv);
+  zero6n = Eigen::VectorXd::Zero(nv);
+}
+
+}  // namespace rail::vehicle

@@ -1,0 +1,283 @@
+#include "rail_vehicle_node/vehicle_integrator.hpp"
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+
+namespace rail::vehicle {
+
+struct VehicleIntegrator::Impl {
+  const VehicleModel& model;
+  VehicleData& data;
+  IntegratorSettings settings;
+  SUNContext context = nullptr;
+  N_Vector y = nullptr;
+  N_Vector dky = nullptr;
+  SUNMatrix jacobian = nullptr;
+  SUNLinearSolver linear_solver = nullptr;
+  SUNNonlinearSolver nonlinear_solver = nullptr;
+  void* cvode = nullptr;
+  double t = 0.0;
+  bool stepped_since_init = false;     // false right after (re-)initialisation
+  bool ls_counters_stale = false;      // linear-solver counters are reset only at the first step after ReInit
+  IntegratorCounters base;             // counters accumulated before the last re-initialisation
+  std::array<char, 512> last_error{};  // CVODE's last message (fixed buffer: no allocation)
+
+  Impl(const VehicleModel& m, VehicleData& d, const IntegratorSettings& s) : model(m), data(d), settings(s) {}
+
+  ~Impl() {
+    if (cvode != nullptr) CVodeFree(&cvode);
+    if (nonlinear_solver != nullptr) SUNNonlinSolFree(nonlinear_solver);
+    if (linear_solver != nullptr) SUNLinSolFree(linear_solver);
+    if (jacobian != nullptr) SUNMatDestroy(jacobian);
+    if (dky != nullptr) N_VDestroy(dky);
+    if (y != nullptr) N_VDestroy(y);
+    if (context != nullptr) SUNContext_Free(&context);
+  }
+
+  Eigen::Map<Eigen::VectorXd> StateMap() const {
+    return Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), model.state_size());
+  }
+
+  [[noreturn]] void Fail(const char* call, int flag) const {
+    std::ostringstream os;
+    os << "vehicle integrator: " << call << " failed with flag " << flag << " at t = " << t;
+    if (last_error[0] != '\0') os << ": " << last_error.data();
+    throw std::runtime_error(os.str());
+  }
+
+  void Check(int flag, const char* call) const {
+    if (flag < 0) Fail(call, flag);
+  }
+
+  static int Rhs(realtype t, N_Vector y, N_Vector y_dot, void* user_data) {
+    auto* self = static_cast<Impl*>(user_data);
+    const int n = self->model.state_size();
+    const Eigen::Map<const Eigen::VectorXd> y_map(N_VGetArrayPointer(y), n);
+    Eigen::Map<Eigen::VectorXd> y_dot_map(N_VGetArrayPointer(y_dot), n);
+    try {
+      ComputeDerivatives(self->model, t, y_map, y_dot_map, self->data);
+    } catch (...) {
+      return -1;  // unrecoverable: CVODE stops and AdvanceTo reports it
+    }
+    return y_dot_map.allFinite() ? 0 : 1;  // non-finite: recoverable, CVODE retries with a smaller step
+  }
+
+  static void ErrorHandler(int /*error_code*/, const char* module, const char* function, char* msg, void* user) {
+    auto* self = static_cast<Impl*>(user);
+    std::snprintf(self->last_error.data(), self->last_error.size(), "%s %s: %s", module, function, msg);
+  }
+
+  void AccumulateCounters() {
+    const IntegratorCounters now = CurrentCounters();
+    base.steps += now.steps;
+    base.rhs_evals += now.rhs_evals;
+    base.rhs_evals_jacobian += now.rhs_evals_jacobian;
+    base.jacobian_evals += now.jacobian_evals;
+    base.error_test_failures += now.error_test_failures;
+    base.nonlinear_iterations += now.nonlinear_iterations;
+    base.nonlinear_convergence_failures += now.nonlinear_convergence_failures;
+  }
+
+  // Counters of CVODE since the last (re-)initialisation.
+  IntegratorCounters CurrentCounters() const {
+    IntegratorCounters c;
+    long v = 0;
+    if (CVodeGetNumSteps(cvode, &v) == CV_SUCCESS) c.steps = v;
+    if (CVodeGetNumRhsEvals(cvode, &v) == CV_SUCCESS) c.rhs_evals = v;
+    if (CVodeGetNumErrTestFails(cvode, &v) == CV_SUCCESS) c.error_test_failures = v;
+    if (CVodeGetNumNonlinSolvIters(cvode, &v) == CV_SUCCESS) c.nonlinear_iterations = v;
+    if (CVodeGetNumNonlinSolvConvFails(cvode, &v) == CV_SUCCESS) c.nonlinear_convergence_failures = v;
+    if (settings.method == IntegrationMethod::kBdf && !ls_counters_stale) {
+      if (CVodeGetNumJacEvals(cvode, &v) == CV_SUCCESS) c.jacobian_evals = v;
+      if (CVodeGetNumLinRhsEvals(cvode, &v) == CV_SUCCESS) c.rhs_evals_jacobian = v;
+    }
+    int order = 0;
+    if (CVodeGetLastOrder(cvode, &order) == CV_SUCCESS) c.last_order = order;
+    realtype h = 0.0;
+    if (CVodeGetLastStep(cvode, &h) == CV_SUCCESS) c.last_step = h;
+    return c;
+  }
+
+  // Projects the state when a threshold is exceeded; returns true if it did (CVODE then re-initialised).
+  bool ProjectIfNeeded() {
+    Eigen::Map<Eigen::VectorXd> state = StateMap();
+    const ConstraintViolation v = EvaluateViolation(model, state, data);
+    if (v.position <= settings.projection_position_threshold && v.velocity <= settings.projection_velocity_threshold &&
+        v.euler_norm <= settings.projection_euler_threshold) {
+      return false;
+    }
+    ProjectState(model, state, data, settings.projection_tolerance, settings.projection_max_iterations);
+    ++base.projections;
+    return true;
+  }
+
+  void ReInit() {
+    AccumulateCounters();
+    Check(CVodeReInit(cvode, t, y), "CVodeReInit");
+    stepped_since_init = false;
+    ls_counters_stale = true;
+  }
+};
+
+VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& data, const Eigen::VectorXd& y0,
+                                     double t0, const IntegratorSettings& settings)
+    : impl_(std::make_unique<Impl>(model, data, settings)) {
+  Impl& s = *impl_;
+  std::ostringstream os;
+  if (!model.finalized()) throw std::runtime_error("vehicle integrator: the model must be finalised first");
+  if (y0.size() != model.state_size()) {
+    os << "vehicle integrator: initial state has " << y0.size() << " entries, the model needs " << model.state_size();
+    throw std::runtime_error(os.str());
+  }
+  if (!(settings.rtol > 0.0) || !(settings.atol > 0.0)) {
+    os << "vehicle integrator: rtol and atol must be > 0, got " << settings.rtol << ", " << settings.atol;
+    throw std::runtime_error(os.str());
+  }
+  const int max_order_limit = settings.method == IntegrationMethod::kBdf ? 5 : 12;
+  if (settings.max_order < 1 || settings.max_order > max_order_limit) {
+    os << "vehicle integrator: max_order must be in [1, " << max_order_limit << "], got " << settings.max_order;
+    throw std::runtime_error(os.str());
+  }
+  if (!(settings.max_step >= 0.0) || !(settings.initial_step >= 0.0)) {
+    os << "vehicle integrator: max_step and initial_step must be >= 0, got " << settings.max_step << ", "
+       << settings.initial_step;
+    throw std::runtime_error(os.str());
+  }
+  s.t = t0;
+  s.Check(SUNContext_Create(nullptr, &s.context), "SUNContext_Create");
+  const sunindextype n = model.state_size();
+  s.y = N_VNew_Serial(n, s.context);
+  s.dky = N_VNew_Serial(n, s.context);
+  if (s.y == nullptr || s.dky == nullptr) throw std::runtime_error("vehicle integrator: N_VNew_Serial failed");
+  s.StateMap() = y0;
+  s.cvode = CVodeCreate(settings.method == IntegrationMethod::kBdf ? CV_BDF : CV_ADAMS, s.context);
+  if (s.cvode == nullptr) throw std::runtime_error("vehicle integrator: CVodeCreate failed");
+  s.Check(CVodeSetErrHandlerFn(s.cvode, &Impl::ErrorHandler, &s), "CVodeSetErrHandlerFn");
+  // A caller-supplied initial state may violate the constraints: project before the first step.
+  s.ProjectIfNeeded();
+  s.Check(CVodeInit(s.cvode, &Impl::Rhs, t0, s.y), "CVodeInit");
+  s.Check(CVodeSetUserData(s.cvode, &s), "CVodeSetUserData");
+  s.Check(CVodeSStolerances(s.cvode, settings.rtol, settings.atol), "CVodeSStolerances");
+  s.Check(CVodeSetMaxOrd(s.cvode, settings.max_order), "CVodeSetMaxOrd");
+  s.Check(CVodeSetMaxNumSteps(s.cvode, settings.max_steps_per_call), "CVodeSetMaxNumSteps");
+  if (settings.max_step > 0.0) s.Check(CVodeSetMaxStep(s.cvode, settings.max_step), "CVodeSetMaxStep");
+  if (settings.initial_step > 0.0) s.Check(CVodeSetInitStep(s.cvode, settings.initial_step), "CVodeSetInitStep");
+  if (settings.method == IntegrationMethod::kBdf) {
+    s.jacobian = SUNDenseMatrix(n, n, s.context);
+    s.linear_solver = SUNLinSol_Dense(s.y, s.jacobian, s.context);
+    if (s.jacobian == nullptr || s.linear_solver == nullptr) {
+      throw std::runtime_error("vehicle integrator: dense matrix / linear solver creation failed");
+    }
+    // No Jacobian function: CVODE uses its difference-quotient approximation.
+    s.Check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
+  } else {
+    s.nonlinear_solver = SUNNonlinSol_FixedPoint(s.y, 0, s.context);
+    if (s.nonlinear_solver == nullptr) throw std::runtime_error("vehicle integrator: fixed-point solver creation failed");
+    s.Check(CVodeSetNonlinearSolver(s.cvode, s.nonlinear_solver), "CVodeSetNonlinearSolver");
+  }
+}
+
+VehicleIntegrator::~VehicleIntegrator() = default;
+
+void VehicleIntegrator::AdvanceTo(double t) {
+  Impl& s = *impl_;
+  if (!(t > s.t)) {
+    std::ostringstream os;
+    os << "vehicle integrator: AdvanceTo(" << t << ") must go beyond the current time " << s.t;
+    throw std::runtime_error(os.str());
+  }
+  s.last_error[0] = '\0';
+  realtype t_reached = s.t;
+  const int flag = CVode(s.cvode, t, s.y, &t_reached, CV_NORMAL);
+  if (flag < 0) s.Fail("CVode", flag);
+  s.ls_counters_stale = false;
+  s.t = t_reached;
+  s.stepped_since_init = true;
+  if (s.ProjectIfNeeded()) s.ReInit();
+}
+
+void VehicleIntegrator::InterpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const {
+  const Impl& s = *impl_;
+  if (!s.stepped_since_init) {
+    if (std::abs(t - s.t) > 1e-12 * std::max(1.0, std::abs(s.t))) {
+      std::ostringstream os;
+      os << "vehicle integrator: InterpolateAt(" << t << "): no step since (re)initialisation at " << s.t;
+      throw std::runtime_error(os.str());
+    }
+    y_out = s.StateMap();
+    return;
+  }
+  const int flag = CVodeGetDky(s.cvode, t, 0, s.dky);
+  if (flag < 0) {
+    double t0 = 0.0, t1 = 0.0;
+    LastStepInterval(t0, t1);
+    std::ostringstream os;
+    os << "vehicle integrator: InterpolateAt(" << t << ") outside the last step [" << t0 << ", " << t1 << "]";
+    throw std::runtime_error(os.str());
+  }
+  y_out = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(s.dky), s.model.state_size());
+}
+
+void VehicleIntegrator::LastStepInterval(double& t_begin, double& t_end) const {
+  const Impl& s = *impl_;
+  if (!s.stepped_since_init) {
+    t_begin = t_end = s.t;
+    return;
+  }
+  realtype t_current = s.t, h_last = 0.0;
+  CVodeGetCurrentTime(s.cvode, &t_current);
+  CVodeGetLastStep(s.cvode, &h_last);
+  t_end = t_current;
+  t_begin = t_current - h_last;
+}
+
+void VehicleIntegrator::Reset(const Eigen::VectorXd& y, double t) {
+  Impl& s = *impl_;
+  if (y.size() != s.model.state_size()) {
+    throw std::runtime_error("vehicle integrator: Reset with a state of " + std::to_string(y.size()) +
+                             " entries, the model needs " + std::to_string(s.model.state_size()));
+  }
+  s.StateMap() = y;
+  s.t = t;
+  s.ProjectIfNeeded();
+  s.ReInit();
+}
+
+double VehicleIntegrator::time() const { return impl_->t; }
+
+Eigen::Map<const Eigen::VectorXd> VehicleIntegrator::state() const {
+  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(impl_->y), impl_->model.state_size());
+}
+
+IntegratorCounters VehicleIntegrator::Counters() const {
+  const Impl& s = *impl_;
+  const IntegratorCounters now = s.CurrentCounters();
+  IntegratorCounters c = s.base;
+  c.steps += now.steps;
+  c.rhs_evals += now.rhs_evals;
+  c.rhs_evals_jacobian += now.rhs_evals_jacobian;
+  c.jacobian_evals += now.jacobian_evals;
+  c.error_test_failures += now.error_test_failures;
+  c.nonlinear_iterations += now.nonlinear_iterations;
+  c.nonlinear_convergence_failures += now.nonlinear_convergence_failures;
+  c.last_order = now.last_order;
+  c.last_step = now.last_step;
+  return c;
+}
+
+ConstraintViolation VehicleIntegrator::Violation() {
+  return EvaluateViolation(impl_->model, impl_->StateMap(), impl_->data);
+}
+
+}  // namespace rail::vehicle

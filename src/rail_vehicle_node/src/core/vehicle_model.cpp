@@ -1,0 +1,218 @@
+#include "rail_vehicle_node/vehicle_model.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace rail::vehicle {
+
+void VehicleModel::RequireBuilding(const char* what) const {
+  if (finalized_) throw std::runtime_error(std::string("vehicle model: ") + what + " after Finalize()");
+}
+
+void VehicleModel::RequireBody(int body, bool ground_allowed, const std::string& what) const {
+  if ((ground_allowed && body == kGround) || (body >= 0 && body < n_bodies())) return;
+  throw std::runtime_error("vehicle model: " + what + ": body index " + std::to_string(body) + " out of range (" +
+                           std::to_string(n_bodies()) + " bodies)");
+}
+
+int VehicleModel::AddBody(const RigidBody& body) {
+  RequireBuilding("AddBody");
+  std::ostringstream os;
+  if (!(body.mass > 0.0) || !std::isfinite(body.mass)) {
+    os << "vehicle model: body " << body.name << ": mass must be > 0, got " << body.mass;
+    throw std::runtime_error(os.str());
+  }
+  const Matrix3 J = body.inertia_in_body;
+  if (!J.allFinite() || (J - J.transpose()).norm() > 1e-9 * J.norm()) {
+    os << "vehicle model: body " << body.name << ": inertia must be finite and symmetric";
+    throw std::runtime_error(os.str());
+  }
+  const Eigen::Vector3d eig = Eigen::SelfAdjointEigenSolver<Matrix3>(J).eigenvalues();
+  if (!(eig.minCoeff() > 0.0)) {
+    os << "vehicle model: body " << body.name << ": inertia must be positive definite, smallest eigenvalue "
+       << eig.minCoeff();
+    throw std::runtime_error(os.str());
+  }
+  if (!body.r_reference.allFinite() || !(body.p_reference.norm() > 0.0)) {
+    os << "vehicle model: body " << body.name << ": reference pose not finite";
+    throw std::runtime_error(os.str());
+  }
+  for (const auto& b : bodies_) {
+    if (b.name == body.name) throw std::runtime_error("vehicle model: body name " + body.name + " defined twice");
+  }
+  RigidBody stored = body;
+  stored.p_reference.normalize();
+  bodies_.push_back(stored);
+  inverse_inertia_.push_back(J.inverse());
+  return n_bodies() - 1;
+}
+
+int VehicleModel::AddLoadPoint(const std::string& name, int body, const Vector3& s_in_body) {
+  RequireBuilding("AddLoadPoint");
+  RequireBody(body, false, "load point " + name);
+  for (const auto& p : load_points_) {
+    if (p.name == name) throw std::runtime_error("vehicle model: load point name " + name + " defined twice");
+  }
+  load_points_.push_back(LoadPoint{name, body, s_in_body});
+  return static_cast<int>(load_points_.size()) - 1;
+}
+
+void VehicleModel::AddJoint(std::unique_ptr<Joint> joint) {
+  RequireBuilding("AddJoint");
+  RequireBody(joint->body_i(), false, "joint " + joint->name() + " body_i");
+  RequireBody(joint->body_j(), true, "joint " + joint->name() + " body_j");
+  if (joint->body_i() == joint->body_j()) {
+    throw std::runtime_error("vehicle model: joint " + joint->name() + " connects a body to itself");
+  }
+  joints_.push_back(std::move(joint));
+}
+
+void VehicleModel::AddForceElement(std::unique_ptr<ForceElement> element) {
+  RequireBuilding("AddForceElement");
+  RequireBody(element->body_i(), true, "force element " + element->name() + " body_i");
+  RequireBody(element->body_j(), true, "force element " + element->name() + " body_j");
+  forces_.push_back(std::move(element));
+}
+
+Matrix3 VehicleModel::ReferenceRotation(int body) const {
+  if (body == kGround) return Matrix3::Identity();
+  RequireBody(body, false, "reference rotation");
+  return RotationFromEulerParameters(bodies_[static_cast<std::size_t>(body)].p_reference);
+}
+
+Vector3 VehicleModel::WorldToBodyAtReference(int body, const Vector3& p_in_world) const {
+  if (body == kGround) return p_in_world;
+  RequireBody(body, false, "world to body");
+  return ReferenceRotation(body).transpose() * (p_in_world - bodies_[static_cast<std::size_t>(body)].r_reference);
+}
+
+int VehicleModel::AddLoadPointAtWorld(const std::string& name, int body, const Vector3& p_in_world) {
+  RequireBody(body, false, "load point " + name);
+  return AddLoadPoint(name, body, WorldToBodyAtReference(body, p_in_world));
+}
+
+void VehicleModel::AddSphericalJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world) {
+  RequireBody(body_i, false, "joint " + name + " body_i");
+  RequireBody(body_j, true, "joint " + name + " body_j");
+  AddJoint(std::make_unique<SphericalJoint>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
+                                            WorldToBodyAtReference(body_j, p_in_world)));
+}
+
+void VehicleModel::AddRevoluteJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+                                      const Vector3& axis_in_world) {
+  RequireBody(body_i, false, "joint " + name + " body_i");
+  RequireBody(body_j, true, "joint " + name + " body_j");
+  AddJoint(std::make_unique<RevoluteJoint>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
+                                           WorldToBodyAtReference(body_j, p_in_world),
+                                           ReferenceRotation(body_i).transpose() * axis_in_world,
+                                           ReferenceRotation(body_j).transpose() * axis_in_world));
+}
+
+void VehicleModel::AddFixedJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world) {
+  RequireBody(body_i, false, "joint " + name + " body_i");
+  RequireBody(body_j, true, "joint " + name + " body_j");
+  AddJoint(std::make_unique<FixedJoint>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
+                                        WorldToBodyAtReference(body_j, p_in_world),
+                                        ReferenceRotation(body_i).transpose(), ReferenceRotation(body_j).transpose()));
+}
+
+void VehicleModel::AddBushingAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+                                const Matrix3& R_bushing_to_world, const Bushing::Parameters& parameters) {
+  RequireBody(body_i, true, "bushing " + name + " body_i");
+  RequireBody(body_j, true, "bushing " + name + " body_j");
+  AddForceElement(std::make_unique<Bushing>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
+                                            WorldToBodyAtReference(body_j, p_in_world),
+                                            ReferenceRotation(body_i).transpose() * R_bushing_to_world,
+                                            ReferenceRotation(body_j).transpose() * R_bushing_to_world, parameters));
+}
+
+void VehicleModel::AddPointToPointAt(const std::string& name, int body_i, int body_j, const Vector3& p_i_in_world,
+                                     const Vector3& p_j_in_world, double stiffness, double damping,
+                                     double free_length, double preload) {
+  RequireBody(body_i, true, "point-to-point " + name + " body_i");
+  RequireBody(body_j, true, "point-to-point " + name + " body_j");
+  const double length = free_length < 0.0 ? (p_j_in_world - p_i_in_world).norm() : free_length;
+  AddForceElement(std::make_unique<PointToPointSpringDamper>(name, body_i, body_j,
+                                                             WorldToBodyAtReference(body_i, p_i_in_world),
+                                                             WorldToBodyAtReference(body_j, p_j_in_world), stiffness,
+                                                             damping, length, preload));
+}
+
+void VehicleModel::AddBumpStopAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+                                 const Vector3& axis_in_world, std::vector<double> deflections,
+                                 std::vector<double> forces) {
+  RequireBody(body_i, true, "bump stop " + name + " body_i");
+  RequireBody(body_j, true, "bump stop " + name + " body_j");
+  AddForceElement(std::make_unique<BumpStop>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
+                                             WorldToBodyAtReference(body_j, p_in_world),
+                                             ReferenceRotation(body_i).transpose() * axis_in_world,
+                                             std::move(deflections), std::move(forces)));
+}
+
+void VehicleModel::SetGravity(const Vector3& gravity_in_world) {
+  RequireBuilding("SetGravity");
+  if (!gravity_in_world.allFinite()) throw std::runtime_error("vehicle model: gravity not finite");
+  gravity_ = gravity_in_world;
+}
+
+void VehicleModel::SetBaumgarte(double alpha, double beta) {
+  RequireBuilding("SetBaumgarte");
+  if (!(alpha >= 0.0) || !(beta >= 0.0) || !std::isfinite(alpha) || !std::isfinite(beta)) {
+    std::ostringstream os;
+    os << "vehicle model: Baumgarte alpha and beta must be finite and >= 0, got " << alpha << ", " << beta;
+    throw std::runtime_error(os.str());
+  }
+  alpha_ = alpha;
+  beta_ = beta;
+}
+
+void VehicleModel::SetKktSolver(KktSolver solver) {
+  RequireBuilding("SetKktSolver");
+  kkt_solver_ = solver;
+}
+
+void VehicleModel::Finalize() {
+  RequireBuilding("Finalize");
+  if (bodies_.empty()) throw std::runtime_error("vehicle model: no bodies");
+  joint_rows_.clear();
+  n_constraints_ = 0;
+  for (const auto& j : joints_) {
+    joint_rows_.push_back(n_constraints_);
+    n_constraints_ += j->size();
+  }
+  finalized_ = true;
+}
+
+double VehicleModel::TotalMass() const {
+  double m = 0.0;
+  for (const auto& b : bodies_) m += b.mass;
+  return m;
+}
+
+int VehicleModel::BodyIndex(const std::string& name) const {
+  for (std::size_t k = 0; k < bodies_.size(); ++k) {
+    if (bodies_[k].name == name) return static_cast<int>(k);
+  }
+  if (name == "ground") return kGround;
+  throw std::runtime_error("vehicle model: no body named " + name);
+}
+
+int VehicleModel::LoadPointIndex(const std::string& name) const {
+  for (std::size_t k = 0; k < load_points_.size(); ++k) {
+    if (load_points_[k].name == name) return static_cast<int>(k);
+  }
+  throw std::runtime_error("vehicle model: no load point named " + name);
+}
+
+Eigen::VectorXd VehicleModel::ReferenceState() const {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(state_size());
+  for (int b = 0; b < n_bodies(); ++b) {
+    y.segment<3>(PositionOffset(b)) = bodies_[static_cast<std::size_t>(b)].r_reference;
+    y.segment<4>(EulerOffset(b)) = bodies_[static_cast<std::size_t>(b)].p_reference;
+  }
+  return y;
+}
+
+}  // namespace rail::vehicle

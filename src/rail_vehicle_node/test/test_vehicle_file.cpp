@@ -1,0 +1,232 @@
+// The paper's coach data file: contents (Table 3), static equilibrium on stand-in wheel springs, and the
+// loader's error messages.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "rail_vehicle_node/vehicle_integrator.hpp"
+#include "rail_vehicle_node/vehicle_loader.hpp"
+
+#ifndef RAIL_VEHICLE_CONFIG_DIR
+#define RAIL_VEHICLE_CONFIG_DIR "config/vehicle"
+#endif
+
+namespace rail::vehicle {
+namespace {
+
+const std::string kCoach = std::string(RAIL_VEHICLE_CONFIG_DIR) + "/paper_coach.yaml";
+
+TEST(PaperCoach, MatchesTable3) {
+  const VehicleModel model = LoadVehicleModel(kCoach);
+  EXPECT_EQ(model.n_bodies(), 15);
+  EXPECT_EQ(model.joints().size(), 8u);
+  EXPECT_EQ(model.n_constraints(), 8 * 5);  // revolute joints
+  EXPECT_NEAR(model.TotalMass(), 59480.0, 1e-9);  // Table 3 sum; integers, exact in floating point
+  EXPECT_EQ(model.load_points().size(), 8u);
+  // Spot checks against Table 3.
+  const RigidBody& carbody = model.bodies()[static_cast<std::size_t>(model.BodyIndex("carbody"))];
+  EXPECT_DOUBLE_EQ(carbody.mass, 46200.0);
+  EXPECT_DOUBLE_EQ(carbody.r_reference.z(), 1.432);
+  EXPECT_DOUBLE_EQ(carbody.inertia_in_body(1, 1), 2600000.0);
+  const RigidBody& ab = model.bodies()[static_cast<std::size_t>(model.BodyIndex("ab3_right"))];
+  EXPECT_DOUBLE_EQ(ab.r_reference.x(), 3.35);
+  EXPECT_DOUBLE_EQ(ab.r_reference.y(), -1.072);
+  // Wheel centres on the axle at y = +-0.8665 m.
+  const LoadPoint& wheel = model.load_points()[static_cast<std::size_t>(model.LoadPointIndex("ws2_wheel_right"))];
+  EXPECT_EQ(wheel.body, model.BodyIndex("ws2"));
+  EXPECT_NEAR(wheel.s_in_body.y(), -0.8665, 1e-12);
+  EXPECT_NEAR(wheel.s_in_body.x(), 0.0, 1e-12);
+  EXPECT_NEAR(wheel.s_in_body.z(), 0.0, 1e-12);
+}
+
+TEST(PaperCoach, ReferenceConfigurationSatisfiesJointsAndSuspensionBalancesGravity) {
+  // With the wheelsets held (their weight plus the suspension load taken by the wheel wrenches) the data
+  // file's preloads make the reference configuration an equilibrium: every acceleration vanishes.
+  const VehicleModel model = LoadVehicleModel(kCoach);
+  VehicleData data(model);
+  const Eigen::VectorXd y = model.ReferenceState();
+  const double wheel_load = 59480.0 * 9.81 / 8.0;  // 72937.35 N
+  for (auto& w : data.external) w.force_in_world = Vector3(0.0, 0.0, wheel_load);
+  Eigen::VectorXd y_dot(model.state_size());
+  ComputeDerivatives(model, 0.0, y, y_dot, data);
+  EXPECT_LT(data.phi.lpNorm<Eigen::Infinity>(), 1e-15);
+  // Accelerations are force residuals / mass: preloads are exact to 1e-10 N relative, so 1e-9 m/s^2.
+  EXPECT_LT(y_dot.tail(model.n_velocities()).lpNorm<Eigen::Infinity>(), 1e-9);
+}
+
+TEST(PaperCoach, AugmentedLuAndRangeSpaceSolvesAgree) {
+  // Both solvers of [M Phi_v^T; Phi_v 0][v_dot; lambda] = [g; c] must give the same solution on a general
+  // state (moving, bump stops engaged, anti-roll bars twisted, constraints slightly violated). The system is
+  // well conditioned after scaling (masses 10..46200 kg): agreement to 1e-8 relative is round-off level.
+  Eigen::VectorXd v_dot[2], lambda[2];
+  const KktSolver solvers[2] = {KktSolver::kAugmentedLu, KktSolver::kRangeSpace};
+  for (int s = 0; s < 2; ++s) {
+    VehicleModel model;
+    LoadVehicleInto(kCoach, model);
+    model.SetKktSolver(solvers[s]);
+    model.Finalize();
+    VehicleData data(model);
+    Eigen::VectorXd y = model.ReferenceState();
+    const int carbody = model.BodyIndex("carbody");
+    y[VehicleModel::PositionOffset(carbody) + 1] += 0.03;
+    y.segment<4>(VehicleModel::EulerOffset(carbody)) = EulerParametersFromRotationVector(Vector3(0.01, 0.0, 0.002));
+    y[VehicleModel::PositionOffset(model.BodyIndex("ab2_right")) + 2] += 1e-5;
+    for (int b = 0; b < model.n_bodies(); ++b) {
+      y.segment<3>(model.VelocityOffset(b)) = Vector3(30.0, 0.01 * b, -0.02);
+      y.segment<3>(model.AngularVelocityOffset(b)) = Vector3(0.01, 0.02 * (b % 3), 0.005);
+    }
+    Eigen::VectorXd y_dot(model.state_size());
+    ComputeDerivatives(model, 0.0, y, y_dot, data);
+    v_dot[s] = data.v_dot;
+    lambda[s] = data.lambda;
+  }
+  EXPECT_LT((v_dot[0] - v_dot[1]).norm(), 1e-8 * v_dot[1].norm());
+  EXPECT_LT((lambda[0] - lambda[1]).norm(), 1e-8 * lambda[1].norm());
+  EXPECT_GT(lambda[1].norm(), 1e3);  // the joints carry load in this state
+}
+
+TEST(PaperCoach, StaticEquilibriumOnWheelSpringsCarriesOneEighthPerWheel) {
+  // Stand-in for the contact: a spring-damper from the ground to each wheel centre, vertical 2e7 N/m with
+  // 3.9e5 N s/m (about half critical for the whole vehicle bouncing on the eight springs), plus soft
+  // longitudinal/lateral support. The vehicle starts at the reference configuration with the wheel springs
+  // unloaded and drops onto them.
+  VehicleModel model;
+  LoadVehicleInto(kCoach, model);
+  std::vector<const Bushing*> supports;
+  for (const auto& w : std::vector<std::string>{"ws1", "ws2", "ws3", "ws4"}) {
+    for (const auto& side : std::vector<std::string>{"left", "right"}) {
+      const int ws = model.BodyIndex(w);
+      const double x = model.bodies()[static_cast<std::size_t>(ws)].r_reference.x();
+      const Vector3 p(x, side == "left" ? 0.8665 : -0.8665, 0.445);
+      Bushing::Parameters par;
+      par.stiffness = Vector3(1e6, 1e6, 2e7);
+      par.damping = Vector3(2e4, 2e4, 3.9e5);
+      model.AddBushingAt("wheel_support_" + w + "_" + side, kGround, ws, p, Matrix3::Identity(), par);
+      supports.push_back(dynamic_cast<const Bushing*>(model.force_elements().back().get()));
+    }
+  }
+  model.Finalize();
+  VehicleData data(model);
+  IntegratorSettings settings;
+  settings.method = IntegrationMethod::kBdf;
+  settings.rtol = 1e-7;
+  settings.atol = 1e-9;
+  VehicleIntegrator integrator(model, data, model.ReferenceState(), 0.0, settings);
+  const double t_end = 12.0;
+  integrator.AdvanceTo(t_end);
+
+  ComputeKinematics(model, integrator.state(), data);
+  const double weight = 59480.0 * 9.81;
+  double sum = 0.0, max_share_error = 0.0;
+  for (const Bushing* s : supports) {
+    Vector3 d, f;
+    s->EvaluateLocal(data, d, f);
+    sum += f.z();
+    max_share_error = std::max(max_share_error, std::abs(f.z() - weight / 8.0) / (weight / 8.0));
+  }
+  const double v_max = integrator.state().tail(model.n_velocities()).lpNorm<Eigen::Infinity>();
+  const IntegratorCounters c = integrator.Counters();
+  std::printf("[ static equilibrium ] t = %.0f s: max wheel-load error %.2e of W/8, sum/W - 1 = %.2e, max |v| %.2e, "
+              "steps %ld, rhs %ld (+%ld for %ld Jacobians), error-test failures %ld, projections %ld\n",
+              t_end, max_share_error, sum / weight - 1.0, v_max, c.steps, c.rhs_evals, c.rhs_evals_jacobian,
+              c.jacobian_evals, c.error_test_failures, c.projections);
+  // The vehicle is symmetric (Table 3: bogies at 11.5 -+ 9.5 m, wheelsets at bogie -+ 1.35 m, sides +-y), so
+  // at equilibrium every wheel carries exactly W/8 = 72937 N. What remains after 12 s is the decaying
+  // transient of the drop; the slowest mode (carbody bounce on the secondary, ~1 Hz, damping ratio ~0.15)
+  // decays by exp(-0.15 * 6.3 * 12) ~ 1e-5 from an initial dynamic load below W/8, so 1e-4 of W/8 (7.3 N)
+  // bounds it together with the integration error (rtol 1e-7).
+  EXPECT_LT(max_share_error, 1e-4);
+  EXPECT_NEAR(sum / weight, 1.0, 1e-4);
+  EXPECT_LT(v_max, 1e-4);  // at rest
+  // Each wheel spring is compressed by (W/8) / k = 3.65 mm.
+  Vector3 d, f;
+  supports[0]->EvaluateLocal(data, d, f);
+  EXPECT_NEAR(d.z(), -weight / 8.0 / 2e7, 1e-4 * weight / 8.0 / 2e7);
+}
+
+// ---------------------------------------------------------------------------------------------------------
+// Loader errors: "<file>: <key.path>: <what>, got <value> (line N)".
+
+std::string WriteTemp(const std::string& name, const std::string& text) {
+  const std::string path = ::testing::TempDir() + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string LoadError(const std::string& path) {
+  try {
+    LoadVehicleModel(path);
+  } catch (const VehicleFileError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+const char* kTwoBodies = R"(bodies:
+  - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 900]}
+  - {name: box, mass: 10, centre_of_mass: [0, 1.0, 0.445], inertia: [1, 1, 1]}
+)";
+
+TEST(VehicleLoader, NamesAnUndefinedBodyOfAJoint) {
+  const std::string path = WriteTemp("undefined_body.yaml", std::string(kTwoBodies) + R"(joints:
+  - {name: bearing, type: revolute, body_i: ws, body_j: axlebox_9, position: [0, 1, 0.445], axis: [0, 1, 0]}
+)");
+  EXPECT_EQ(LoadError(path), path + ": joints[0].body_j: no body of that name is defined, got axlebox_9 (line 5)");
+}
+
+TEST(VehicleLoader, RejectsNonPhysicalMass) {
+  const std::string path = WriteTemp("negative_mass.yaml", R"(bodies:
+  - {name: ws, mass: -5, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 900]}
+)");
+  EXPECT_EQ(LoadError(path), path + ": bodies[0].mass: mass must be > 0 kg, got -5 (line 2)");
+}
+
+TEST(VehicleLoader, RejectsMissingKeyUnknownKeyAndBadNumber) {
+  const std::string missing = WriteTemp("missing.yaml", R"(bodies:
+  - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445]}
+)");
+  EXPECT_EQ(LoadError(missing), missing + ": bodies[0].inertia: required key missing, got nothing (line 2)");
+  const std::string typo = WriteTemp("typo.yaml", std::string(kTwoBodies) + R"(forces:
+  - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], stifness: [1, 2, 3]}
+)");
+  EXPECT_NE(LoadError(typo).find(typo + ": forces[0].stifness: unknown key"), std::string::npos) << LoadError(typo);
+  const std::string not_number = WriteTemp("not_number.yaml", R"(bodies:
+  - {name: ws, mass: heavy, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 900]}
+)");
+  EXPECT_EQ(LoadError(not_number), not_number + ": bodies[0].mass: expected a number, got heavy (line 2)");
+  const std::string short_vector = WriteTemp("short_vector.yaml", R"(bodies:
+  - {name: ws, mass: 1800, centre_of_mass: [0, 0.445], inertia: [900, 10, 900]}
+)");
+  EXPECT_EQ(LoadError(short_vector),
+            short_vector + ": bodies[0].centre_of_mass: expected a list of 3 numbers, got [0, 0.445] (line 2)");
+}
+
+TEST(VehicleLoader, RejectsBadBumpStopTableAndNegativeStiffness) {
+  const std::string table = WriteTemp("table.yaml", std::string(kTwoBodies) + R"(forces:
+  - name: stop
+    type: bump_stop
+    body_i: ws
+    body_j: box
+    position: [0, 0, 0.5]
+    axis: [0, 1, 0]
+    table: [[0.025, 0], [0.030, 600], [0.028, 900]]
+)");
+  EXPECT_EQ(LoadError(table), table + ": forces[0].table[2][0]: deflection not increasing (after 0.030), got 0.028 (line 11)");
+  const std::string negative = WriteTemp("negative_k.yaml", std::string(kTwoBodies) + R"(forces:
+  - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], stiffness: [1, -2, 3]}
+)");
+  EXPECT_EQ(LoadError(negative), negative + ": forces[0].stiffness[1]: must be >= 0, got -2 (line 5)");
+}
+
+TEST(VehicleLoader, ReportsSyntaxErrorsAndMissingFiles) {
+  const std::string bad = WriteTemp("syntax.yaml", "bodies:\n  - {name: ws, mass: [1800\n");
+  EXPECT_EQ(LoadError(bad).rfind(bad + ":", 0), 0u);
+  EXPECT_NE(LoadError(bad).find("YAML syntax error"), std::string::npos);
+  EXPECT_EQ(LoadError("/nonexistent/vehicle.yaml"), "/nonexistent/vehicle.yaml: cannot open the file");
+}
+
+}  // namespace
+}  // namespace rail::vehicle
