@@ -1,18 +1,40 @@
 // rail_track node: ROS wiring of the track side. Reads the scene from the parameter server, validates it,
-// reports what it will simulate and, in a co-simulation, waits for the vehicle node's handshake. Physics
-// lives in the ROS-free core.
+// reports what it will simulate, then
+//  - in a co-simulation scene: waits for the vehicle node's handshake (and exits after it until the
+//    co-simulation exists);
+//  - in a moving-load scene: builds the flexible track, runs it to solver.end and publishes /clock
+//    (simulated time), rail deflections and markers, recording the scene's output.topics to a bag.
+// Physics lives in the ROS-free core (rail_track_node/scene_track.hpp, track_simulator.hpp).
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <rosbag/bag.h>
+#include <rosgraph_msgs/Clock.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <sys/stat.h>
+#include <vector>
 
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/handshake.hpp>
 #include <rail_core/ros/scene_param.hpp>
 #include <rail_core/scene_loader.hpp>
 #include <rail_msgs/Handshake.h>
+#include <rail_msgs/RailDeflection.h>
+
+#include "rail_track_node/scene_track.hpp"
+#include "rail_track_node/track_simulator.hpp"
 
 using namespace rail::core;
+namespace rt = rail::track;
 
 namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void onSignal(int) { g_stop = 1; }
 
 // Answers the vehicle's handshake; remembers whether it was accepted.
 struct HandshakeServer {
@@ -39,10 +61,307 @@ struct HandshakeServer {
   }
 };
 
+int runHandshake(ros::NodeHandle& nh, const Scene& scene) {
+  HandshakeServer server;
+  server.mine = handshake_info(scene, ros::this_node::getName());
+  ros::ServiceServer srv = nh.advertiseService("/railsim/handshake", &HandshakeServer::on_request, &server);
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
+  while (ros::ok() && !g_stop && !server.answered && ros::WallTime::now() < deadline) {
+    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.05));
+  }
+  if (!ros::ok() || g_stop) return kExitInterrupted;
+  if (!server.answered) {
+    ROS_FATAL("%s: no vehicle node called /railsim/handshake within %.1f s (solver.handshake_timeout): is "
+              "rail_vehicle running?", ros::this_node::getName().c_str(), scene.solver.handshake_timeout);
+    return kExitPeerTimeout;
+  }
+  if (!server.accepted) {
+    ROS_FATAL("%s: handshake refused: %s", ros::this_node::getName().c_str(), server.refusal.c_str());
+    return kExitPeerRefused;
+  }
+  ROS_INFO("%s: handshake complete", ros::this_node::getName().c_str());
+  // Let the service response reach the caller before the node goes away.
+  ros::WallDuration(0.2).sleep();
+  ROS_WARN("%s: scene validated; this build has no track time integration yet, exiting",
+           ros::this_node::getName().c_str());
+  return kExitOk;
+}
+
+// mkdir -p; false on failure.
+bool makeDirs(const std::string& dir) {
+  std::string path;
+  std::size_t pos = 0;
+  while (pos != std::string::npos) {
+    pos = dir.find('/', pos + 1);
+    path = dir.substr(0, pos);
+    if (path.empty()) continue;
+    if (mkdir(path.c_str(), 0755) != 0 && errno != EEXIST) return false;
+  }
+  return true;
+}
+
+bool contains(const std::vector<std::string>& v, const std::string& x) {
+  for (const std::string& s : v)
+    if (s == x) return true;
+  return false;
+}
+
+// Rails as line strips coloured by vertical deflection (displacements magnified by `scale`) and the
+// sleepers as a line list between their end nodes. Message storage allocated once; update() only writes.
+class TrackMarkers {
+ public:
+  TrackMarkers(const rt::TrackModel& model, const std::string& frame_id, double scale, double colour_range)
+      : model_(model), scale_(scale), colour_range_(colour_range) {
+    const rt::TrackMesh& mesh = model.mesh;
+    const double incl = model.data.layout.rail_inclination;
+    msg_.markers.resize(3);
+    for (int r = 0; r < 2; ++r) {
+      visualization_msgs::Marker& m = msg_.markers[r];
+      m.header.frame_id = frame_id;
+      m.ns = "rails";
+      m.id = r;
+      m.type = visualization_msgs::Marker::LINE_STRIP;
+      m.action = visualization_msgs::Marker::ADD;
+      m.pose.orientation.w = 1.0;
+      m.scale.x = 0.07;  // line width, m (rail head width)
+      m.color.a = 1.0;
+      const std::size_t n = mesh.rail_nodes[r].size();
+      m.points.resize(n);
+      m.colors.resize(n);
+      up_[r].resize(n);
+      const double sg = r == rt::kLeftRail ? 1.0 : -1.0;
+      for (std::size_t k = 0; k < n; ++k) {
+        const int beam = mesh.rail_beams[r][k + 1 < n ? k : k - 1];
+        const Eigen::Matrix3d& R = mesh.beams[beam].R_local_to_world;
+        up_[r][k] = sg * std::sin(incl) * R.col(1) + std::cos(incl) * R.col(2);  // track normal
+      }
+    }
+    visualization_msgs::Marker& s = msg_.markers[2];
+    s.header.frame_id = frame_id;
+    s.ns = "sleepers";
+    s.id = 0;
+    s.type = visualization_msgs::Marker::LINE_LIST;
+    s.action = visualization_msgs::Marker::ADD;
+    s.pose.orientation.w = 1.0;
+    s.scale.x = 0.22;  // line width, m (sleeper width)
+    s.color.r = s.color.g = s.color.b = 0.55f;
+    s.color.a = 1.0;
+    s.points.resize(2 * mesh.sleeper_nodes.size());
+  }
+
+  const visualization_msgs::MarkerArray& update(const Eigen::VectorXd& d, const ros::Time& stamp) {
+    const rt::TrackMesh& mesh = model_.mesh;
+    for (int r = 0; r < 2; ++r) {
+      visualization_msgs::Marker& m = msg_.markers[r];
+      m.header.stamp = stamp;
+      for (std::size_t k = 0; k < m.points.size(); ++k) {
+        const int node = mesh.rail_nodes[r][k];
+        const Eigen::Vector3d u = translation(d, node);
+        const Eigen::Vector3d p = mesh.nodes[node].p_in_world + scale_ * u;
+        m.points[k].x = p.x();
+        m.points[k].y = p.y();
+        m.points[k].z = p.z();
+        // 0 (no deflection, blue) .. 1 (colour_range down, red).
+        const double w = std::min(1.0, std::max(0.0, -u.dot(up_[r][k]) / colour_range_));
+        m.colors[k].r = static_cast<float>(w);
+        m.colors[k].g = static_cast<float>(0.3 * (1.0 - w));
+        m.colors[k].b = static_cast<float>(1.0 - w);
+        m.colors[k].a = 1.0f;
+      }
+    }
+    visualization_msgs::Marker& s = msg_.markers[2];
+    s.header.stamp = stamp;
+    for (std::size_t k = 0; k < mesh.sleeper_nodes.size(); ++k) {
+      for (int e = 0; e < 2; ++e) {
+        const int node = mesh.sleeper_nodes[k][e == 0 ? 0 : 5];
+        const Eigen::Vector3d p = mesh.nodes[node].p_in_world + scale_ * translation(d, node);
+        s.points[2 * k + e].x = p.x();
+        s.points[2 * k + e].y = p.y();
+        s.points[2 * k + e].z = p.z();
+      }
+    }
+    return msg_;
+  }
+
+ private:
+  Eigen::Vector3d translation(const Eigen::VectorXd& d, int node) const {
+    Eigen::Vector3d u;
+    for (int q = 0; q < 3; ++q) {
+      const int i = model_.mesh.dofIndex(node, q);
+      u(q) = i >= 0 ? d(i) : 0.0;
+    }
+    return u;
+  }
+  const rt::TrackModel& model_;
+  double scale_, colour_range_;
+  std::array<std::vector<Eigen::Vector3d>, 2> up_;
+  visualization_msgs::MarkerArray msg_;
+};
+
+void fill(geometry_msgs::Vector3& out, const Eigen::Vector3d& v) {
+  out.x = v.x();
+  out.y = v.y();
+  out.z = v.z();
+}
+
+int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene) {
+  const std::string me = ros::this_node::getName();
+  // ---- build ----
+  std::unique_ptr<rt::SceneTrack> track;
+  rt::SimulatorSettings settings;
+  try {
+    track.reset(new rt::SceneTrack(rt::buildSceneTrack(scene)));
+    settings.t_end = rt::movingLoadEndTime(scene);
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: %s", me.c_str(), e.what());
+    return kExitBadInput;
+  }
+  settings.dt = scene.solver.track_step;
+  settings.loads = scene.moving_loads;
+  settings.rail_height = track->rail_height;
+  const rt::TrackModel& model = track->model;
+  ROS_INFO("%s: flexible track built: %d free DOFs, %d sleepers; running to t = %.4g s with dt = %.3g s (%ld steps)",
+           me.c_str(), model.system.size(), model.mesh.n_sleepers, settings.t_end, settings.dt,
+           std::lround(settings.t_end / settings.dt));
+  rt::TrackSimulator sim(model, settings);
+  sim.setProgressCallback(
+      [&me](const rt::SimulationProgress& p) {
+        ROS_INFO("%s: t = %.4f s of %.4f s (%.1f %%), %.3g x real time, %.0f s left", me.c_str(), p.t, p.t_end,
+                 p.percent, p.real_time_factor, p.eta);
+      },
+      pnh.param("progress_interval", 2.0));
+
+  const bool deflections = scene.effects.rail_deflection_output && !scene.output.deflection_sections.empty();
+  if (deflections) {
+    const rt::TrackFrameFunction frames = rt::seatPlaneFrames(track->geometry, track->seat_below_centre);
+    for (std::size_t i = 0; i < scene.output.deflection_sections.size(); ++i) {
+      try {
+        sim.addSection(scene.output.deflection_sections[i], frames);
+      } catch (const std::exception& e) {
+        ROS_FATAL("%s: %s: output.deflection_sections[%zu]: %s", me.c_str(), scene.file.c_str(), i, e.what());
+        return kExitBadInput;
+      }
+    }
+  }
+
+  // ---- ROS wiring ----
+  ros::Publisher clock_pub = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  ros::Publisher deflection_pub, marker_pub;
+  if (deflections) deflection_pub = nh.advertise<rail_msgs::RailDeflection>("/rail_deflection", 100);
+  std::unique_ptr<TrackMarkers> markers;
+  double marker_period = 0.0;
+  if (scene.effects.rviz_markers) {
+    marker_pub = nh.advertise<visualization_msgs::MarkerArray>("/markers", 2, true);
+    markers.reset(new TrackMarkers(model, pnh.param<std::string>("frame_id", "world"),
+                                   pnh.param("marker_scale", 200.0), pnh.param("marker_colour_range", 1.0e-3)));
+    marker_period = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
+  }
+
+  rosbag::Bag bag;
+  bool bag_open = false;
+  bool bag_deflection = false, bag_markers = false, bag_clock = false;
+  std::string bag_path;
+  if (!scene.output.bag.empty()) {
+    std::string dir = pnh.param<std::string>("output_dir", "");
+    if (dir.empty()) {
+      const char* ros_home = std::getenv("ROS_HOME");
+      const char* home = std::getenv("HOME");
+      dir = std::string(ros_home ? ros_home : (std::string(home ? home : ".") + "/.ros")) + "/railsim";
+    }
+    bag_path = scene.output.bag[0] == '/' ? scene.output.bag : dir + "/" + scene.output.bag;
+    const std::string bag_dir = bag_path.substr(0, bag_path.rfind('/'));
+    if (!bag_dir.empty() && !makeDirs(bag_dir)) {
+      ROS_FATAL("%s: %s: output.bag: cannot create the directory %s", me.c_str(), scene.file.c_str(), bag_dir.c_str());
+      return kExitBadInput;
+    }
+    try {
+      bag.open(bag_path, rosbag::bagmode::Write);
+      bag_open = true;
+    } catch (const std::exception& e) {
+      ROS_FATAL("%s: %s: output.bag: cannot write %s: %s", me.c_str(), scene.file.c_str(), bag_path.c_str(), e.what());
+      return kExitBadInput;
+    }
+    bag_deflection = deflections && contains(scene.output.topics, "rail_deflection");
+    bag_markers = markers && contains(scene.output.topics, "markers");
+    bag_clock = contains(scene.output.topics, "clock");
+    for (const std::string& t : scene.output.topics)
+      if (t != "rail_deflection" && t != "markers" && t != "clock")
+        ROS_WARN("%s: output.topics: %s has no source in a moving-load run; not recorded", me.c_str(), t.c_str());
+    ROS_INFO("%s: recording to %s", me.c_str(), bag_path.c_str());
+  }
+
+  // Optionally wait (wall clock) for subscribers to connect, so that they see the run from t = 0.
+  const double wait = pnh.param("wait_for_subscribers", 0.0);
+  if (wait > 0.0) {
+    const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(wait);
+    while (!g_stop && ros::ok() && ros::WallTime::now() < until &&
+           ((deflections && deflection_pub.getNumSubscribers() == 0) ||
+            (markers && marker_pub.getNumSubscribers() == 0)))
+      ros::WallDuration(0.02).sleep();
+  }
+
+  // ---- loop: advance to each output time, publish ----
+  const int n_sections = sim.sectionCount();
+  std::vector<rail_msgs::RailDeflection> deflection_msgs(n_sections);
+  for (rail_msgs::RailDeflection& m : deflection_msgs) m.header.frame_id = "track";
+  rt::RailSectionDeflection deflection;
+  rosgraph_msgs::Clock clock_msg;
+  const double period = 1.0 / scene.output.rate;
+  double next_marker = 0.0;
+  long k = 0;
+  int exit_code = kExitOk;
+  while (true) {
+    if (g_stop || !ros::ok()) {
+      ROS_WARN("%s: stopped at t = %.4f s", me.c_str(), sim.time());
+      exit_code = kExitInterrupted;
+      break;
+    }
+    sim.advanceTo(std::min(k * period, settings.t_end));
+    const ros::Time stamp(sim.time());
+    // A bag refuses time 0: the first output (t = 0) is filed at the smallest time it takes.
+    const ros::Time bag_time = stamp < ros::TIME_MIN ? ros::TIME_MIN : stamp;
+    clock_msg.clock = stamp;
+    clock_pub.publish(clock_msg);
+    if (bag_clock) bag.write("/clock", bag_time, clock_msg);
+    for (int i = 0; i < n_sections; ++i) {
+      sim.sectionDeflection(i, deflection);
+      rail_msgs::RailDeflection& m = deflection_msgs[i];
+      m.header.stamp = stamp;
+      m.arc_length = deflection.s;
+      fill(m.left_displacement, deflection.displacement[rt::kLeftRail]);
+      fill(m.left_rotation, deflection.rotation[rt::kLeftRail]);
+      fill(m.right_displacement, deflection.displacement[rt::kRightRail]);
+      fill(m.right_rotation, deflection.rotation[rt::kRightRail]);
+      deflection_pub.publish(m);
+      if (bag_deflection) bag.write("/rail_deflection", bag_time, m);
+    }
+    if (markers && (sim.time() + 1e-12 >= next_marker || sim.finished())) {
+      next_marker += marker_period;
+      const visualization_msgs::MarkerArray& ma = markers->update(sim.state().d, stamp);
+      marker_pub.publish(ma);
+      if (bag_markers) bag.write("/markers", bag_time, ma);
+    }
+    if (sim.finished()) break;
+    ++k;
+  }
+  if (bag_open) {
+    bag.close();
+    ROS_INFO("%s: bag closed: %s", me.c_str(), bag_path.c_str());
+  }
+  if (exit_code == kExitOk) {
+    ROS_INFO("%s: finished at t = %.4f s (%ld steps)", me.c_str(), sim.time(), sim.steps());
+    // Let subscribers receive the last messages.
+    ros::WallDuration(0.3).sleep();
+  }
+  return exit_code;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "rail_track");
+  ros::init(argc, argv, "rail_track", ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
   ros::NodeHandle nh, pnh("~");
   Scene scene;
   if (!ros_glue::read_scene(pnh, scene)) return kExitBadInput;
@@ -53,30 +372,11 @@ int main(int argc, char** argv) {
     return kExitOk;
   }
   if (pnh.param("validate_only", false)) return kExitOk;
-
-  if (scene.has_vehicle) {
-    HandshakeServer server;
-    server.mine = handshake_info(scene, ros::this_node::getName());
-    ros::ServiceServer srv = nh.advertiseService("/railsim/handshake", &HandshakeServer::on_request, &server);
-    const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
-    while (ros::ok() && !server.answered && ros::WallTime::now() < deadline) {
-      ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.05));
-    }
-    if (!ros::ok()) return kExitInterrupted;
-    if (!server.answered) {
-      ROS_FATAL("%s: no vehicle node called /railsim/handshake within %.1f s (solver.handshake_timeout): is "
-                "rail_vehicle running?", ros::this_node::getName().c_str(), scene.solver.handshake_timeout);
-      return kExitPeerTimeout;
-    }
-    if (!server.accepted) {
-      ROS_FATAL("%s: handshake refused: %s", ros::this_node::getName().c_str(), server.refusal.c_str());
-      return kExitPeerRefused;
-    }
-    ROS_INFO("%s: handshake complete", ros::this_node::getName().c_str());
-    // Let the service response reach the caller before the node goes away.
-    ros::WallDuration(0.2).sleep();
+  try {
+    if (scene.has_vehicle) return runHandshake(nh, scene);
+    return runMovingLoads(nh, pnh, scene);
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: internal error: %s", ros::this_node::getName().c_str(), e.what());
+    return kExitInternal;
   }
-  ROS_WARN("%s: scene validated; this build has no track time integration yet, exiting",
-           ros::this_node::getName().c_str());
-  return kExitOk;
 }

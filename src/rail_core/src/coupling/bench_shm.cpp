@@ -1,0 +1,153 @@
+// Round-trip time of one co-simulation exchange (vehicle sends 8 wheel states, track answers 8 wrenches)
+// through the protocol objects: shm transport between two processes (spinning, then futex sleep; and
+// futex sleep only), and the in-process loopback between two threads for comparison.
+//
+// usage: bench_shm [exchanges (default 100000)]
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "rail_core/coupling/loopback_transport.hpp"
+#include "rail_core/coupling/protocol.hpp"
+#include "rail_core/coupling/shm_transport.hpp"
+
+using namespace rail::core::coupling;
+
+namespace {
+
+constexpr int kWheels = 8;
+
+CouplingConfig bench_config() {
+  CouplingConfig c;
+  c.track_step = 2e-5;
+  c.exchange_timeout = 10.0;
+  c.scene_hash = 0xbe9c000000000001ull;
+  c.wheel_count = kWheels;
+  return c;
+}
+
+// Answers `steps` steps with a wrench made from the states; returns 0 if all went well.
+int track_loop(FrameTransport& t, long steps) {
+  TrackCoupling track(bench_config(), t);
+  for (long k = 0; k < steps; ++k) {
+    if (!track.receive()) return 1;
+    for (int i = 0; i < kWheels; ++i) {
+      track.wrenches().wheels[i].f_wheel_in_world = 1e3 * track.states().wheels[i].p_wheel_in_world;
+      track.wrenches().wheels[i].n_wheel_in_world = track.states().wheels[i].omega_wheelset_in_world;
+    }
+    if (!track.send()) return 2;
+  }
+  return 0;
+}
+
+// Times `steps` exchanges (after `warmup` untimed ones); fills round-trip times [s].
+bool vehicle_loop(FrameTransport& t, long warmup, long steps, std::vector<double>& rtt) {
+  VehicleCoupling v(bench_config(), t);
+  rtt.resize(static_cast<std::size_t>(steps));
+  for (long k = 0; k < warmup + steps; ++k) {
+    for (int i = 0; i < kWheels; ++i) {
+      v.states().wheels[i].p_wheel_in_world = Eigen::Vector3d(1e-3 * k, i, 0.445);
+      v.states().wheels[i].omega_wheelset_in_world = Eigen::Vector3d(0, 60.0, 0);
+    }
+    const auto t0 = Clock::now();
+    const Result r = v.exchange();
+    const auto t1 = Clock::now();
+    if (!r) {
+      std::fprintf(stderr, "%s\n", r.message.c_str());
+      return false;
+    }
+    if (k >= warmup) rtt[static_cast<std::size_t>(k - warmup)] = std::chrono::duration<double>(t1 - t0).count();
+  }
+  return true;
+}
+
+void report(const char* what, std::vector<double>& rtt) {
+  std::sort(rtt.begin(), rtt.end());
+  const auto at = [&](double q) { return rtt[static_cast<std::size_t>(q * static_cast<double>(rtt.size() - 1))]; };
+  double sum = 0;
+  for (double x : rtt) sum += x;
+  std::printf("%-44s n %zu  median %8.2f us  p99 %8.2f us  mean %8.2f us  max %9.1f us\n", what, rtt.size(),
+              1e6 * at(0.5), 1e6 * at(0.99), 1e6 * sum / static_cast<double>(rtt.size()), 1e6 * rtt.back());
+}
+
+bool bench_shm(const char* what, long warmup, long steps, int spin) {
+  ShmOptions o;
+  o.scene_hash = bench_config().scene_hash;
+  o.wheel_capacity = kWheels;
+  o.run_id = "bench" + std::to_string(getpid());
+  o.spin_iterations = spin;
+  ShmOptions track_options = o;
+  track_options.role = Role::kTrack;
+  const pid_t child = fork();
+  if (child == 0) {
+    int code = 3;
+    try {
+      ShmTransport t(track_options);
+      code = track_loop(t, warmup + steps);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "track: %s\n", e.what());
+    }
+    _exit(code);
+  }
+  std::vector<double> rtt;
+  bool ok = false;
+  try {
+    o.role = Role::kVehicle;
+    ShmTransport t(o);
+    ok = vehicle_loop(t, warmup, steps, rtt);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "vehicle: %s\n", e.what());
+  }
+  int status = 0;
+  if (!ok) kill(child, SIGKILL);
+  waitpid(child, &status, 0);
+  ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  if (ok) report(what, rtt);
+  return ok;
+}
+
+bool bench_loopback(long warmup, long steps) {
+  LoopbackLink link(kWheels);
+  int track_code = -1;
+  std::thread track([&] { track_code = track_loop(link.track_end(), warmup + steps); });
+  std::vector<double> rtt;
+  const bool ok = vehicle_loop(link.vehicle_end(), warmup, steps, rtt);
+  if (!ok) link.vehicle_end().close();
+  track.join();
+  if (ok && track_code == 0) report("loopback (2 threads, mutex + condvar)", rtt);
+  return ok && track_code == 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const long steps = argc > 1 ? std::atol(argv[1]) : 100000;
+  if (steps <= 0) {
+    std::fprintf(stderr, "usage: bench_shm [exchanges > 0]\n");
+    return 2;
+  }
+  const long warmup = std::min(steps / 10, 10000L);
+  std::printf("round trip of one exchange, %d wheels, %u hardware threads\n", kWheels,
+              std::thread::hardware_concurrency());
+#if defined(__x86_64__) || defined(__i386__)
+  {  // how long the default spin lasts on this machine (the same pause loop as the transport's)
+    const int spins = ShmOptions{}.spin_iterations;
+    const auto t0 = Clock::now();
+    for (int rep = 0; rep < 100; ++rep)
+      for (int i = 0; i < spins; ++i) __builtin_ia32_pause();
+    std::printf("default spin: %d pause iterations = %.2f us\n", spins,
+                1e6 * std::chrono::duration<double>(Clock::now() - t0).count() / 100);
+  }
+#endif
+  bool ok = bench_shm("shm, 2 processes (spin 2000, then futex)", warmup, steps, 2000);
+  ok = bench_shm("shm, 2 processes (futex only, no spin)", warmup, steps, 0) && ok;
+  ok = bench_loopback(warmup, steps) && ok;
+  return ok ? 0 : 1;
+}

@@ -1,0 +1,33 @@
+#include "rail_core/coupling/transport.hpp"
+
+#include "rail_core/exit_codes.hpp"
+
+namespace rail::core::coupling {
+
+const char* to_string(Role r) { return r == Role::kVehicle ? "vehicle" : "track"; }
+
+const char* to_string(Status s) {
+  switch (s) {
+    case Status::kOk: return "ok";
+    case Status::kTimeout: return "timeout";
+    case Status::kPeerClosed: return "peer closed";
+    case Status::kRefused: return "refused";
+    case Status::kInterrupted: return "interrupted";
+    case Status::kError: return "error";
+  }
+  return "unknown";
+}
+
+int exit_code(Status s) {
+  switch (s) {
+    case Status::kOk: return kExitOk;
+    case Status::kTimeout:
+    case Status::kPeerClosed: return kExitPeerTimeout;
+    case Status::kRefused: return kExitPeerRefused;
+    case Status::kInterrupted: return kExitInterrupted;
+    case Status::kError: return kExitInternal;
+  }
+  return kExitInternal;
+}
+
+}  // namespace rail::core::coupling

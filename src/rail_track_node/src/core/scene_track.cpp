@@ -1,0 +1,85 @@
+// Scene -> flexible track (see scene_track.hpp).
+#include "rail_track_node/scene_track.hpp"
+
+#include <cmath>
+#include <exception>
+#include <string>
+#include <utility>
+
+#include <rail_core/geometry_builder.hpp>
+#include <rail_core/scene_loader.hpp>
+
+namespace rail {
+namespace track {
+
+namespace rc = rail::contact;
+using rail::core::Scene;
+using rail::core::SceneError;
+
+TrackData sceneTrackData(const Scene& scene, const rc::GeometrySpec& geometry, const SceneTrackOptions& options) {
+  TrackData data;
+  try {
+    data = loadTrackData(scene.track.data.path);
+  } catch (const std::exception& e) {
+    throw SceneError(scene.file + ": track.data: " + e.what());
+  }
+  if (!(options.rail_height > data.layout.rail_centroid_height))
+    throw SceneError(scene.file + ": track.data: layout.rail_centroid_height must lie below the rail height (" +
+                     std::to_string(options.rail_height) + " m), got " +
+                     std::to_string(data.layout.rail_centroid_height));
+  TrackLayout& L = data.layout;
+  L.sleeper_spacing = scene.track.sleeper_spacing;
+  L.rail_elements_between_sleepers = scene.track.rail_elements_between_sleepers;
+  L.rail_inclination = geometry.rail_inclination;
+  L.rail_lateral_offset =
+      geometry.rail_half_spacing + (L.pad_thickness + options.rail_height) * std::sin(L.rail_inclination);
+  if (!(L.rail_lateral_offset < 0.5 * L.sleeper_length))
+    throw SceneError(scene.file + ": track.gauge: the rail seats (" + std::to_string(L.rail_lateral_offset) +
+                     " m from the centre) lie beyond the sleeper ends (track.data: layout.sleeper_length " +
+                     std::to_string(L.sleeper_length) + " m)");
+  if (!scene.effects.track_damping) {
+    for (BeamSection* b : {&data.rail, &data.sleeper}) {
+      b->rayleigh_alpha = 0.0;
+      b->rayleigh_beta = 0.0;
+    }
+    for (SpringDamperData* s : {&data.pad, &data.ballast, &data.sleeper_interaction}) s->c.setZero();
+  }
+  data.absorbing_ends.enabled = scene.effects.absorbing_ends;
+  return data;
+}
+
+double seatPlaneBelowCentreLine(const TrackData& data, double rail_height) {
+  return (data.layout.pad_thickness + rail_height) * std::cos(data.layout.rail_inclination);
+}
+
+TrackFrameFunction seatPlaneFrames(const rc::TrackGeometry& geometry, double seat_below_centre) {
+  return [&geometry, seat_below_centre](double s) {
+    rc::TrackPoint c;
+    geometry.centre(s, c);
+    TrackFrameSample F;
+    F.R_track_to_world = c.R_track_to_world;
+    F.p_centre_in_world = c.p_center_in_world - seat_below_centre * c.R_track_to_world.col(2);
+    return F;
+  };
+}
+
+SceneTrack buildSceneTrack(const Scene& scene, const SceneTrackOptions& options) {
+  rc::TrackGeometry geometry = rail::core::build_track_geometry(scene);
+  const TrackData data = sceneTrackData(scene, geometry.spec(), options);
+  const double seat = seatPlaneBelowCentreLine(data, options.rail_height);
+  MeshOptions mesh;
+  mesh.s_start = scene.track.start_arc_length;
+  mesh.track_length = scene.track.length();
+  TrackModel model;
+  try {
+    model = buildTrackModel(data, mesh, seatPlaneFrames(geometry, seat), options.g_in_world);
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw SceneError(scene.file + ": track: " + e.what());
+  }
+  return SceneTrack{std::move(geometry), std::move(model), seat, options.rail_height};
+}
+
+}  // namespace track
+}  // namespace rail
