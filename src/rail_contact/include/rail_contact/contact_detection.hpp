@@ -1,0 +1,153 @@
+// Online wheel-rail contact detection for one wheel on one rail (paper section 4.1, eqs. 4, 5 and 8).
+//
+// Surfaces (Figure 8):
+//  - wheel tread and flange: surfaces of revolution of the wheel profile curves (profile.hpp) about the
+//    axle, parameters (s_w, u_w): s_w the revolution angle (rad) measured from the downward direction
+//    (world -z projected on the wheel plane) toward forward, u_w the profile arc length (m);
+//  - rail: the rail profile swept along the rail (track_geometry.hpp), parameters (s_r, u_r): s_r the
+//    track arc length (m), u_r the profile arc length (m); deformed by a provider (rail_deformation.hpp).
+// Unknowns x = (s_w, u_w, s_r, u_r); equations (eq. 4): with d = p_wheel - p_rail, t_s, t_u the rail
+// tangents and n_w the wheel normal:  d.t_s = 0, d.t_u = 0, n_w.t_s = 0, n_w.t_u = 0.
+// Newton's method with the analytic Jacobian (the rail's second derivative along s, of the order of the
+// track curvature, is left out; exact on straight track), warm-started from the previous solution kept
+// in a caller-owned DetectionWork. When Newton fails, leaves the surface bounds or finds a non-opposed
+// normal pair, a robust search over the wheel profile in the rail cross-section (signed distance field of
+// the rail profile, precomputed) gives a new start and Newton runs again. Contact exists when the
+// penetration along the normal is positive (eq. 5).
+//
+// Frames: world x forward, y left, z up (track_geometry.hpp). Wheelset frame: y along the axle (left
+// positive). A wheel's profile y points toward the track centre, like the rail's, so the left wheel has
+// profile y along -axle, the right wheel along +axle. The wheel centre is the axle point in the plane of
+// the taping line (profile y = 0).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "rail_contact/profile.hpp"
+#include "rail_contact/rail_deformation.hpp"
+#include "rail_contact/track_geometry.hpp"
+
+namespace rail {
+namespace contact {
+
+/// Which wheel surface (paper Figure 8).
+enum class WheelSurface : int { kTread = 0, kFlange = 1 };
+
+/// Outcome of one detection.
+enum class DetectionStatus : std::uint8_t {
+  kConverged = 0,          ///< Newton from the warm start converged inside the surface bounds
+  kConvergedAfterSearch,   ///< converged after a (fallback or initial) robust search
+  kApproximate,            ///< Newton failed; the search's best point pair is returned (finite, usable)
+  kOutOfBounds,            ///< no contact point inside the surfaces (e.g. wheel far off the rail)
+  kInvalidInput,           ///< non-finite pose: nothing computed
+};
+const char* toString(DetectionStatus status) noexcept;
+
+/// Detection settings (constant after building the detector).
+struct DetectionOptions {
+  int max_iterations = 15;               ///< Newton iterations per attempt
+  double tolerance = 1e-10;              ///< convergence: step below this (m; rad times nominal radius)
+  double max_step_length = 0.01;         ///< Newton step limit on u_w, u_r (m) and s_r (x 5)
+  double max_step_angle = 0.1;           ///< Newton step limit on s_w, rad
+  double max_penetration = 0.005;        ///< larger penetrations are rejected as spurious point pairs, m
+  double min_normal_opposition = 0.9;    ///< -n_w . n_r must exceed this at a valid point pair
+  double search_cell = 0.5e-3;           ///< cell of the rail signed-distance grid, m
+  double search_margin = 0.04;           ///< grid margin around the rail profile, m
+  double search_spacing = 0.5e-3;        ///< spacing of the wheel profile samples in the search, m
+};
+
+/// Caller-owned per-pair state: warm start and counters (one per wheel surface and wheel).
+struct DetectionWork {
+  Eigen::Vector4d x = Eigen::Vector4d::Zero();  ///< last solution (s_w, u_w, s_r, u_r)
+  bool has_warm_start = false;
+  long long calls = 0;              ///< detections run
+  long long newton_iterations = 0;  ///< total Newton iterations
+  long long searches = 0;           ///< robust searches run (initial and fallback)
+  long long fallbacks = 0;          ///< searches caused by a failed warm-started Newton
+  long long approximations = 0;     ///< results returned as kApproximate
+  void reset() { *this = DetectionWork(); }
+};
+
+/// Wheel pose for the detection (world frame).
+struct WheelPose {
+  Eigen::Vector3d p_centre_in_world = Eigen::Vector3d::Zero();      ///< wheel centre, m
+  Eigen::Matrix3d R_wheelset_to_world = Eigen::Matrix3d::Identity();  ///< A_ws
+  RailSide side = RailSide::kLeft;  ///< wheel side = rail side
+  double s_hint = 0.0;              ///< track arc length near the wheel, m (used by the search)
+};
+
+/// Geometry of one detected point pair (world frame).
+struct ContactGeometry {
+  DetectionStatus status = DetectionStatus::kOutOfBounds;
+  bool valid = false;             ///< point pair usable (converged or approximate)
+  bool in_contact = false;        ///< valid and penetration > 0 (eq. 5)
+  double s_w = 0.0, u_w = 0.0;    ///< wheel surface parameters, rad and m
+  double s_r = 0.0, u_r = 0.0;    ///< rail surface parameters, m and m
+  double penetration = 0.0;       ///< along the normal, m; > 0 interpenetrating, < 0 gap (finite always)
+  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();   ///< wheel surface point, m
+  Eigen::Vector3d p_rail_in_world = Eigen::Vector3d::Zero();    ///< rail surface point, m
+  Eigen::Vector3d n_in_world = Eigen::Vector3d::UnitZ();        ///< unit normal, from rail into wheel
+  Eigen::Vector3d t_rolling_in_world = Eigen::Vector3d::UnitX();  ///< wheel circumferential unit tangent, forward
+  Eigen::Vector3d p_section_centre_in_world = Eigen::Vector3d::Zero();  ///< deformed rail section centre at s_r, m
+  RailSectionMotion rail_motion;  ///< provider's section motion at s_r
+  double wheel_radius = 0.0;      ///< distance from the axle to the wheel point (rolling radius), m
+  double cos_normal_radial = 1.0; ///< |n . radial direction| (for the wheel's rolling curvature)
+  double wheel_curvature = 0.0;   ///< wheel profile curvature at u_w, 1/m (convex > 0)
+  double rail_curvature = 0.0;    ///< rail profile curvature at u_r, 1/m (convex > 0)
+  double wheel_y = 0.0, wheel_z = 0.0;  ///< contact point in the wheel profile frame, m
+  double rail_y = 0.0, rail_z = 0.0;    ///< contact point in the rail profile frame, m
+  int iterations = 0;             ///< Newton iterations of this call
+};
+
+/// Detector for one wheel profile on one rail profile. Constant after building; shared by all wheels
+/// with these profiles. The rail profile is given in the rail profile frame of track_geometry.hpp (y
+/// toward the track centre, z along the rail's up axis), the wheel profile in the frame of profile.hpp.
+class ContactDetector {
+ public:
+  /// wheel: tread and flange curves; nominal_radius: r0 (m); rail: rail profile curve;
+  /// section_centre_yz: rail section centre (beam axis) in the rail profile frame (m), e.g.
+  /// (0, -uic60::kCentroidDepth) for an untilted UIC60. Throws std::runtime_error on non-physical input.
+  ContactDetector(const WheelProfile& wheel, double nominal_radius, const ProfileCurve& rail,
+                  const Eigen::Vector2d& section_centre_yz, const DetectionOptions& options = {});
+
+  /// Detects the point pair of one wheel surface on its rail. No allocation, no exception.
+  template <class Deformation>
+  void detect(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
+              const Deformation& deformation, DetectionWork& work, ContactGeometry& out) const noexcept;
+
+  const ProfileCurve& wheelCurve(WheelSurface s) const { return s == WheelSurface::kTread ? tread_ : flange_; }
+  const ProfileCurve& railCurve() const { return rail_; }
+  double nominalRadius() const { return r0_; }
+  const Eigen::Vector2d& sectionCentre() const { return section_centre_; }
+  const DetectionOptions& options() const { return options_; }
+
+  /// Signed distance (m, > 0 outside the rail) of a point of the rail profile frame to the rail profile,
+  /// from the precomputed grid (bilinear), and the parameter of the closest rail point (nearest cell).
+  double railSignedDistance(const Eigen::Vector2d& p_yz, double* u_closest = nullptr) const noexcept;
+
+ private:
+  struct Sample {
+    double u, y, z;
+  };
+  ProfileCurve tread_, flange_, rail_;
+  double r0_ = 0.0;
+  Eigen::Vector2d section_centre_;
+  DetectionOptions options_;
+  double wheel_normal_sign_[2] = {1.0, 1.0};
+  double rail_normal_sign_ = 1.0;
+  std::vector<Sample> samples_[2];  // wheel profile samples per surface
+  // Signed-distance grid of the rail profile.
+  double grid_y0_ = 0.0, grid_z0_ = 0.0, grid_h_ = 0.0;
+  int grid_ny_ = 0, grid_nz_ = 0;
+  std::vector<float> grid_dist_, grid_u_;
+
+  template <class Deformation>
+  bool search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
+              const Deformation& deformation, Eigen::Vector4d& x_seed, double& distance,
+              Eigen::Vector3d& p_wheel_seed) const noexcept;
+};
+
+}  // namespace contact
+}  // namespace rail

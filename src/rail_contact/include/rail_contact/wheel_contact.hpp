@@ -1,0 +1,133 @@
+// Per-wheel contact evaluation (paper section 4.1, eqs. 9-13 and 15): detection of the tread and flange
+// contacts of one wheel on its rail (contact_detection.hpp), Hertz normal force with hysteresis damping
+// (hertz.hpp), creepages from the material-point velocities (creepage.hpp), creep forces (polach.hpp),
+// contact force vectors (eq. 12) and their equivalent wrenches at the wheel centre (eq. 13) and on the
+// rail cross-section (eq. 15) (wrench_transfer.hpp).
+//
+// Contact frame of each contact: t_rolling (wheel circumferential direction, forward along the track),
+// t_lateral = n x t_rolling, n the unit normal from the rail into the wheel. Forces act on the wheel;
+// the rail receives the opposite forces. World frame x forward, y left, z up.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+
+#include "rail_contact/contact_detection.hpp"
+#include "rail_contact/creepage.hpp"
+#include "rail_contact/hertz.hpp"
+#include "rail_contact/kalker.hpp"
+#include "rail_contact/polach.hpp"
+#include "rail_contact/wrench_transfer.hpp"
+
+namespace rail {
+namespace contact {
+
+/// Tangential creep-force law. Only Polach's method for now; the enum leaves room for another law.
+enum class CreepLaw : std::uint8_t { kPolach = 0 };
+
+/// Scene effects and material data (constant after building the model).
+struct WheelContactOptions {
+  bool flange_contact = true;          ///< false: the flange search is not run at all
+  bool spin = true;                    ///< spin creepage in the creep forces (Polach's F_yS, nu_C)
+  CreepLaw creep_law = CreepLaw::kPolach;
+  double friction = 0.3;               ///< mu0, maximum friction coefficient [-] (scene value; no default implied)
+  PolachOptions polach;                ///< kA, kS, A, B (its `spin` field is overridden by `spin`)
+  ElasticMaterial wheel_material;      ///< E, nu of the wheel
+  ElasticMaterial rail_material;       ///< E, nu of the rail
+  NormalDampingParams damping;         ///< restitution e, exponent n, impact-velocity floor (eq. 9)
+  CreepageOptions creepage;            ///< speed regularisation at standstill
+  HertzOptions hertz;                  ///< degenerate-geometry clamps
+  DetectionOptions detection;          ///< Newton and search settings
+  /// Tread and flange contacts closer than this (wheel points, m) are one conformal patch across the
+  /// tread/flange split: only the deeper one is kept (the other is flagged merged).
+  double merge_distance = 3e-3;
+};
+
+/// Throws std::runtime_error naming the field and value when an option is non-physical.
+void validate(const WheelContactOptions& options);
+
+/// Kinematic state of one wheel (world frame).
+struct WheelState {
+  Eigen::Vector3d p_centre_in_world = Eigen::Vector3d::Zero();        ///< wheel centre (taping-line plane), m
+  Eigen::Matrix3d R_wheelset_to_world = Eigen::Matrix3d::Identity();  ///< A_ws
+  Eigen::Vector3d v_centre_in_world = Eigen::Vector3d::Zero();        ///< velocity of the wheel centre, m/s
+  Eigen::Vector3d omega_in_world = Eigen::Vector3d::Zero();           ///< wheelset angular velocity, rad/s
+  double s_hint = 0.0;  ///< track arc length near the wheel, m (start of the search; e.g. wheelset station)
+};
+
+/// Index of a wheel's two contacts.
+constexpr int kTread = 0;
+constexpr int kFlange = 1;
+
+/// One contact (what rail_msgs/ContactPoint carries, plus the force vectors and the detection details).
+struct ContactPointResult {
+  bool active = false;             ///< surfaces interpenetrate and N > 0 is evaluated
+  DetectionStatus status = DetectionStatus::kOutOfBounds;
+  bool searched = false;           ///< false: the search was not run (flange contact off)
+  bool merged = false;             ///< in contact but merged into the other surface's contact (see merge_distance)
+  double s_r = 0.0;                ///< rail arc length of the contact, m
+  Eigen::Vector3d p_contact_in_world = Eigen::Vector3d::Zero();  ///< midpoint of wheel and rail points, m
+  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();    ///< wheel surface point, m
+  Eigen::Vector3d p_rail_in_world = Eigen::Vector3d::Zero();     ///< rail surface point, m
+  Eigen::Vector3d normal_in_world = Eigen::Vector3d::UnitZ();    ///< unit normal, rail into wheel
+  Eigen::Matrix3d R_contact_to_world = Eigen::Matrix3d::Identity();  ///< columns t_rolling, t_lateral, n
+  double N = 0.0;                  ///< normal force, N (>= 0)
+  double F_long = 0.0;             ///< creep force along t_rolling on the wheel, N
+  double F_lat = 0.0;              ///< creep force along t_lateral on the wheel, N
+  double nu_x = 0.0, nu_y = 0.0;   ///< longitudinal and lateral creepages, -
+  double phi = 0.0;                ///< spin creepage, 1/m (0 with spin off)
+  double a = 0.0, b = 0.0;         ///< contact ellipse semi-axes (rolling, lateral), m
+  double penetration = 0.0;        ///< delta, m (> 0 in contact; finite gap otherwise)
+  double penetration_rate = 0.0;   ///< d delta / dt, m/s (> 0 approaching)
+  double rolling_radius = 0.0;     ///< wheel radius at the contact, m
+  double contact_angle = 0.0;      ///< angle of the normal to the rail's up axis in the cross-section, rad
+  Eigen::Vector3d force_on_wheel_in_world = Eigen::Vector3d::Zero();  ///< eq. 12, N
+  RailWrench rail_wrench;          ///< eq. 15 for this contact alone, about its own section centre at s_r
+  Eigen::Vector3d p_section_centre_in_world = Eigen::Vector3d::Zero();  ///< rail section centre at s_r, m
+  std::uint32_t hertz_flags = 0;   ///< HertzFlag bits of the contact geometry
+};
+
+/// Output of one wheel's evaluation.
+struct WheelContactResult {
+  ContactPointResult contact[2];   ///< [kTread], [kFlange]
+  WheelsetWrench wheel_centre;     ///< eq. 13: force (world) and moment about the wheel centre (wheelset frame)
+  RailWrench rail_section;         ///< eq. 15: both contacts about the section centre at rail_section_s
+  double rail_section_s = 0.0;     ///< s_r of that section (tread contact if active, else flange), m
+};
+
+/// Caller-owned per-wheel work state: detection warm starts and impact memories of both contacts.
+struct WheelContactWork {
+  DetectionWork detection[2];
+  ImpactMemory impact[2];
+  void reset() { *this = WheelContactWork(); }
+};
+
+/// Contact model for one wheel profile on one rail profile. Constant after building.
+class WheelContactModel {
+ public:
+  /// Throws std::runtime_error on non-physical options or geometry (see ContactDetector).
+  WheelContactModel(const WheelProfile& wheel, double nominal_radius, const ProfileCurve& rail,
+                    const Eigen::Vector2d& rail_section_centre_yz, const WheelContactOptions& options);
+
+  /// Evaluates both contacts of one wheel on the rail of the same side. No allocation, no exception;
+  /// finite output for any finite input (invalid input gives inactive contacts and zero wrenches).
+  template <class Deformation>
+  void evaluate(const WheelState& wheel, RailSide side, const TrackGeometry& track, const Deformation& deformation,
+                WheelContactWork& work, WheelContactResult& out) const noexcept;
+
+  const ContactDetector& detector() const { return detector_; }
+  const WheelContactOptions& options() const { return options_; }
+  double contactModulus() const { return E_star_; }
+  double shearModulus() const { return G_; }
+  double poissonRatio() const { return nu_; }
+
+ private:
+  WheelContactOptions options_;
+  ContactDetector detector_;
+  PolachOptions polach_;
+  double E_star_ = 0.0, G_ = 0.0, nu_ = 0.0;
+  const KalkerTable* kalker_ = nullptr;
+};
+
+}  // namespace contact
+}  // namespace rail

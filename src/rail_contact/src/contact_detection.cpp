@@ -1,0 +1,457 @@
+#include "rail_contact/contact_detection.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace rail {
+namespace contact {
+
+const char* toString(DetectionStatus status) noexcept {
+  switch (status) {
+    case DetectionStatus::kConverged: return "converged";
+    case DetectionStatus::kConvergedAfterSearch: return "converged_after_search";
+    case DetectionStatus::kApproximate: return "approximate";
+    case DetectionStatus::kOutOfBounds: return "out_of_bounds";
+    case DetectionStatus::kInvalidInput: return "invalid_input";
+  }
+  return "unknown";
+}
+
+namespace {
+
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+using Eigen::Vector4d;
+using Eigen::Matrix3d;
+using Eigen::Matrix4d;
+
+inline Vector2d perp(const Vector2d& v) { return Vector2d(-v.y(), v.x()); }  // +90 deg rotation
+
+// Wheel frame of one pose: centre c, axle a, revolution directions d0 (s_w = 0, down) and f0 (forward),
+// lateral sign of the profile y axis along a.
+struct WheelFrame {
+  Vector3d c, a, d0, f0;
+  double ls = 1.0;
+};
+
+bool makeWheelFrame(const WheelPose& pose, WheelFrame& wf) {
+  const Matrix3d& R = pose.R_wheelset_to_world;
+  if (!R.allFinite() || !pose.p_centre_in_world.allFinite() || !std::isfinite(pose.s_hint)) return false;
+  wf.c = pose.p_centre_in_world;
+  const double an = R.col(1).norm();
+  if (!(an > 0.5)) return false;
+  wf.a = R.col(1) / an;
+  const Vector3d down(0.0, 0.0, -1.0);
+  Vector3d d0 = down - down.dot(wf.a) * wf.a;
+  if (d0.norm() < 1e-6) d0 = -R.col(2) + R.col(2).dot(wf.a) * wf.a;  // axle vertical: wheelset -z
+  wf.d0 = d0.normalized();
+  wf.f0 = wf.d0.cross(wf.a);
+  wf.ls = pose.side == RailSide::kLeft ? -1.0 : 1.0;
+  return true;
+}
+
+// Wheel surface point and first derivatives.
+struct WheelEval {
+  Vector3d p, p_th, p_u, n, n_th, n_u, e_r, e_th;
+  Vector2d q;  // profile point (y, z)
+  double rho = 0.0;
+};
+
+void evalWheel(const ProfileCurve& curve, double normal_sign, const WheelFrame& wf, double r0, double th, double u,
+               WheelEval& w) {
+  Vector2d dq, d2q;
+  curve.derivatives(u, w.q, dq, d2q);
+  const double speed = dq.norm();
+  const Vector2d t = dq / speed;
+  const Vector2d dt = (d2q - t * t.dot(d2q)) / speed;
+  const Vector2d n2 = normal_sign * perp(t);
+  const Vector2d dn2 = normal_sign * perp(dt);
+  const double c = std::cos(th), s = std::sin(th);
+  w.e_r = c * wf.d0 + s * wf.f0;
+  w.e_th = -s * wf.d0 + c * wf.f0;
+  w.rho = r0 - w.q.y();
+  w.p = wf.c + (wf.ls * w.q.x()) * wf.a + w.rho * w.e_r;
+  w.p_th = w.rho * w.e_th;
+  w.p_u = (wf.ls * dq.x()) * wf.a - dq.y() * w.e_r;
+  w.n = (wf.ls * n2.x()) * wf.a - n2.y() * w.e_r;
+  w.n_th = -n2.y() * w.e_th;
+  w.n_u = (wf.ls * dn2.x()) * wf.a - dn2.y() * w.e_r;
+}
+
+// Rail surface point, tangents, their derivatives and the outward normal, deformed by the provider.
+struct RailEval {
+  Vector3d r, t_s, t_u, t_us, t_uu, n, c_section;
+  Vector2d q;
+  RailPoint rp;
+  RailSectionMotion motion;
+};
+
+template <class Deformation>
+void evalRail(const TrackGeometry& track, RailSide side, const ProfileCurve& rail, double rail_normal_sign,
+              const Vector2d& centre_yz, const Deformation& deformation, double s, double u, RailEval& e) {
+  track.rail(side, std::clamp(s, track.sStart(), track.sEnd()), e.rp);
+  Vector2d dq, d2q;
+  rail.derivatives(u, e.q, dq, d2q);
+  const double ls = e.rp.lateral_sign;
+  const Matrix3d& R = e.rp.R_rail_to_world;
+  const Matrix3d& dR = e.rp.dR_ds;
+  const Vector3d& o = e.rp.p_origin_in_world;
+  const Vector3d& dO = e.rp.dp_origin_ds;
+  e.r = o + (ls * e.q.x()) * R.col(1) + e.q.y() * R.col(2);
+  e.t_s = dO + (ls * e.q.x()) * dR.col(1) + e.q.y() * dR.col(2);
+  e.t_u = (ls * dq.x()) * R.col(1) + dq.y() * R.col(2);
+  e.t_us = (ls * dq.x()) * dR.col(1) + dq.y() * dR.col(2);
+  e.t_uu = (ls * d2q.x()) * R.col(1) + d2q.y() * R.col(2);
+  const Vector2d n2 = rail_normal_sign * perp(dq.normalized());
+  e.n = (ls * n2.x()) * R.col(1) + n2.y() * R.col(2);
+  const Vector3d c0 = o + (ls * centre_yz.x()) * R.col(1) + centre_yz.y() * R.col(2);
+  if constexpr (!Deformation::kRigid) {
+    deformation.sectionMotion(side, s, e.motion);
+    const Vector3d dc0 = dO + (ls * centre_yz.x()) * dR.col(1) + centre_yz.y() * dR.col(2);
+    const Matrix3d A = smallRotationMatrix(e.motion.theta);
+    const Vector3d Arel = A * (e.r - c0);
+    const Vector3d At_u = A * e.t_u;
+    e.r = c0 + e.motion.u + Arel;
+    e.t_s = dc0 + e.motion.du_ds + e.motion.dtheta_ds.cross(Arel) + A * (e.t_s - dc0);
+    e.t_us = A * e.t_us + e.motion.dtheta_ds.cross(At_u);
+    e.t_u = At_u;
+    e.t_uu = A * e.t_uu;
+    e.n = A * e.n;
+    e.c_section = c0 + e.motion.u;
+  } else {
+    e.c_section = c0;
+  }
+  // Surface normal: the cross-section normal made orthogonal to t_s (differs only on twisting track).
+  e.n -= (e.n.dot(e.t_s) / e.t_s.squaredNorm()) * e.t_s;
+  e.n.normalize();
+}
+
+}  // namespace
+
+ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radius, const ProfileCurve& rail,
+                                 const Vector2d& section_centre_yz, const DetectionOptions& options)
+    : tread_(wheel.tread), flange_(wheel.flange), rail_(rail), r0_(nominal_radius),
+      section_centre_(section_centre_yz), options_(options) {
+  if (!(nominal_radius > 0.1) || !(nominal_radius < 2.0)) {
+    std::ostringstream m;
+    m << "ContactDetector: nominal_radius = " << nominal_radius << " m is not a wheel radius (0.1 .. 2 m)";
+    throw std::runtime_error(m.str());
+  }
+  if (!section_centre_yz.allFinite()) throw std::runtime_error("ContactDetector: section centre is not finite");
+  const DetectionOptions& o = options_;
+  if (o.max_iterations < 1 || !(o.tolerance > 0.0) || !(o.max_step_length > 0.0) || !(o.max_step_angle > 0.0) ||
+      !(o.max_penetration > 0.0) || !(o.min_normal_opposition > 0.0 && o.min_normal_opposition <= 1.0) ||
+      !(o.search_cell > 0.0) || !(o.search_margin > 0.0) || !(o.search_spacing > 0.0))
+    throw std::runtime_error("ContactDetector: DetectionOptions has a non-positive or out-of-range value");
+  if (tread_.numSegments() < 1 || flange_.numSegments() < 1 || rail_.numSegments() < 1)
+    throw std::runtime_error("ContactDetector: empty wheel or rail profile curve");
+
+  auto normalSign = [](const ProfileCurve& c) {
+    const double u = 0.5 * c.uMax();
+    return c.normal(u).dot(perp(c.tangent(u))) >= 0.0 ? 1.0 : -1.0;
+  };
+  wheel_normal_sign_[0] = normalSign(tread_);
+  wheel_normal_sign_[1] = normalSign(flange_);
+  rail_normal_sign_ = normalSign(rail_);
+
+  // Wheel profile samples for the search.
+  for (int k = 0; k < 2; ++k) {
+    const ProfileCurve& c = k == 0 ? tread_ : flange_;
+    const int n = std::max(3, static_cast<int>(std::ceil(c.uMax() / o.search_spacing)) + 1);
+    samples_[k].resize(n);
+    for (int i = 0; i < n; ++i) {
+      const double u = c.uMax() * i / (n - 1);
+      const Vector2d p = c.position(u);
+      samples_[k][i] = {u, p.x(), p.y()};
+    }
+  }
+
+  // Signed-distance grid of the rail profile: exact distance to a 1 mm polyline of the curve, sign from
+  // the curve's outward normal at the foot point.
+  const int n_poly = std::max(8, static_cast<int>(std::ceil(rail_.uMax() / 1e-3)));
+  std::vector<Vector2d> poly(n_poly + 1);
+  std::vector<double> poly_u(n_poly + 1);
+  double ymin = 1e9, ymax = -1e9, zmin = 1e9, zmax = -1e9;
+  for (int i = 0; i <= n_poly; ++i) {
+    poly_u[i] = rail_.uMax() * i / n_poly;
+    poly[i] = rail_.position(poly_u[i]);
+    ymin = std::min(ymin, poly[i].x());
+    ymax = std::max(ymax, poly[i].x());
+    zmin = std::min(zmin, poly[i].y());
+    zmax = std::max(zmax, poly[i].y());
+  }
+  grid_h_ = o.search_cell;
+  grid_y0_ = ymin - o.search_margin;
+  grid_z0_ = zmin - o.search_margin;
+  grid_ny_ = static_cast<int>(std::ceil((ymax - ymin + 2 * o.search_margin) / grid_h_)) + 1;
+  grid_nz_ = static_cast<int>(std::ceil((zmax - zmin + 2 * o.search_margin) / grid_h_)) + 1;
+  grid_dist_.resize(static_cast<std::size_t>(grid_ny_) * grid_nz_);
+  grid_u_.resize(grid_dist_.size());
+  for (int j = 0; j < grid_nz_; ++j) {
+    for (int i = 0; i < grid_ny_; ++i) {
+      const Vector2d q(grid_y0_ + i * grid_h_, grid_z0_ + j * grid_h_);
+      double best = std::numeric_limits<double>::infinity(), best_u = 0.0;
+      for (int k = 0; k < n_poly; ++k) {
+        const Vector2d seg = poly[k + 1] - poly[k];
+        const double t = std::clamp((q - poly[k]).dot(seg) / seg.squaredNorm(), 0.0, 1.0);
+        const double d2 = (poly[k] + t * seg - q).squaredNorm();
+        if (d2 < best) {
+          best = d2;
+          best_u = poly_u[k] + t * (poly_u[k + 1] - poly_u[k]);
+        }
+      }
+      const Vector2d foot = rail_.position(best_u);
+      const double sign = (q - foot).dot(rail_.normal(best_u)) >= 0.0 ? 1.0 : -1.0;
+      grid_dist_[static_cast<std::size_t>(j) * grid_ny_ + i] = static_cast<float>(sign * std::sqrt(best));
+      grid_u_[static_cast<std::size_t>(j) * grid_ny_ + i] = static_cast<float>(best_u);
+    }
+  }
+}
+
+double ContactDetector::railSignedDistance(const Vector2d& p, double* u_closest) const noexcept {
+  const double fy = (p.x() - grid_y0_) / grid_h_, fz = (p.y() - grid_z0_) / grid_h_;
+  if (!(fy >= 0.0) || !(fz >= 0.0) || !(fy <= grid_ny_ - 1) || !(fz <= grid_nz_ - 1)) {
+    // Outside the grid: at least the margin away from the profile; grows with the distance to the grid.
+    const double dy = std::max({0.0, -fy, fy - (grid_ny_ - 1)}) * grid_h_;
+    const double dz = std::max({0.0, -fz, fz - (grid_nz_ - 1)}) * grid_h_;
+    if (u_closest) *u_closest = 0.5 * rail_.uMax();
+    return options_.search_margin + std::hypot(dy, dz);
+  }
+  const int i = std::min(static_cast<int>(fy), grid_ny_ - 2), j = std::min(static_cast<int>(fz), grid_nz_ - 2);
+  const double ty = fy - i, tz = fz - j;
+  const std::size_t k = static_cast<std::size_t>(j) * grid_ny_ + i;
+  const double d = (1 - ty) * (1 - tz) * grid_dist_[k] + ty * (1 - tz) * grid_dist_[k + 1] +
+                   (1 - ty) * tz * grid_dist_[k + grid_ny_] + ty * tz * grid_dist_[k + grid_ny_ + 1];
+  if (u_closest) {
+    const std::size_t kn = static_cast<std::size_t>(j + (tz > 0.5 ? 1 : 0)) * grid_ny_ + i + (ty > 0.5 ? 1 : 0);
+    *u_closest = grid_u_[kn];
+  }
+  return d;
+}
+
+template <class Deformation>
+bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
+                             const Deformation& deformation, Vector4d& x_seed, double& distance,
+                             Vector3d& p_wheel_seed) const noexcept {
+  WheelFrame wf;
+  makeWheelFrame(pose, wf);
+  // Rail cross-section nearest to the wheel centre (one projection step from the hint).
+  RailPoint rp;
+  double s = std::clamp(pose.s_hint, track.sStart(), track.sEnd());
+  for (int k = 0; k < 2; ++k) {
+    track.rail(pose.side, s, rp);
+    const Vector3d t = rp.dp_origin_ds;
+    s = std::clamp(s + (wf.c - rp.p_origin_in_world).dot(t) / t.squaredNorm(), track.sStart(), track.sEnd());
+  }
+  track.rail(pose.side, s, rp);
+  const Matrix3d& R = rp.R_rail_to_world;
+  Vector3d o = rp.p_origin_in_world;
+  Vector3d T = R.col(0), Ny = rp.lateral_sign * R.col(1), B = R.col(2);
+  if constexpr (!Deformation::kRigid) {
+    // Move the section frame with the rail section (eq. 8).
+    RailSectionMotion m;
+    deformation.sectionMotion(pose.side, s, m);
+    const Matrix3d A = smallRotationMatrix(m.theta);
+    const Vector3d c0 = o + (rp.lateral_sign * section_centre_.x()) * R.col(1) + section_centre_.y() * R.col(2);
+    o = c0 + m.u + A * (o - c0);
+    T = A * T;
+    Ny = A * Ny;
+    B = A * B;
+  }
+  // Lowest circle direction of the wheel with respect to the rail's up axis.
+  const double th = std::atan2(-B.dot(wf.f0), -B.dot(wf.d0));
+  const Vector3d e_r = std::cos(th) * wf.d0 + std::sin(th) * wf.f0;
+  const std::vector<Sample>& smp = samples_[static_cast<int>(surface)];
+  const int n = static_cast<int>(smp.size());
+  double d_prev2 = 0.0, d_prev = 0.0;
+  int best = -1;
+  double best_d = std::numeric_limits<double>::infinity();
+  double min_any = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < n; ++i) {
+    const Vector3d q = wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * e_r;
+    const Vector3d rel = q - o;
+    const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
+    min_any = std::min(min_any, d);
+    // Interior local minimum at i - 1.
+    if (i >= 2 && d_prev <= d_prev2 && d_prev <= d && d_prev < best_d) {
+      best_d = d_prev;
+      best = i - 1;
+    }
+    d_prev2 = d_prev;
+    d_prev = d;
+  }
+  distance = best >= 0 ? best_d : min_any;
+  if (best < 0 || !(best_d < 0.9 * options_.search_margin)) return false;
+  const Vector3d q = wf.c + (wf.ls * smp[best].y) * wf.a + (r0_ - smp[best].z) * e_r;
+  const Vector3d rel = q - o;
+  double u_r = 0.0;
+  railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), &u_r);
+  x_seed = Vector4d(th, smp[best].u, s + T.dot(rel), u_r);
+  p_wheel_seed = q;
+  return true;
+}
+
+template <class Deformation>
+void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
+                             const Deformation& deformation, DetectionWork& work,
+                             ContactGeometry& out) const noexcept {
+  ++work.calls;
+  out.iterations = 0;
+  WheelFrame wf;
+  if (!makeWheelFrame(pose, wf)) {
+    out.status = DetectionStatus::kInvalidInput;
+    out.valid = out.in_contact = false;
+    out.penetration = -1.0;
+    work.has_warm_start = false;
+    return;
+  }
+  const int k = static_cast<int>(surface);
+  const ProfileCurve& wc = k == 0 ? tread_ : flange_;
+  const double wsign = wheel_normal_sign_[k];
+  const DetectionOptions& opt = options_;
+  WheelEval w;
+  RailEval e;
+
+  // Newton on eq. 4 from x; true when converged to a valid point pair (w, e evaluated at the solution).
+  auto newton = [&](Vector4d& x) -> bool {
+    for (int it = 0; it <= opt.max_iterations; ++it) {
+      evalWheel(wc, wsign, wf, r0_, x[0], x[1], w);
+      evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
+      const Vector3d d = w.p - e.r;
+      const Vector4d F(d.dot(e.t_s), d.dot(e.t_u), w.n.dot(e.t_s), w.n.dot(e.t_u));
+      if (!F.allFinite()) return false;
+      if (std::abs(F[0]) < opt.tolerance && std::abs(F[1]) < opt.tolerance &&
+          std::abs(F[2]) * r0_ < opt.tolerance && std::abs(F[3]) * r0_ < opt.tolerance) {
+        // Converged: check the bounds and that this is a contact-type pair.
+        const double eps = 1e-7;
+        if (x[1] < wc.uMin() - eps || x[1] > wc.uMax() + eps) return false;
+        if (x[3] < rail_.uMin() - eps || x[3] > rail_.uMax() + eps) return false;
+        if (x[2] < track.sStart() || x[2] > track.sEnd()) return false;
+        if (std::cos(x[0]) < 0.5) return false;
+        if (-w.n.dot(e.n) < opt.min_normal_opposition) return false;
+        if (-d.dot(e.n) > opt.max_penetration) return false;
+        return true;
+      }
+      if (it == opt.max_iterations) break;
+      Matrix4d J;
+      J(0, 0) = w.p_th.dot(e.t_s);
+      J(0, 1) = w.p_u.dot(e.t_s);
+      J(0, 2) = -e.t_s.squaredNorm();
+      J(0, 3) = -e.t_u.dot(e.t_s) + d.dot(e.t_us);
+      J(1, 0) = w.p_th.dot(e.t_u);
+      J(1, 1) = w.p_u.dot(e.t_u);
+      J(1, 2) = -e.t_s.dot(e.t_u) + d.dot(e.t_us);
+      J(1, 3) = -e.t_u.squaredNorm() + d.dot(e.t_uu);
+      J(2, 0) = w.n_th.dot(e.t_s);
+      J(2, 1) = w.n_u.dot(e.t_s);
+      J(2, 2) = 0.0;  // n_w . d t_s/ds: of the order of the track curvature, left out
+      J(2, 3) = w.n.dot(e.t_us);
+      J(3, 0) = w.n_th.dot(e.t_u);
+      J(3, 1) = w.n_u.dot(e.t_u);
+      J(3, 2) = w.n.dot(e.t_us);
+      J(3, 3) = w.n.dot(e.t_uu);
+      const Eigen::PartialPivLU<Matrix4d> lu(J);
+      const double det = lu.determinant();
+      if (!(std::abs(det) > 1e-14)) return false;
+      Vector4d dx = lu.solve(-F);
+      if (!dx.allFinite()) return false;
+      // Step limits (keep the direction).
+      double scale = 1.0;
+      scale = std::min(scale, opt.max_step_angle / std::max(std::abs(dx[0]), 1e-300));
+      scale = std::min(scale, opt.max_step_length / std::max(std::abs(dx[1]), 1e-300));
+      scale = std::min(scale, 5.0 * opt.max_step_length / std::max(std::abs(dx[2]), 1e-300));
+      scale = std::min(scale, opt.max_step_length / std::max(std::abs(dx[3]), 1e-300));
+      x += scale * dx;
+      ++out.iterations;
+      ++work.newton_iterations;
+      // Far outside the surfaces: give up early.
+      const double far = 0.02;
+      if (x[1] < wc.uMin() - far || x[1] > wc.uMax() + far || x[3] < rail_.uMin() - far ||
+          x[3] > rail_.uMax() + far || x[2] < track.sStart() - far || x[2] > track.sEnd() + far ||
+          std::abs(x[0]) > 1.2)
+        return false;
+    }
+    return false;
+  };
+
+  Vector4d x = work.x;
+  bool ok = false;
+  DetectionStatus status = DetectionStatus::kConverged;
+  if (work.has_warm_start) ok = newton(x);
+  double search_distance = 0.0;
+  Vector3d p_seed;
+  if (!ok) {
+    if (work.has_warm_start) ++work.fallbacks;
+    ++work.searches;
+    Vector4d seed;
+    if (!search(surface, pose, track, deformation, seed, search_distance, p_seed)) {
+      out.status = DetectionStatus::kOutOfBounds;
+      out.valid = out.in_contact = false;
+      out.penetration = -std::min(search_distance, 1.0);
+      work.has_warm_start = false;
+      return;
+    }
+    x = seed;
+    ok = newton(x);
+    status = DetectionStatus::kConvergedAfterSearch;
+    if (!ok) {
+      // Approximate: the search's best pair.
+      x = seed;
+      evalWheel(wc, wsign, wf, r0_, x[0], x[1], w);
+      evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
+      w.p = p_seed;
+      status = DetectionStatus::kApproximate;
+      ++work.approximations;
+    }
+  }
+  work.x = x;
+  work.has_warm_start = status != DetectionStatus::kApproximate;
+
+  out.status = status;
+  out.valid = true;
+  out.s_w = x[0];
+  out.u_w = x[1];
+  out.s_r = x[2];
+  out.u_r = x[3];
+  out.p_wheel_in_world = w.p;
+  out.p_rail_in_world = e.r;
+  out.n_in_world = e.n;
+  out.penetration = status == DetectionStatus::kApproximate ? -search_distance : -(w.p - e.r).dot(e.n);
+  out.in_contact = out.penetration > 0.0;
+  Vector3d t = w.e_th - w.e_th.dot(e.n) * e.n;
+  t.normalize();
+  if (t.dot(e.t_s) < 0.0) t = -t;
+  out.t_rolling_in_world = t;
+  out.p_section_centre_in_world = e.c_section;
+  if constexpr (Deformation::kRigid) {
+    out.rail_motion.setZero();
+  } else {
+    out.rail_motion = e.motion;
+  }
+  out.wheel_radius = w.rho;
+  out.cos_normal_radial = std::abs(e.n.dot(w.e_r));
+  out.wheel_curvature = wc.curvature(x[1]);
+  out.rail_curvature = rail_.curvature(x[3]);
+  out.wheel_y = w.q.x();
+  out.wheel_z = w.q.y();
+  out.rail_y = e.q.x();
+  out.rail_z = e.q.y();
+}
+
+// Explicit instantiations for the providers of rail_deformation.hpp.
+template void ContactDetector::detect<RigidRailDeformation>(WheelSurface, const WheelPose&, const TrackGeometry&,
+                                                            const RigidRailDeformation&, DetectionWork&,
+                                                            ContactGeometry&) const noexcept;
+template void ContactDetector::detect<BeamRailDeformation>(WheelSurface, const WheelPose&, const TrackGeometry&,
+                                                           const BeamRailDeformation&, DetectionWork&,
+                                                           ContactGeometry&) const noexcept;
+template void ContactDetector::detect<RailDeformation>(WheelSurface, const WheelPose&, const TrackGeometry&,
+                                                       const RailDeformation&, DetectionWork&,
+                                                       ContactGeometry&) const noexcept;
+
+}  // namespace contact
+}  // namespace rail

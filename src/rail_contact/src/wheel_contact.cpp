@@ -1,0 +1,185 @@
+#include "rail_contact/wheel_contact.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace rail {
+namespace contact {
+
+namespace {
+[[noreturn]] void fail(const char* field, double value, const char* rule) {
+  std::ostringstream m;
+  m << "WheelContactOptions: " << field << " = " << value << " " << rule;
+  throw std::runtime_error(m.str());
+}
+}  // namespace
+
+void validate(const WheelContactOptions& o) {
+  if (!(o.friction > 0.0) || !(o.friction < 5.0)) fail("friction", o.friction, "must be in (0, 5)");
+  if (o.creep_law != CreepLaw::kPolach) fail("creep_law", static_cast<double>(o.creep_law), "is not a known law");
+  validate(o.wheel_material, "WheelContactOptions.wheel_material");
+  validate(o.rail_material, "WheelContactOptions.rail_material");
+  validate(o.damping);
+  validate(o.polach);
+  if (!(o.merge_distance >= 0.0)) fail("merge_distance", o.merge_distance, "m must not be negative");
+  if (!(o.creepage.v_eps > 0.0)) fail("creepage.v_eps", o.creepage.v_eps, "m/s must be positive");
+}
+
+WheelContactModel::WheelContactModel(const WheelProfile& wheel, double nominal_radius, const ProfileCurve& rail,
+                                     const Eigen::Vector2d& rail_section_centre_yz,
+                                     const WheelContactOptions& options)
+    : options_(options), detector_(wheel, nominal_radius, rail, rail_section_centre_yz, options.detection) {
+  validate(options_);
+  polach_ = options_.polach;
+  polach_.spin = options_.spin;
+  E_star_ = contact_modulus(options_.wheel_material, options_.rail_material);
+  G_ = combined_shear_modulus(options_.wheel_material, options_.rail_material);
+  nu_ = combined_poisson_ratio(options_.wheel_material, options_.rail_material);
+  kalker_ = &KalkerTable::builtin();
+}
+
+template <class Deformation>
+void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const TrackGeometry& track,
+                                 const Deformation& deformation, WheelContactWork& work,
+                                 WheelContactResult& out) const noexcept {
+  WheelPose pose;
+  pose.p_centre_in_world = ws.p_centre_in_world;
+  pose.R_wheelset_to_world = ws.R_wheelset_to_world;
+  pose.side = side;
+  pose.s_hint = ws.s_hint;
+  const bool input_ok = ws.v_centre_in_world.allFinite() && ws.omega_in_world.allFinite();
+  const Eigen::Vector3d axle = ws.R_wheelset_to_world.col(1).normalized();
+  const double ls = side == RailSide::kLeft ? -1.0 : 1.0;
+
+  for (int k = 0; k < 2; ++k) {
+    ContactPointResult& c = out.contact[k];
+    c = ContactPointResult();
+    if (k == kFlange && !options_.flange_contact) {
+      c.searched = false;
+      c.status = DetectionStatus::kOutOfBounds;
+      work.impact[k] = ImpactMemory();
+      continue;
+    }
+    c.searched = true;
+    ContactGeometry g;
+    detector_.detect(static_cast<WheelSurface>(k), pose, track, deformation, work.detection[k], g);
+    c.status = input_ok ? g.status : DetectionStatus::kInvalidInput;
+    c.penetration = std::isfinite(g.penetration) ? g.penetration : -1.0;
+    if (!g.valid || !input_ok) {
+      update_impact_memory(work.impact[k], -1.0, 0.0);
+      continue;
+    }
+    c.s_r = g.s_r;
+    c.p_wheel_in_world = g.p_wheel_in_world;
+    c.p_rail_in_world = g.p_rail_in_world;
+    c.p_contact_in_world = 0.5 * (g.p_wheel_in_world + g.p_rail_in_world);
+    c.normal_in_world = g.n_in_world;
+    c.p_section_centre_in_world = g.p_section_centre_in_world;
+    c.rolling_radius = g.wheel_radius;
+    const Eigen::Vector3d& n = g.n_in_world;
+    const Eigen::Vector3d& t_w = g.t_rolling_in_world;
+    c.R_contact_to_world.col(0) = t_w;
+    c.R_contact_to_world.col(1) = n.cross(t_w);
+    c.R_contact_to_world.col(2) = n;
+    c.contact_angle = std::asin(std::clamp(n.dot(ls * axle), -1.0, 1.0));
+
+    // Material-point velocities: wheel (rigid wheelset) and rail (section motion from the provider).
+    const Eigen::Vector3d v_wheel = ws.v_centre_in_world + ws.omega_in_world.cross(g.p_wheel_in_world - ws.p_centre_in_world);
+    const Eigen::Vector3d v_rail =
+        g.rail_motion.u_dot + g.rail_motion.theta_dot.cross(g.p_rail_in_world - g.p_section_centre_in_world);
+    c.penetration_rate = -(v_wheel - v_rail).dot(n);
+    update_impact_memory(work.impact[k], c.penetration, c.penetration_rate);
+    if (!g.in_contact) continue;
+
+    // Hertz (eq. 9): principal curvatures, rail longitudinal curvature ~ 0.
+    PrincipalCurvatures kc;
+    kc.wheel_rolling = g.cos_normal_radial / g.wheel_radius;
+    kc.wheel_lateral = g.wheel_curvature;
+    kc.rail_rolling = 0.0;
+    kc.rail_lateral = g.rail_curvature;
+    const HertzGeometry hz = compute_hertz(kc, E_star_, options_.hertz);
+    c.hertz_flags = hz.flags;
+    if (k == kFlange && out.contact[kTread].penetration > 0.0 &&
+        (out.contact[kTread].p_wheel_in_world - g.p_wheel_in_world).norm() < options_.merge_distance) {
+      // One patch across the split: keep the deeper of the two.
+      ContactPointResult& t = out.contact[kTread];
+      if (c.penetration > t.penetration) {
+        t.active = false;
+        t.merged = true;
+        t.N = t.F_long = t.F_lat = t.a = t.b = 0.0;
+        t.force_on_wheel_in_world.setZero();
+        t.rail_wrench = RailWrench();
+      } else {
+        c.merged = true;
+        continue;
+      }
+    }
+    c.N = damped_normal_force(hz.K, c.penetration, c.penetration_rate, work.impact[k].impact_velocity,
+                              options_.damping);
+    c.active = true;
+    c.a = hz.a(c.N);
+    c.b = hz.b(c.N);
+
+    // Creepages (rolling speed: wheel centre relative to the rail section along t_rolling).
+    const double V = (ws.v_centre_in_world - g.rail_motion.u_dot).dot(t_w);
+    const Creepages cr = compute_creepages(v_wheel, v_rail, ws.omega_in_world, g.rail_motion.theta_dot,
+                                           c.R_contact_to_world, V, options_.creepage);
+    c.nu_x = cr.nu_x;
+    c.nu_y = cr.nu_y;
+    c.phi = options_.spin ? cr.phi : 0.0;
+
+    if (c.N > 0.0 && c.a > 0.0 && c.b > 0.0) {
+      PolachInput pin;
+      pin.nu_x = c.nu_x;
+      pin.nu_y = c.nu_y;
+      pin.phi = c.phi;
+      pin.N = c.N;
+      pin.a = c.a;
+      pin.b = c.b;
+      pin.G = G_;
+      pin.mu0 = options_.friction;
+      pin.V = cr.V_ref;
+      pin.c = kalker_->evaluate(c.a / c.b, nu_);
+      const PolachResult pr = polach_forces(pin, polach_);
+      c.F_long = pr.Fx;
+      c.F_lat = pr.Fy;
+    }
+    c.force_on_wheel_in_world = contact_force_in_world(c.R_contact_to_world, c.F_long, c.F_lat, c.N);
+    c.rail_wrench = rail_section_wrench(-c.force_on_wheel_in_world, Eigen::Vector3d::Zero(),
+                                        c.p_rail_in_world - c.p_section_centre_in_world, Eigen::Vector3d::Zero());
+  }
+
+  // Eq. 13: both contacts to the wheel centre (inactive contacts carry zero force).
+  const Eigen::Matrix3d& A = ws.R_wheelset_to_world;
+  const ContactPointResult& tr = out.contact[kTread];
+  const ContactPointResult& fl = out.contact[kFlange];
+  out.wheel_centre = wheel_centre_wrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
+                                         A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
+                                         A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
+  // Eq. 15: both contacts about one section centre (the tread contact's if active, else the flange's).
+  const ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
+  out.rail_section_s = ref.s_r;
+  out.rail_section = rail_section_wrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
+                                         tr.p_rail_in_world - ref.p_section_centre_in_world,
+                                         fl.p_rail_in_world - ref.p_section_centre_in_world);
+  if (!out.wheel_centre.force_in_world.allFinite() || !out.wheel_centre.moment_in_wheelset.allFinite()) {
+    out.wheel_centre = WheelsetWrench();
+    out.rail_section = RailWrench();
+  }
+}
+
+template void WheelContactModel::evaluate<RigidRailDeformation>(const WheelState&, RailSide, const TrackGeometry&,
+                                                                const RigidRailDeformation&, WheelContactWork&,
+                                                                WheelContactResult&) const noexcept;
+template void WheelContactModel::evaluate<BeamRailDeformation>(const WheelState&, RailSide, const TrackGeometry&,
+                                                               const BeamRailDeformation&, WheelContactWork&,
+                                                               WheelContactResult&) const noexcept;
+template void WheelContactModel::evaluate<RailDeformation>(const WheelState&, RailSide, const TrackGeometry&,
+                                                           const RailDeformation&, WheelContactWork&,
+                                                           WheelContactResult&) const noexcept;
+
+}  // namespace contact
+}  // namespace rail
