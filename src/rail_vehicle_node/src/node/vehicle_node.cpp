@@ -1,17 +1,43 @@
 // rail_vehicle node: ROS wiring of the vehicle side. Reads the scene from the parameter server, validates
-// it, reports what it will simulate and, in a co-simulation, checks with the track node that both run the
-// same scene. Physics lives in the ROS-free core.
+// it and reports what it will simulate. On the rigid track (effects.track_model: rigid) it runs the
+// VehicleSimulator to solver.end, publishing /clock, wheel states, contact points and wrenches, wheelset
+// kinematics and tf frames, and records output.topics to output.bag. In a co-simulation it checks with the
+// track node that both run the same scene (the coupled run is not built yet). Physics lives in the core.
 #include <ros/ros.h>
+#include <rosbag/bag.h>
+#include <rosgraph_msgs/Clock.h>
+#include <tf2_msgs/TFMessage.h>
+#include <tf2_ros/transform_broadcaster.h>
 
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/handshake.hpp>
 #include <rail_core/ros/scene_param.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <rail_msgs/ContactPoints.h>
+#include <rail_msgs/ContactWrenches.h>
 #include <rail_msgs/Handshake.h>
+#include <rail_msgs/WheelStates.h>
+#include <rail_msgs/WheelsetKinematics.h>
+#include <rail_vehicle_node/vehicle_simulator.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <sys/stat.h>
 
 using namespace rail::core;
+namespace rv = rail::vehicle;
+namespace rc = rail::contact;
 
 namespace {
+
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
 
 int handshake(const Scene& scene) {
   const std::string service = "/railsim/handshake";
@@ -43,10 +69,279 @@ int handshake(const Scene& scene) {
   return kExitOk;
 }
 
+bool Records(const Scene& scene, const char* topic) {
+  return std::find(scene.output.topics.begin(), scene.output.topics.end(), topic) != scene.output.topics.end();
+}
+
+void Fill(geometry_msgs::Vector3& out, const rv::Vector3& v) { out.x = v.x(), out.y = v.y(), out.z = v.z(); }
+void Fill(geometry_msgs::Point& out, const rv::Vector3& v) { out.x = v.x(), out.y = v.y(), out.z = v.z(); }
+void Fill(geometry_msgs::Quaternion& out, const rv::Vector4& p) { out.w = p[0], out.x = p[1], out.y = p[2], out.z = p[3]; }
+
+// Messages of one output instant, sized once and refilled in place.
+struct Outputs {
+  rail_msgs::WheelStates wheel_states;
+  rail_msgs::ContactPoints contact_points;
+  rail_msgs::ContactWrenches contact_wrenches;
+  rail_msgs::WheelsetKinematics kinematics;
+  tf2_msgs::TFMessage tf;
+  rosgraph_msgs::Clock clock;
+
+  Outputs(const rv::VehicleSimulator& sim, const Scene& scene) {
+    const std::size_t n = sim.wheels().size();
+    wheel_states.wheels.resize(n);
+    wheel_states.scene_hash = scene.hash;
+    contact_points.points.resize(2 * n);
+    contact_wrenches.wrenches.resize(n);
+    contact_wrenches.scene_hash = scene.hash;
+    kinematics.wheelsets.resize(sim.wheelsets().size());
+    tf.transforms.resize(sim.bodies().size());
+    for (auto& h : {&wheel_states.header, &contact_points.header, &contact_wrenches.header, &kinematics.header}) {
+      h->frame_id = "world";
+    }
+    for (std::size_t b = 0; b < sim.bodies().size(); ++b) {
+      tf.transforms[b].header.frame_id = "world";
+      tf.transforms[b].child_frame_id = FrameName(sim, static_cast<int>(b));
+    }
+  }
+
+  // tf frame names: carbody, bogie_1..., wheelset_1... (by reference x, front first); other bodies keep
+  // their data-file names.
+  static std::string FrameName(const rv::VehicleSimulator& sim, int b) {
+    const auto& ws = sim.wheelset_bodies();
+    const auto it = std::find(ws.begin(), ws.end(), b);
+    if (it != ws.end()) return "wheelset_" + std::to_string(it - ws.begin() + 1);
+    const std::string& name = sim.model().bodies()[static_cast<std::size_t>(b)].name;
+    if (name.rfind("bogie", 0) == 0) {
+      int rank = 1;
+      const double x = sim.model().bodies()[static_cast<std::size_t>(b)].r_reference.x();
+      for (const auto& other : sim.model().bodies()) {
+        if (other.name.rfind("bogie", 0) == 0 && other.r_reference.x() > x) ++rank;
+      }
+      return "bogie_" + std::to_string(rank);
+    }
+    return name;
+  }
+
+  void Update(const rv::VehicleSimulator& sim, const ros::Time& stamp, std::uint64_t step) {
+    wheel_states.header.stamp = contact_points.header.stamp = contact_wrenches.header.stamp = stamp;
+    kinematics.header.stamp = stamp;
+    clock.clock = stamp;
+    wheel_states.step = contact_wrenches.step = step;
+    for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
+      const rv::WheelOutput& w = sim.wheels()[i];
+      rail_msgs::WheelState& m = wheel_states.wheels[i];
+      m.wheel_id = static_cast<std::uint8_t>(w.wheel_id);
+      m.wheelset = static_cast<std::uint8_t>(w.wheelset);
+      m.side = static_cast<std::uint8_t>(w.side);
+      m.arc_length = w.arc_length;
+      Fill(m.position, w.p_in_world);
+      Fill(m.orientation, w.orientation);
+      Fill(m.linear_velocity, w.v_in_world);
+      Fill(m.angular_velocity, w.omega_in_world);
+      rail_msgs::ContactWrench& cw = contact_wrenches.wrenches[i];
+      cw.wheel_id = m.wheel_id;
+      Fill(cw.force, w.force_in_world);
+      Fill(cw.moment, w.moment_in_world);
+      for (int k = 0; k < 2; ++k) {
+        const rc::ContactPointResult& c = sim.contacts()[i].contact[k];
+        rail_msgs::ContactPoint& p = contact_points.points[2 * i + static_cast<std::size_t>(k)];
+        p.wheel_id = m.wheel_id;
+        p.side = m.side;
+        p.kind = k == rc::kTread ? rail_msgs::ContactPoint::KIND_TREAD : rail_msgs::ContactPoint::KIND_FLANGE;
+        p.active = c.active;
+        p.arc_length = c.s_r;
+        Fill(p.position, c.p_contact_in_world);
+        Fill(p.normal, c.normal_in_world);
+        p.normal_force = c.N;
+        p.creep_force_longitudinal = c.F_long;
+        p.creep_force_lateral = c.F_lat;
+        p.creepage_longitudinal = c.nu_x;
+        p.creepage_lateral = c.nu_y;
+        p.creepage_spin = c.phi;
+        p.semi_axis_a = c.a;
+        p.semi_axis_b = c.b;
+        p.penetration = c.penetration;
+      }
+    }
+    for (std::size_t w = 0; w < sim.wheelsets().size(); ++w) {
+      const rv::WheelsetTrackOutput& o = sim.wheelsets()[w];
+      rail_msgs::WheelsetTrackState& m = kinematics.wheelsets[w];
+      m.wheelset = static_cast<std::uint8_t>(o.wheelset);
+      m.arc_length = o.arc_length;
+      m.lateral_displacement = o.lateral;
+      m.vertical_displacement = o.vertical;
+      m.angle_of_attack = o.angle_of_attack;
+      m.roll = o.roll;
+      m.spin_speed = o.spin;
+    }
+    for (std::size_t b = 0; b < sim.bodies().size(); ++b) {
+      geometry_msgs::TransformStamped& t = tf.transforms[b];
+      t.header.stamp = stamp;
+      t.transform.translation.x = sim.bodies()[b].p_in_world.x();
+      t.transform.translation.y = sim.bodies()[b].p_in_world.y();
+      t.transform.translation.z = sim.bodies()[b].p_in_world.z();
+      Fill(t.transform.rotation, sim.bodies()[b].orientation);
+    }
+  }
+};
+
+std::string OutputDir(ros::NodeHandle& pnh) {
+  std::string dir;
+  if (pnh.getParam("output_dir", dir) && !dir.empty()) return dir;
+  const char* ros_home = std::getenv("ROS_HOME");
+  if (ros_home != nullptr && *ros_home != '\0') return std::string(ros_home) + "/railsim";
+  const char* home = std::getenv("HOME");
+  return std::string(home != nullptr ? home : ".") + "/.ros/railsim";
+}
+
+// mkdir -p
+bool MakeDirs(const std::string& path) {
+  for (std::size_t pos = 1; pos <= path.size(); ++pos) {
+    if (pos == path.size() || path[pos] == '/') {
+      const std::string part = path.substr(0, pos);
+      if (::mkdir(part.c_str(), 0755) != 0 && errno != EEXIST) return false;
+    }
+  }
+  return true;
+}
+
+const char* StatusName(rv::RunStatus s) {
+  switch (s) {
+    case rv::RunStatus::kRunning: return "running";
+    case rv::RunStatus::kFinished: return "finished";
+    case rv::RunStatus::kDerailed: return "derailed";
+    case rv::RunStatus::kNonFinite: return "non-finite state";
+    case rv::RunStatus::kLeftTrack: return "left the track";
+    case rv::RunStatus::kIntegratorFailed: return "integrator failure";
+  }
+  return "?";
+}
+
+int RunRigid(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
+  const std::string node = ros::this_node::getName();
+  std::unique_ptr<rv::VehicleSimulator> sim;
+  try {
+    sim = std::make_unique<rv::VehicleSimulator>(scene);
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: cannot build the vehicle: %s", node.c_str(), e.what());
+    return kExitBadInput;
+  }
+  ROS_INFO("%s: vehicle settled on the rails (lowered %.4f mm, wheel loads %.1f N of %.1f N); integrating with "
+           "%s, rtol %g, atol %g, max step %g s", node.c_str(), -sim->settle_lift() * 1e3,
+           sim->settled_wheel_load_sum(), sim->static_load(),
+           sim->method() == rv::IntegrationMethod::kBdf ? "BDF" : "Adams", scene.solver.vehicle_rtol,
+           scene.solver.vehicle_atol, scene.solver.vehicle_max_step);
+
+  ros::Publisher pub_clock = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
+  ros::Publisher pub_states = nh.advertise<rail_msgs::WheelStates>("wheel_states", 100);
+  ros::Publisher pub_points;
+  if (scene.effects.contact_point_output) pub_points = nh.advertise<rail_msgs::ContactPoints>("contact_points", 100);
+  ros::Publisher pub_wrenches = nh.advertise<rail_msgs::ContactWrenches>("contact_wrenches", 100);
+  ros::Publisher pub_kinematics = nh.advertise<rail_msgs::WheelsetKinematics>("wheelset_kinematics", 100);
+  tf2_ros::TransformBroadcaster tf_broadcaster;
+
+  rosbag::Bag bag;
+  std::string bag_path;
+  if (!scene.output.bag.empty()) {
+    bag_path = scene.output.bag[0] == '/' ? scene.output.bag : OutputDir(pnh) + "/" + scene.output.bag;
+    const std::string dir = bag_path.substr(0, bag_path.find_last_of('/'));
+    try {
+      if (!MakeDirs(dir)) throw std::runtime_error("cannot create the directory " + dir);
+      bag.open(bag_path, rosbag::bagmode::Write);
+    } catch (const std::exception& e) {
+      ROS_FATAL("%s: output.bag: cannot write %s: %s", node.c_str(), bag_path.c_str(), e.what());
+      return kExitBadInput;
+    }
+    ROS_INFO("%s: recording [%s] to %s", node.c_str(), [&] {
+      std::string t;
+      for (const auto& s : scene.output.topics) t += (t.empty() ? "" : ", ") + s;
+      return t;
+    }().c_str(), bag_path.c_str());
+  }
+  const bool rec_states = bag.isOpen() && Records(scene, "wheel_states");
+  const bool rec_points = bag.isOpen() && Records(scene, "contact_points") && scene.effects.contact_point_output;
+  const bool rec_wrenches = bag.isOpen() && Records(scene, "contact_wrenches");
+  const bool rec_kinematics = bag.isOpen() && Records(scene, "wheelset_kinematics");
+  const bool rec_tf = bag.isOpen() && Records(scene, "tf");
+  const bool rec_clock = bag.isOpen() && Records(scene, "clock");
+
+  Outputs out(*sim, scene);
+  const double dt = 1.0 / scene.output.rate;
+  const double t_estimate = sim->end_time_estimate();
+  // A time end stops exactly there; an arc-length end when the leading wheelset passes it.
+  const double t_limit = scene.solver.end.kind == EndKind::kTime ? scene.solver.end.value : 1e9;
+  auto publish = [&](std::uint64_t step) {
+    const ros::Time stamp(std::max(sim->time(), 1e-9));
+    out.Update(*sim, stamp, step);
+    pub_clock.publish(out.clock);
+    pub_states.publish(out.wheel_states);
+    if (scene.effects.contact_point_output) pub_points.publish(out.contact_points);
+    pub_wrenches.publish(out.contact_wrenches);
+    pub_kinematics.publish(out.kinematics);
+    tf_broadcaster.sendTransform(out.tf.transforms);
+    if (rec_states) bag.write("/wheel_states", stamp, out.wheel_states);
+    if (rec_points) bag.write("/contact_points", stamp, out.contact_points);
+    if (rec_wrenches) bag.write("/contact_wrenches", stamp, out.contact_wrenches);
+    if (rec_kinematics) bag.write("/wheelset_kinematics", stamp, out.kinematics);
+    if (rec_tf) bag.write("/tf", stamp, out.tf);
+    if (rec_clock) bag.write("/clock", stamp, out.clock);
+  };
+
+  int rc = kExitOk;
+  const auto wall0 = std::chrono::steady_clock::now();
+  auto last_report = wall0;
+  try {
+    publish(0);
+    rv::RunStatus status = rv::RunStatus::kRunning;
+    for (std::uint64_t step = 1; status == rv::RunStatus::kRunning; ++step) {
+      if (g_stop || !ros::ok()) {
+        ROS_WARN("%s: stopped at t = %.4f s (signal or ROS shutdown); closing the bag", node.c_str(), sim->time());
+        rc = kExitInterrupted;
+        break;
+      }
+      const double t_next = std::min(static_cast<double>(step) * dt, t_limit);
+      status = sim->AdvanceTo(t_next);
+      publish(step);
+      const auto now = std::chrono::steady_clock::now();
+      const double wall = std::chrono::duration<double>(now - wall0).count();
+      if (std::chrono::duration<double>(now - last_report).count() >= 5.0) {
+        last_report = now;
+        const double rtf = sim->time() / std::max(wall, 1e-9);
+        const double eta = (t_estimate - sim->time()) / std::max(rtf, 1e-12);
+        ROS_INFO("%s: t = %.3f s (%.1f %%), leading wheelset at s = %.2f m, real-time factor %.3f, ETA %.0f s",
+                 node.c_str(), sim->time(), 100.0 * sim->time() / std::max(t_estimate, 1e-9),
+                 sim->leading_arc_length(), rtf, std::max(eta, 0.0));
+      }
+      if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
+        ROS_ERROR("%s: run stopped (%s): %s", node.c_str(), StatusName(status), sim->message().c_str());
+        rc = kExitInternal;
+      }
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    const rv::IntegratorCounters c = sim->Counters();
+    ROS_INFO("%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
+             "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections", node.c_str(),
+             rc == kExitOk ? "finished" : "stopped", sim->time(), sim->leading_arc_length(), wall,
+             wall / std::max(sim->time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
+             c.projections);
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: internal error at t = %.4f s: %s", node.c_str(), sim->time(), e.what());
+    rc = kExitInternal;
+  }
+  if (bag.isOpen()) {
+    bag.close();
+    ROS_INFO("%s: bag closed: %s", node.c_str(), bag_path.c_str());
+  }
+  return rc;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "rail_vehicle");
+  ros::init(argc, argv, "rail_vehicle", ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
   Scene scene;
   if (!ros_glue::read_scene(pnh, scene)) return kExitBadInput;
@@ -60,8 +355,10 @@ int main(int argc, char** argv) {
   if (scene.cosimulation()) {
     const int rc = handshake(scene);
     if (rc != kExitOk) return rc;
+    ROS_WARN("%s: scene validated; the co-simulated run is not built yet, exiting", ros::this_node::getName().c_str());
+    return kExitOk;
   }
-  ROS_WARN("%s: scene validated; this build has no vehicle time integration yet, exiting",
-           ros::this_node::getName().c_str());
-  return kExitOk;
+  const int rc = RunRigid(scene, nh, pnh);
+  ros::shutdown();
+  return rc;
 }

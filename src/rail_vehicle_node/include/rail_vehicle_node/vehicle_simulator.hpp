@@ -1,0 +1,184 @@
+// The vehicle running alone on the rigid track (effects.track_model: rigid): paper sections 2 and 4.2.
+//
+// Built once from a resolved Scene: the vehicle data file (VehicleModel), the rigid track geometry, the
+// wheel and rail profiles and the wheel-rail contact of every wheel evaluated inside each right-hand side
+// (WheelRailContactElement). The vehicle is placed on the track (PlaceOnTrack below), lowered onto the
+// rails until the contact carries its weight (static vertical solve), and handed to a VehicleIntegrator
+// (CVODE) that the caller advances with AdvanceTo. Outputs (wheel states, contact points, wheel-centre
+// wrenches, wheelset kinematics relative to the track, body poses) are computed on demand by
+// UpdateOutputs into preallocated buffers.
+//
+// Frames: world x forward at the track start, y left, z up (rail_contact/track_geometry.hpp); the vehicle
+// data file's reference pose is on straight level track, x forward, y left, z up from the rail top.
+#pragma once
+
+#include <rail_contact/profile.hpp>
+#include <rail_contact/track_geometry.hpp>
+#include <rail_contact/wheel_contact.hpp>
+#include <rail_core/scene.hpp>
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rail_vehicle_node/vehicle_data.hpp"
+#include "rail_vehicle_node/vehicle_integrator.hpp"
+#include "rail_vehicle_node/vehicle_model.hpp"
+#include "rail_vehicle_node/wheel_rail_contact.hpp"
+
+namespace rail::vehicle {
+
+// What the scene does not say (constant after building).
+struct SimulatorSettings {
+  // Contact data the scene has no key for: friction mu0, restitution e, materials, Polach parameters,
+  // detection settings. The effects (flange_contact, spin_creepage, creep_law) come from the scene and
+  // override these fields.
+  contact::WheelContactOptions contact;
+  // Derailment: a wheel centre more than this above its settled height relative to the track plane [m];
+  // 0 = the wheel profile's flange height.
+  double derailment_lift = 0.0;
+  // Derailment: a wheelset centre farther than this from the track centre line, laterally [m].
+  double derailment_lateral = 0.05;
+};
+
+// One wheel centre (rail_msgs/WheelState), world frame.
+struct WheelOutput {
+  int wheel_id = 0;   // 2 * wheelset + side
+  int wheelset = 0;   // 0 = leading
+  int side = 0;       // 0 left, 1 right
+  double arc_length = 0.0;                // s of the wheel centre's projection on the track [m]
+  Vector3 p_in_world = Vector3::Zero();   // wheel centre (the load point) [m]
+  Vector4 orientation = Vector4(1, 0, 0, 0);  // R_wheelset_to_world as Euler parameters (w, x, y, z)
+  Vector3 v_in_world = Vector3::Zero();   // [m/s]
+  Vector3 omega_in_world = Vector3::Zero();  // wheelset angular velocity, spin included [rad/s]
+  Vector3 force_in_world = Vector3::Zero();  // contact wrench on the wheel at its centre [N]
+  Vector3 moment_in_world = Vector3::Zero(); // about the wheel centre [N m]
+};
+
+// One wheelset relative to the track frame at its arc length (rail_msgs/WheelsetTrackState).
+struct WheelsetTrackOutput {
+  int wheelset = 0;
+  double arc_length = 0.0;      // s of the wheelset centre [m]
+  double lateral = 0.0;         // along n (left) from the centre line [m]
+  double vertical = 0.0;        // along b from the nominal height (nominal rolling radius above the rails) [m]
+  double angle_of_attack = 0.0; // yaw of the axle relative to the track frame [rad], > 0 turning left
+  double roll = 0.0;            // roll relative to the canted track plane [rad], > 0 left side up
+  double spin = 0.0;            // rate about the axle [rad/s]
+};
+
+// Pose of one body for tf.
+struct BodyPose {
+  std::string name;             // the data file's body name
+  Vector3 p_in_world = Vector3::Zero();
+  Vector4 orientation = Vector4(1, 0, 0, 0);  // body -> world, (w, x, y, z)
+};
+
+// Why a run stopped (or kRunning).
+enum class RunStatus { kRunning, kFinished, kDerailed, kNonFinite, kLeftTrack, kIntegratorFailed };
+
+// Start state of the vehicle on the track: each body's reference pose mapped through the track frame at
+// its own arc length s_b = start_arc_length - (x_lead - x_b) (x_lead: the leading wheelset's reference x),
+// r = c(s_b) + R_track(s_b) [0, y_b, z_b + lift], A = R_track(s_b) A_ref; velocities of a rigid motion
+// along the track at `speed`: r_dot = speed t(s_b) + omega_track x (r - c(s_b)),
+// omega = speed * axial(dR/ds R^T) (+ speed / rolling_radius about the axle for wheelsets).
+// Throws std::runtime_error if a body falls outside the track.
+Eigen::VectorXd PlaceOnTrack(const VehicleModel& model, const contact::TrackGeometry& track,
+                             const std::vector<int>& wheelset_bodies, double start_arc_length, double speed,
+                             double lift, const std::vector<double>& rolling_radius);
+
+// Arc length of the point of the centre line closest to p (Newton from s_guess, clamped to the track);
+// tp receives the centre line at that s. No allocation.
+double ProjectOnTrack(const contact::TrackGeometry& track, const Vector3& p_in_world, double s_guess,
+                      contact::TrackPoint& tp) noexcept;
+
+class VehicleSimulator {
+ public:
+  // Builds a model from the scene's vehicle data file.
+  explicit VehicleSimulator(const core::Scene& scene, const SimulatorSettings& settings = {});
+  // Builds the model with `build` instead (tests): it adds bodies, load points (two wheel centres per
+  // wheelset body, nothing else), joints and force elements to an unfinalised model.
+  VehicleSimulator(const core::Scene& scene, const std::function<void(VehicleModel&)>& build,
+                   const SimulatorSettings& settings = {});
+  ~VehicleSimulator();
+  VehicleSimulator(const VehicleSimulator&) = delete;
+  VehicleSimulator& operator=(const VehicleSimulator&) = delete;
+
+  // Integrates to t (> time()); returns kRunning, kFinished once solver.end is reached, or why the run
+  // stopped (message() says which wheel, where and when). No exception on the normal path.
+  RunStatus AdvanceTo(double t);
+  const std::string& message() const { return message_; }
+
+  double time() const;
+  double start_time() const { return 0.0; }
+  // Leading wheelset's arc length [m] (from the last UpdateOutputs or AdvanceTo).
+  double leading_arc_length() const { return leading_s_; }
+  // Simulated time at which the run ends: solver.end.time, or an estimate from the arc length at speed.
+  double end_time_estimate() const;
+  bool finished() const;
+
+  // Evaluates kinematics and contact at the current state and fills the output buffers below.
+  void UpdateOutputs();
+  const std::vector<WheelOutput>& wheels() const { return wheel_out_; }
+  const std::vector<contact::WheelContactResult>& contacts() const { return contact_data_->result; }
+  const std::vector<WheelsetTrackOutput>& wheelsets() const { return wheelset_out_; }
+  const std::vector<BodyPose>& bodies() const { return body_out_; }
+
+  // Replaces the state (e.g. a test's initial lateral offset); re-initialises the integrator.
+  void ResetState(const Eigen::VectorXd& y);
+  Eigen::Map<const Eigen::VectorXd> state() const { return integrator_->state(); }
+
+  const VehicleModel& model() const { return model_; }
+  VehicleData& data() { return *data_; }
+  const contact::TrackGeometry& track() const { return *track_; }
+  const WheelRailContactModel& contact_model() const { return *contact_model_; }
+  const WheelRailContactData& contact_data() const { return *contact_data_; }
+  const std::vector<int>& wheelset_bodies() const { return wheelset_bodies_; }
+  IntegratorCounters Counters() const { return integrator_->Counters(); }
+  IntegrationMethod method() const { return method_; }
+  // Settled lowering of the vehicle onto the rails (static vertical solve) [m], < 0 downward.
+  double settle_lift() const { return lift_; }
+  // Total vertical load the rails carry at rest [N] and the sum of the wheel loads after settling [N].
+  double static_load() const { return static_load_; }
+  double settled_wheel_load_sum() const { return settled_load_sum_; }
+
+ private:
+  void Build(const core::Scene& scene, const std::function<void(VehicleModel&)>& build,
+             const SimulatorSettings& settings);
+  double SumWheelLoads(const Eigen::VectorXd& y);
+  RunStatus Check();
+
+  core::Scene scene_;
+  SimulatorSettings settings_;
+  std::unique_ptr<contact::TrackGeometry> track_;
+  contact::WheelProfile wheel_profile_;
+  contact::ProfileCurve rail_profile_;
+  VehicleModel model_;
+  std::unique_ptr<WheelRailContactModel> contact_model_;
+  std::unique_ptr<WheelRailContactData> contact_data_;
+  std::unique_ptr<VehicleData> data_;
+  std::unique_ptr<VehicleIntegrator> integrator_;
+  IntegrationMethod method_ = IntegrationMethod::kBdf;
+  std::vector<int> wheelset_bodies_;     // body index per wheelset, leading first
+  std::vector<double> rolling_radius_;   // per wheelset, at the settled centred position [m]
+  std::vector<double> wheelset_s_;       // arc length per wheelset (projection warm start) [m]
+  std::vector<double> wheel_s_;          // arc length per wheel centre [m]
+  double lift_ = 0.0;
+  double static_load_ = 0.0;
+  double settled_load_sum_ = 0.0;
+  double nominal_height_ = 0.0;          // nominal rolling radius [m]
+  double derailment_lift_ = 0.0;
+  double leading_s_ = 0.0;
+  std::string message_;
+  Eigen::VectorXd y_scratch_, ydot_scratch_;
+  std::vector<WheelOutput> wheel_out_;
+  std::vector<WheelsetTrackOutput> wheelset_out_;
+  std::vector<BodyPose> body_out_;
+};
+
+// "bdf" / "adams" choice for solver.vehicle_method auto: Adams (fixed-point, no Jacobian) when the step
+// is capped at max_step <= 5e-5 s (the contact's fastest modes are then resolved explicitly and a
+// difference-quotient Jacobian costs 13 n RHS), BDF otherwise. See doc/simulator.md for the measurements.
+IntegrationMethod ChooseMethod(const core::Solver& solver);
+
+}  // namespace rail::vehicle

@@ -1,0 +1,86 @@
+// Wheel-rail contact on the rigid track, evaluated inside the vehicle's right-hand side (paper sections
+// 4.1-4.2). This is the one place where the vehicle side calls rail_contact's per-wheel evaluation
+// (rail_contact/wheel_contact.hpp): each wheel's tread and flange contacts give a wrench at the wheel
+// centre (eq. 13) which is applied to the wheelset at its load point, like an external wrench.
+//
+// Model/Data split: WheelRailContactModel (profiles, options, which load point is which wheel, the track
+// geometry) is constant after building; WheelRailContactData (detection warm starts, impact memories,
+// the last results) is owned by the caller. The force element added to the VehicleModel holds a pointer
+// to both, so the model's data must outlive it.
+#pragma once
+
+#include <rail_contact/rail_deformation.hpp>
+#include <rail_contact/track_geometry.hpp>
+#include <rail_contact/wheel_contact.hpp>
+
+#include <vector>
+
+#include "rail_vehicle_node/force_element.hpp"
+#include "rail_vehicle_node/joint.hpp"
+#include "rail_vehicle_node/rigid_math.hpp"
+#include "rail_vehicle_node/vehicle_data.hpp"
+
+namespace rail::vehicle {
+
+// One wheel of the vehicle: its wheelset body, its load point (the vehicle's wheel centre, where the
+// wrench is applied) and the taping-line point (the contact code's wheel centre).
+struct WheelDefinition {
+  int wheelset = 0;                          // 0 = leading
+  contact::RailSide side = contact::RailSide::kLeft;
+  int load_point = 0;                        // index in VehicleModel::load_points()
+  int body = 0;                              // the wheelset body
+  Vector3 s_load_point_in_body = Vector3::Zero();  // wheel centre from the wheelset's centre of mass [m]
+  Vector3 s_taping_in_body = Vector3::Zero();      // axle point in the taping-line plane [m]
+};
+
+// Constant part: the per-wheel contact model (one profile pair shared by all wheels), the rigid track
+// geometry and the wheel list.
+class WheelRailContactModel {
+ public:
+  WheelRailContactModel(const contact::TrackGeometry& track, const contact::WheelProfile& wheel_profile,
+                        double nominal_radius, const contact::ProfileCurve& rail_profile,
+                        const Eigen::Vector2d& rail_section_centre_yz, const contact::WheelContactOptions& options,
+                        std::vector<WheelDefinition> wheels);
+
+  const contact::TrackGeometry& track() const { return *track_; }
+  const contact::WheelContactModel& wheel_model() const { return wheel_model_; }
+  const std::vector<WheelDefinition>& wheels() const { return wheels_; }
+  int n_wheels() const { return static_cast<int>(wheels_.size()); }
+
+ private:
+  const contact::TrackGeometry* track_;
+  contact::WheelContactModel wheel_model_;
+  std::vector<WheelDefinition> wheels_;
+};
+
+// Per-wheel work state and the results of the last evaluation (sized once).
+struct WheelRailContactData {
+  explicit WheelRailContactData(const WheelRailContactModel& model);
+  std::vector<contact::WheelContactWork> work;      // warm starts, impact memories
+  std::vector<contact::WheelContactResult> result;  // last evaluation
+  std::vector<double> s_hint;                       // track arc length near each wheel [m]
+  std::vector<Vector3> force_in_world;              // on the wheel, at its load point [N]
+  std::vector<Vector3> moment_in_world;             // about the load point [N m]
+  bool enabled = true;                              // false: no contact forces (set-up only)
+  long long evaluations = 0;                        // wheel evaluations since construction
+};
+
+// Evaluates wheel k from data.bodies (kinematics already computed) and stores the result, the wrench at
+// the load point and the updated s_hint in contact_data. No allocation, no exception.
+void EvaluateWheel(const WheelRailContactModel& model, const VehicleData& data, int k,
+                   WheelRailContactData& contact_data) noexcept;
+
+// The contact of all wheels as a force element of the vehicle model: AddForces evaluates every wheel and
+// applies its wrench at the load point (nothing when contact_data.enabled is false).
+class WheelRailContactElement : public ForceElement {
+ public:
+  WheelRailContactElement(const WheelRailContactModel* model, WheelRailContactData* contact_data);
+  void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
+  double PotentialEnergy(const VehicleData& data) const override;  // not tracked: 0
+
+ private:
+  const WheelRailContactModel* model_;
+  WheelRailContactData* contact_data_;
+};
+
+}  // namespace rail::vehicle

@@ -1,0 +1,276 @@
+// The vehicle on the rigid track (VehicleSimulator): static equilibrium on the contact, the kinematic
+// (Klingel) oscillation of a wheelset on straight track, flange contact and quasi-static displacement in
+// a tight curve.
+#include <gtest/gtest.h>
+
+#include <rail_contact/contact_geometry_table.hpp>
+#include <rail_core/scene_loader.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "rail_vehicle_node/multibody_dynamics.hpp"
+#include "rail_vehicle_node/vehicle_simulator.hpp"
+
+#ifndef RAILSIM_CONFIG_DIR
+#define RAILSIM_CONFIG_DIR "config"
+#endif
+
+namespace rail::vehicle {
+namespace {
+
+namespace rc = rail::contact;
+
+const std::string kScenes = std::string(RAILSIM_CONFIG_DIR) + "/scenes/";
+constexpr double kCoachMass = 59480.0;  // Table 3 of the paper [kg]
+constexpr double kG = 9.81;             // the data file's gravity [m/s^2]
+
+// The short straight of the shipped scenes (Iberian gauge, paper coach) on the rigid track, lengthened to
+// 200 m.
+core::Scene StraightScene(double speed, double end_time) {
+  core::Scene scene = core::load_scene_file(kScenes + "straight_short.yaml");
+  scene.track.segments.at(0).length = 200.0;
+  scene.effects.track_model = core::TrackModel::kRigid;
+  scene.vehicle.speed = speed;
+  scene.solver.end.kind = core::EndKind::kTime;
+  scene.solver.end.value = end_time;
+  return scene;
+}
+
+// Wheel index of wheelset w (0 = leading) and side (0 left, 1 right).
+int Wheel(int w, int side) { return 2 * w + side; }
+
+TEST(VehicleSimulator, SettlesWithEachWheelCarryingItsShareOfTheWeight) {
+  VehicleSimulator sim(StraightScene(30.5556, 0.2));
+  const double share = kCoachMass * kG / 8.0;  // 72 937.35 N
+  // The static solve matches the total to 1e-9 of the load; the data file's preloads make the reference
+  // pose the suspension's equilibrium, so every wheel carries the same share up to the contact geometry's
+  // left/right symmetry (mirrored profiles on a symmetric track): 1e-4 of the share.
+  EXPECT_NEAR(sim.settled_wheel_load_sum(), kCoachMass * kG, 1e-6 * kCoachMass * kG);
+  EXPECT_NEAR(sim.static_load(), kCoachMass * kG, 1e-6 * kCoachMass * kG);
+  ASSERT_EQ(sim.wheels().size(), 8u);
+  for (const WheelOutput& w : sim.wheels()) {
+    EXPECT_NEAR(w.force_in_world.z(), share, 1e-4 * share) << "wheel " << w.wheel_id;
+    const auto& tread = sim.contacts()[static_cast<std::size_t>(w.wheel_id)].contact[rc::kTread];
+    EXPECT_TRUE(tread.active) << "wheel " << w.wheel_id;
+    EXPECT_GT(tread.penetration, 0.0);
+    // Hertz approach of a wheel load of 73 kN on S1002/UIC60: a few hundredths to a few tenths of a mm.
+    EXPECT_LT(tread.penetration, 0.5e-3);
+  }
+  // Rolling on straight track at speed, the loads stay at the static share: the vehicle starts in
+  // equilibrium, so the only transients come from the creep forces settling (1 % of the share).
+  EXPECT_EQ(sim.AdvanceTo(0.2), RunStatus::kFinished) << sim.message();
+  for (const WheelOutput& w : sim.wheels()) {
+    EXPECT_NEAR(w.force_in_world.z(), share, 1e-2 * share) << "wheel " << w.wheel_id;
+  }
+  const IntegratorCounters c = sim.Counters();
+  EXPECT_GT(c.steps, 0);
+  std::printf("settle: lift %.4f mm; 0.2 s: %ld steps, %ld RHS, %ld Jacobian RHS, %ld Jacobians\n",
+              sim.settle_lift() * 1e3, c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals);
+}
+
+
+// A constant downward force on one body: the axle load of a lone wheelset.
+class AxleLoad : public ForceElement {
+ public:
+  AxleLoad(int body, double force) : ForceElement("axle_load", body, kGround), force_(force) {}
+  void AddForces(const VehicleData& /*data*/, Eigen::Ref<Eigen::VectorXd> g) const override {
+    g[6 * body_i() + 2] -= force_;
+  }
+  double PotentialEnergy(const VehicleData& /*data*/) const override { return 0.0; }
+
+ private:
+  double force_;
+};
+
+// Lateral displacement samples of one wheelset and the wavelength of their oscillation.
+struct LateralRecord {
+  std::vector<double> t, y;
+  // Zero crossings by linear interpolation, after t_from.
+  std::vector<double> Crossings(double t_from) const {
+    std::vector<double> out;
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      if (t[i - 1] < t_from) continue;
+      if ((y[i - 1] < 0.0) != (y[i] < 0.0)) out.push_back(t[i - 1] + (t[i] - t[i - 1]) * y[i - 1] / (y[i - 1] - y[i]));
+    }
+    return out;
+  }
+  double MaxAbs(double t_from) const {
+    double m = 0.0;
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      if (t[i] >= t_from) m = std::max(m, std::abs(y[i]));
+    }
+    return m;
+  }
+};
+
+LateralRecord RunAndRecord(VehicleSimulator& sim, int wheelset, double t_end, double dt) {
+  LateralRecord r;
+  const int n = static_cast<int>(std::lround(t_end / dt));
+  for (int i = 1; i <= n; ++i) {
+    const RunStatus status = sim.AdvanceTo(i * dt);
+    EXPECT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
+    if (!(status == RunStatus::kRunning || status == RunStatus::kFinished)) break;
+    r.t.push_back(sim.time());
+    r.y.push_back(sim.wheelsets()[static_cast<std::size_t>(wheelset)].lateral);
+  }
+  return r;
+}
+
+// Shifts the given bodies laterally (world y; straight track) in the simulator's current state.
+void ShiftBodies(VehicleSimulator& sim, const std::vector<std::string>& names, double dy) {
+  Eigen::VectorXd y = sim.state();
+  for (const std::string& name : names) y[VehicleModel::PositionOffset(sim.model().BodyIndex(name)) + 1] += dy;
+  sim.ResetState(y);
+}
+
+// Rolling radius of the tread contact of both wheels of wheelset 0 with the wheelset shifted laterally by
+// dy (world y, straight track) from the simulator's settled state; no dynamics, geometry only.
+void RollingRadii(VehicleSimulator& sim, double dy, double& r_left, double& r_right, double& y_left,
+                  double& y_right) {
+  Eigen::VectorXd y = sim.state();
+  y[VehicleModel::PositionOffset(sim.wheelset_bodies()[0]) + 1] += dy;
+  ComputeKinematics(sim.model(), y, sim.data());
+  WheelRailContactData cd(sim.contact_model());
+  cd.s_hint = sim.contact_data().s_hint;
+  EvaluateWheel(sim.contact_model(), sim.data(), 0, cd);
+  EvaluateWheel(sim.contact_model(), sim.data(), 1, cd);
+  const auto& left = cd.result[0].contact[rc::kTread];
+  const auto& right = cd.result[1].contact[rc::kTread];
+  r_left = left.rolling_radius;
+  r_right = right.rolling_radius;
+  y_left = left.p_contact_in_world.y();
+  y_right = right.p_contact_in_world.y();
+}
+
+TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
+  // One wheelset of the coach (Table 3 mass and inertia) under the coach's axle load, free of any
+  // suspension, on straight track at 20 m/s: the kinematic oscillation of Klingel. With S1002 on UIC60
+  // 1/20 at 1668 mm gauge and 1592 mm back-to-back the conicity is low (~0.01) and the wavelength long
+  // (~40 m): 3.4 s give three zero crossings.
+  const double speed = 20.0;
+  core::Scene scene = StraightScene(speed, 3.4);
+  scene.vehicle.wheelsets = 1;
+  scene.solver.vehicle_max_step = 2e-5;
+  const double axle_load = kCoachMass * kG / 4.0;
+  auto build = [&](VehicleModel& m) {
+    RigidBody ws;
+    ws.name = "ws";
+    ws.mass = 1800.0;
+    ws.inertia_in_body = Eigen::Vector3d(900.0, 10.0, 900.0).asDiagonal();
+    ws.r_reference = Vector3(0.0, 0.0, 0.445);
+    const int b = m.AddBody(ws);
+    m.AddLoadPointAtWorld("wheel_left", b, Vector3(0.0, 0.8665, 0.445));
+    m.AddLoadPointAtWorld("wheel_right", b, Vector3(0.0, -0.8665, 0.445));
+    m.AddForceElement(std::make_unique<AxleLoad>(b, axle_load - 1800.0 * kG));
+  };
+  VehicleSimulator sim(scene, build);
+  EXPECT_NEAR(sim.static_load(), axle_load, 1e-9 * axle_load);
+
+  // Klingel: L = 2 pi sqrt(r0 e / lambda), e half the distance between the contact points, r0 the rolling
+  // radius there, lambda the equivalent conicity at the oscillation's amplitude from rail_contact's
+  // contact-geometry table (EN 15302 principle) for the same wheelset and track.
+  const double amplitude = 2e-3;
+  rc::WheelsetTrackSpec spec;
+  spec.track_gauge = scene.track.gauge;
+  spec.gauge_depth = scene.track.gauge_measuring_depth;
+  spec.back_to_back = scene.vehicle.back_to_back;
+  spec.nominal_radius = scene.vehicle.nominal_radius;
+  rc::ContactGeometryTable table(rc::makeS1002(), rc::makeUic60Rail(scene.track.rail_inclination), spec);
+  std::vector<double> ys, delta_r;
+  for (const rc::ContactGeometryRow& row : table.table(-3 * amplitude, 3 * amplitude, 0.1e-3)) {
+    ASSERT_TRUE(row.ok) << "contact-geometry table row at y = " << row.y;
+    ys.push_back(row.y);
+    delta_r.push_back(row.delta_r);
+  }
+  const double e = table.contactHalfDistance();
+  const double r0 = scene.vehicle.nominal_radius;
+  const double lambda = rc::equivalentConicity(ys, delta_r, amplitude, e, r0);
+  ASSERT_TRUE(std::isfinite(lambda) && lambda > 0.0) << "equivalent conicity " << lambda;
+  const double klingel = 2.0 * M_PI * std::sqrt(r0 * e / lambda);
+  // Cross-check from the simulator's own contact: the rolling-radius difference slope at the amplitude.
+  double r_l0, r_r0, y_l0, y_r0, r_lA, r_rA, dummy1, dummy2;
+  RollingRadii(sim, 0.0, r_l0, r_r0, y_l0, y_r0);
+  RollingRadii(sim, amplitude, r_lA, r_rA, dummy1, dummy2);
+  const double lambda_slope = (r_lA - r_rA) / (2.0 * amplitude);
+
+  ShiftBodies(sim, {"ws"}, amplitude);
+  const LateralRecord rec = RunAndRecord(sim, 0, 3.4, 1e-3);
+  const std::vector<double> zc = rec.Crossings(0.0);
+  ASSERT_GE(zc.size(), 3u) << "no oscillation: Klingel wavelength " << klingel << " m";
+  const double period = 2.0 * (zc.back() - zc.front()) / static_cast<double>(zc.size() - 1);
+  const double wavelength = speed * period;
+  std::printf("lone wheelset: r0 %.5f m, e %.4f m, lambda %.4f (table), %.4f (slope), Klingel %.3f m, simulated "
+              "%.3f m (%zu crossings), amplitude at the end %.3f mm\n", r0, e, lambda, lambda_slope, klingel,
+              wavelength, zc.size(), rec.MaxAbs(3.0) * 1e3);
+  // Klingel's formula is the kinematic (creep-dominated, inertia-free) limit; at 20 m/s the inertia
+  // forces m w^2 y are about 2e-3 of the lateral creep forces, so the difference is dominated by the
+  // nonlinearity of Delta r over the amplitude and the wheelset's roll and spin creep; the zero crossings
+  // are interpolated from 1 ms samples (1e-4 of the period). Measured 0.2 %; tolerance 2 %.
+  EXPECT_NEAR(wavelength, klingel, 0.02 * klingel);
+}
+
+// Disabled: with S1002 on UIC60 1/20 at 1668 mm gauge and 1592 mm back-to-back the conicity is ~0.009, the
+// bogie's kinematic wavelength ~75 m (2.5 s at 110 km/h), and after 1.5 s the offset has grown to 4.8 mm
+// (half a cycle of the bogie mode): a decay cannot be judged within a test's run time. Kept to be enabled
+// with a run of several periods.
+TEST(VehicleSimulator, DISABLED_WheelsetOffsetDecaysOnStraightTrackBelowCriticalSpeed) {
+  // The coach at 30.6 m/s (110 km/h, the paper's speed) on straight track; the leading wheelset (with its
+  // axleboxes) starts 3 mm off the centre line. Below the critical speed the motion decays: after 1.5 s
+  // the amplitude is below a third of the offset.
+  VehicleSimulator sim(StraightScene(30.5556, 1.5));
+  const double offset = 3e-3;
+  ShiftBodies(sim, {"ws1", "ab1_left", "ab1_right"}, offset);
+  const LateralRecord rec = RunAndRecord(sim, 0, 1.5, 1e-3);
+  ASSERT_FALSE(rec.t.empty());
+  const double late = rec.MaxAbs(1.2);
+  std::printf("coach, wheelset 1 offset %.1f mm: max |y| over 1.2-1.5 s %.4f mm, crossings %zu\n", offset * 1e3,
+              late * 1e3, rec.Crossings(0.0).size());
+  EXPECT_LT(late, offset / 3.0);
+}
+
+// Disabled in the suite for its run time (about 7 minutes: flange contact costs ~370 s of wall time per
+// simulated second, see doc/simulator.md); run it with --gtest_also_run_disabled_tests.
+TEST(VehicleSimulator, DISABLED_TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
+  // config/scenes/tight_curve.yaml: R 150 m left, 50 km/h, cant 150 mm (77 mm deficiency). The coach starts
+  // inside the circular curve (s 110-230 m) on the chord placement of PlaceOnTrack and runs 1 s; the
+  // leading wheelset of each bogie is pushed to the outer (right) rail and flanges there, measured over the
+  // last 0.3 s (the rear bogie's leading wheelset settles on its flange only after ~0.5 s). Slow: flange
+  // contact costs ~370 s of wall time per simulated second (doc/simulator.md).
+  core::Scene scene = core::load_scene_file(kScenes + "tight_curve.yaml");
+  scene.vehicle.start_arc_length = 145.0;  // trailing wheelset at 123.3 m, inside the circle
+  scene.solver.end.kind = core::EndKind::kTime;
+  scene.solver.end.value = 1.0;
+  VehicleSimulator sim(scene);
+  std::vector<double> lateral_sum(4, 0.0);
+  std::vector<int> flange_count(8, 0);
+  int samples = 0;
+  RunStatus status = RunStatus::kRunning;
+  for (int i = 1; i <= 100 && status == RunStatus::kRunning; ++i) {
+    status = sim.AdvanceTo(0.01 * i);
+    ASSERT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
+    if (sim.time() < 0.7 - 1e-9) continue;
+    ++samples;
+    for (int w = 0; w < 4; ++w) lateral_sum[static_cast<std::size_t>(w)] += sim.wheelsets()[static_cast<std::size_t>(w)].lateral;
+    for (int k = 0; k < 8; ++k) flange_count[static_cast<std::size_t>(k)] += sim.contacts()[static_cast<std::size_t>(k)].contact[rc::kFlange].active;
+  }
+  ASSERT_GT(samples, 0);
+  for (int w = 0; w < 4; ++w) {
+    std::printf("tight curve: wheelset %d mean lateral %.3f mm, flange contact left %d/%d, right %d/%d\n", w + 1,
+                lateral_sum[static_cast<std::size_t>(w)] / samples * 1e3, flange_count[static_cast<std::size_t>(Wheel(w, 0))], samples,
+                flange_count[static_cast<std::size_t>(Wheel(w, 1))], samples);
+  }
+  for (int w : {0, 2}) {  // leading wheelset of each bogie
+    // Flange contact on the outer (right) wheel in every sample of the last 0.3 s, never on the inner one.
+    EXPECT_EQ(flange_count[static_cast<std::size_t>(Wheel(w, 1))], samples) << "wheelset " << w + 1;
+    EXPECT_EQ(flange_count[static_cast<std::size_t>(Wheel(w, 0))], 0) << "wheelset " << w + 1;
+    // Quasi-static lateral displacement toward the outer rail (-y, to the right of a left-hand curve), at
+    // least the flangeway clearance's order: more than 2 mm.
+    EXPECT_LT(lateral_sum[static_cast<std::size_t>(w)] / samples, -2e-3) << "wheelset " << w + 1;
+  }
+}
+
+}  // namespace
+}  // namespace rail::vehicle
