@@ -1,0 +1,229 @@
+// Round-trip time of one co-simulation exchange (the vehicle sends 8 wheel states, the track answers 8
+// wrenches, through VehicleCoupling and TrackCoupling) over the ROS service, the ROS topic and the
+// shared-memory transports, between two processes that are two ROS nodes. Prints median and 99th
+// percentile; not a test.
+//
+// usage: railsim_bench_transports [exchanges (default 20000)] [service,topic,shm]
+// Needs a ROS master: `roslaunch test/bench_transports.launch` (starts one), or with a running roscore
+// `rosrun rail_core railsim_bench_transports`. The program forks its track end itself.
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <ros/ros.h>
+
+#include "rail_core/coupling/protocol.hpp"
+#include "rail_core/coupling/shm_transport.hpp"
+#include "rail_core/ros/service_transport.hpp"
+#include "rail_core/ros/topic_transport.hpp"
+
+using namespace rail::core::coupling;
+using namespace rail::core::ros_glue;
+
+namespace {
+
+constexpr int kWheels = 8;
+constexpr double kTrackStep = 2e-5;  // [s]
+
+CouplingConfig bench_config() {
+  CouplingConfig c;
+  c.track_step = kTrackStep;
+  c.exchange_timeout = 10.0;
+  c.scene_hash = 0xbe9c000000000002ull;
+  c.wheel_count = kWheels;
+  return c;
+}
+
+struct Names {
+  std::string prefix;  // "/railsim_bench_<pid>"
+  std::string run_id;  // shm run id
+};
+
+// One endpoint of the named transport for `role`.
+std::unique_ptr<FrameTransport> make(const std::string& kind, Role role, const Names& names, ros::NodeHandle& nh) {
+  if (kind == "shm") {
+    ShmOptions o;
+    o.role = role;
+    o.scene_hash = bench_config().scene_hash;
+    o.wheel_capacity = kWheels;
+    o.run_id = names.run_id;
+    return std::make_unique<ShmTransport>(o);
+  }
+  if (kind == "service") {
+    ServiceTransportOptions o;
+    o.role = role;
+    o.track_step = kTrackStep;
+    o.wheel_capacity = kWheels;
+    o.service = names.prefix + "/lockstep";
+    return std::make_unique<ServiceTransport>(nh, o);
+  }
+  if (kind == "topic") {
+    TopicTransportOptions o;
+    o.role = role;
+    o.track_step = kTrackStep;
+    o.wheel_capacity = kWheels;
+    o.states_topic = names.prefix + "/wheel_states_exchange";
+    o.wrenches_topic = names.prefix + "/contact_wrenches_exchange";
+    return std::make_unique<TopicTransport>(nh, o);
+  }
+  throw std::runtime_error("unknown transport '" + kind + "' (service, topic or shm)");
+}
+
+// Track end: answers until the vehicle closes; 0 when it did.
+int track_loop(FrameTransport& t) {
+  TrackCoupling track(bench_config(), t);
+  for (;;) {
+    const Result r = track.receive();
+    if (r.status == Status::kPeerClosed) return 0;
+    if (!r) {
+      std::fprintf(stderr, "%s\n", r.message.c_str());
+      return 1;
+    }
+    for (int i = 0; i < kWheels; ++i) {
+      track.wrenches().wheels[i].f_wheel_in_world = 1e3 * track.states().wheels[i].p_wheel_in_world;
+      track.wrenches().wheels[i].n_wheel_in_world = track.states().wheels[i].omega_wheelset_in_world;
+    }
+    if (!track.send()) return 2;
+  }
+}
+
+// Vehicle end: times `steps` exchanges after `warmup` untimed ones; round-trip times [s] into rtt.
+bool vehicle_loop(FrameTransport& t, long warmup, long steps, std::vector<double>& rtt) {
+  VehicleCoupling v(bench_config(), t);
+  rtt.resize(static_cast<std::size_t>(steps));
+  for (long k = 0; k < warmup + steps; ++k) {
+    for (int i = 0; i < kWheels; ++i) {
+      v.states().wheels[i].p_wheel_in_world = Eigen::Vector3d(1e-3 * static_cast<double>(k), i, 0.445);
+      v.states().wheels[i].omega_wheelset_in_world = Eigen::Vector3d(0, 60.0, 0);
+    }
+    const auto t0 = Clock::now();
+    const Result r = v.exchange();
+    const auto t1 = Clock::now();
+    if (!r) {
+      std::fprintf(stderr, "%s\n", r.message.c_str());
+      return false;
+    }
+    if (k >= warmup) rtt[static_cast<std::size_t>(k - warmup)] = std::chrono::duration<double>(t1 - t0).count();
+  }
+  v.close();
+  return true;
+}
+
+void report(const std::string& what, std::vector<double>& rtt) {
+  std::sort(rtt.begin(), rtt.end());
+  const auto at = [&](double q) { return rtt[static_cast<std::size_t>(q * static_cast<double>(rtt.size() - 1))]; };
+  double sum = 0;
+  for (double x : rtt) sum += x;
+  std::printf("%-8s n %zu  median %8.1f us  p99 %8.1f us  mean %8.1f us  max %9.1f us\n", what.c_str(), rtt.size(),
+              1e6 * at(0.5), 1e6 * at(0.99), 1e6 * sum / static_cast<double>(rtt.size()), 1e6 * rtt.back());
+  std::fflush(stdout);
+}
+
+// Remappings from the command line except the node name and log file roslaunch gives (the two
+// processes name themselves).
+ros::M_string remappings(int argc, char** argv, std::vector<std::string>& rest) {
+  ros::M_string m;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const auto eq = a.find(":=");
+    if (eq == std::string::npos) {
+      rest.push_back(a);
+      continue;
+    }
+    const std::string key = a.substr(0, eq);
+    if (key != "__name" && key != "__log") m[key] = a.substr(eq + 2);
+  }
+  return m;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args;
+  const ros::M_string remap = remappings(argc, argv, args);
+  const long steps = !args.empty() ? std::atol(args[0].c_str()) : 20000;
+  std::vector<std::string> kinds = {"service", "topic", "shm"};
+  if (args.size() > 1) {
+    kinds.clear();
+    std::stringstream ss(args[1]);
+    for (std::string k; std::getline(ss, k, ',');) kinds.push_back(k);
+  }
+  if (steps <= 0) {
+    std::fprintf(stderr, "usage: railsim_bench_transports [exchanges > 0] [service,topic,shm]\n");
+    return 2;
+  }
+  const long warmup = std::min(steps / 10, 2000L);
+  Names names;
+  names.prefix = "/railsim_bench_" + std::to_string(getpid());
+  names.run_id = "bench" + std::to_string(getpid());
+
+  const pid_t parent = getpid();
+  const pid_t child = fork();
+  if (child < 0) {
+    std::perror("fork");
+    return 6;
+  }
+  if (child == 0) {  // track node
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != parent) _exit(5);
+    ros::init(remap, "railsim_bench_track_" + std::to_string(parent), ros::init_options::NoSigintHandler);
+    if (!ros::master::check()) _exit(4);
+    ros::NodeHandle nh;
+    int code = 0;
+    for (const std::string& kind : kinds) {
+      try {
+        auto t = make(kind, Role::kTrack, names, nh);
+        code = track_loop(*t);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "track (%s): %s\n", kind.c_str(), e.what());
+        code = 3;
+      }
+      if (code != 0) break;
+    }
+    ros::shutdown();
+    _exit(code);
+  }
+
+  ros::init(remap, "railsim_bench_vehicle_" + std::to_string(getpid()), ros::init_options::NoSigintHandler);
+  if (!ros::master::check()) {
+    std::fprintf(stderr, "railsim_bench_transports needs a ROS master (%s): start roscore, or run "
+                         "roslaunch test/bench_transports.launch\n", ros::master::getURI().c_str());
+    kill(child, SIGKILL);
+    waitpid(child, nullptr, 0);
+    return 4;
+  }
+  ros::NodeHandle nh;
+  std::printf("round trip of one exchange, %d wheels, two processes, %u hardware threads, %ld exchanges after %ld "
+              "warm-up\n", kWheels, std::thread::hardware_concurrency(), steps, warmup);
+  bool ok = true;
+  for (const std::string& kind : kinds) {
+    std::vector<double> rtt;
+    bool run_ok = false;
+    try {
+      auto t = make(kind, Role::kVehicle, names, nh);
+      run_ok = vehicle_loop(*t, warmup, steps, rtt);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "vehicle (%s): %s\n", kind.c_str(), e.what());
+    }
+    if (run_ok) report(kind, rtt);
+    ok = ok && run_ok;
+    if (!ok) break;
+  }
+  int status = 0;
+  if (!ok) kill(child, SIGKILL);
+  waitpid(child, &status, 0);
+  ros::shutdown();
+  ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  if (!ok) std::fprintf(stderr, "benchmark failed (track exit status %d)\n", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+  return ok ? 0 : 1;
+}

@@ -1,0 +1,168 @@
+#include "rail_core/ros/frame_messages.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+namespace rail::core::ros_glue {
+
+using coupling::Result;
+using coupling::Status;
+
+namespace {
+
+// The stamp of time t [s] (the frames' times are >= 0), or false when t is no valid ros::Time.
+bool stamp_of(double t, ros::Time& stamp) {
+  if (!(t >= 0.0) || !(t < static_cast<double>(std::numeric_limits<std::uint32_t>::max()))) return false;
+  stamp.fromSec(t);
+  return true;
+}
+
+Result bad_time(double t) {
+  char buf[96];
+  std::snprintf(buf, sizeof(buf), "frame time %.9g s is not a valid ROS stamp (0 .. 2^32 s)", t);
+  return {Status::kError, buf};
+}
+
+Result bad_id(std::uint32_t id) {
+  return {Status::kError, "wheel id " + std::to_string(id) + " does not fit the message's uint8 wheel_id"};
+}
+
+void put(const Eigen::Vector3d& v, geometry_msgs::Vector3& m) {
+  m.x = v.x();
+  m.y = v.y();
+  m.z = v.z();
+}
+void get(const geometry_msgs::Vector3& m, Eigen::Vector3d& v) { v = Eigen::Vector3d(m.x, m.y, m.z); }
+
+// The checks shared by both message kinds: wheel count against the capacity, stamp against k h.
+Result check_incoming(std::uint64_t step, const ros::Time& stamp, std::size_t count, int capacity,
+                      double track_step, const char* source) {
+  if (count > static_cast<std::size_t>(capacity))
+    return {Status::kRefused, std::string(source) + ": " + std::to_string(count) + " wheels in step " +
+                                  std::to_string(step) + ", more than the capacity " + std::to_string(capacity)};
+  const double t = static_cast<double>(step) * track_step;
+  ros::Time expected;
+  const bool valid = stamp_of(t, expected);
+  const std::int64_t diff = static_cast<std::int64_t>(stamp.toNSec()) - static_cast<std::int64_t>(expected.toNSec());
+  if (!valid || diff > 1 || diff < -1) {
+    char buf[200];
+    std::snprintf(buf, sizeof(buf), "%s: stamp %u.%09u s of step %llu differs from step x track_step = %.9g s",
+                  source, stamp.sec, stamp.nsec, static_cast<unsigned long long>(step), t);
+    return {Status::kRefused, buf};
+  }
+  return {};
+}
+
+}  // namespace
+
+void reserve_message(rail_msgs::WheelStates& msg, int capacity) {
+  msg.header.frame_id = kWorldFrameId;
+  msg.wheels.reserve(static_cast<std::size_t>(capacity > 0 ? capacity : 0));
+}
+
+void reserve_message(rail_msgs::ContactWrenches& msg, int capacity) {
+  msg.header.frame_id = kWorldFrameId;
+  msg.wrenches.reserve(static_cast<std::size_t>(capacity > 0 ? capacity : 0));
+}
+
+Result to_message(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates& msg) {
+  ros::Time stamp;
+  if (!stamp_of(frame.time, stamp)) return bad_time(frame.time);
+  for (std::uint32_t i = 0; i < frame.count; ++i)
+    if (frame.wheels[i].id > 255u) return bad_id(frame.wheels[i].id);
+  msg.header.stamp = stamp;
+  msg.step = frame.step;
+  msg.scene_hash = frame.scene_hash;
+  msg.wheels.resize(frame.count);  // within the reserved capacity: no allocation
+  for (std::uint32_t i = 0; i < frame.count; ++i) {
+    const coupling::WheelState& w = frame.wheels[i];
+    rail_msgs::WheelState& m = msg.wheels[i];
+    m.wheel_id = static_cast<std::uint8_t>(w.id);
+    m.wheelset = static_cast<std::uint8_t>(w.id / 2);
+    m.side = static_cast<std::uint8_t>(w.id % 2 ? rail_msgs::WheelState::SIDE_RIGHT : rail_msgs::WheelState::SIDE_LEFT);
+    m.arc_length = w.arc_length;
+    m.position.x = w.p_wheel_in_world.x();
+    m.position.y = w.p_wheel_in_world.y();
+    m.position.z = w.p_wheel_in_world.z();
+    m.orientation.x = w.q_wheelset_to_world.x();
+    m.orientation.y = w.q_wheelset_to_world.y();
+    m.orientation.z = w.q_wheelset_to_world.z();
+    m.orientation.w = w.q_wheelset_to_world.w();
+    put(w.v_wheel_in_world, m.linear_velocity);
+    put(w.omega_wheelset_in_world, m.angular_velocity);
+  }
+  return {};
+}
+
+Result to_message(const coupling::WrenchFrame& frame, rail_msgs::ContactWrenches& msg) {
+  ros::Time stamp;
+  if (!stamp_of(frame.time, stamp)) return bad_time(frame.time);
+  for (std::uint32_t i = 0; i < frame.count; ++i)
+    if (frame.wheels[i].id > 255u) return bad_id(frame.wheels[i].id);
+  msg.header.stamp = stamp;
+  msg.step = frame.step;
+  msg.scene_hash = frame.scene_hash;
+  msg.wrenches.resize(frame.count);
+  for (std::uint32_t i = 0; i < frame.count; ++i) {
+    const coupling::WheelWrench& w = frame.wheels[i];
+    rail_msgs::ContactWrench& m = msg.wrenches[i];
+    m.wheel_id = static_cast<std::uint8_t>(w.id);
+    put(w.f_wheel_in_world, m.force);
+    put(w.n_wheel_in_world, m.moment);
+  }
+  return {};
+}
+
+void make_close_marker(rail_msgs::WheelStates& msg) {
+  msg.step = kCloseStep;
+  msg.wheels.clear();  // keeps the capacity
+}
+
+void make_close_marker(rail_msgs::ContactWrenches& msg) {
+  msg.step = kCloseStep;
+  msg.wrenches.clear();
+}
+
+Result from_message(const rail_msgs::WheelStates& msg, double track_step, coupling::WheelStateFrame& frame,
+                    const char* source) {
+  Result r = check_incoming(msg.step, msg.header.stamp, msg.wheels.size(), frame.capacity(), track_step, source);
+  if (!r) return r;
+  frame.step = msg.step;
+  frame.time = static_cast<double>(msg.step) * track_step;
+  frame.scene_hash = msg.scene_hash;
+  frame.count = static_cast<std::uint32_t>(msg.wheels.size());
+  for (std::uint32_t i = 0; i < frame.count; ++i) {
+    const rail_msgs::WheelState& m = msg.wheels[i];
+    coupling::WheelState& w = frame.wheels[i];
+    w.id = m.wheel_id;
+    w.arc_length = m.arc_length;
+    w.p_wheel_in_world = Eigen::Vector3d(m.position.x, m.position.y, m.position.z);
+    // Eigen's (w, x, y, z) constructor; stored as given (no normalisation), so the bits survive.
+    w.q_wheelset_to_world = Eigen::Quaterniond(m.orientation.w, m.orientation.x, m.orientation.y, m.orientation.z);
+    get(m.linear_velocity, w.v_wheel_in_world);
+    get(m.angular_velocity, w.omega_wheelset_in_world);
+  }
+  return {};
+}
+
+Result from_message(const rail_msgs::ContactWrenches& msg, double track_step, coupling::WrenchFrame& frame,
+                    const char* source) {
+  Result r = check_incoming(msg.step, msg.header.stamp, msg.wrenches.size(), frame.capacity(), track_step, source);
+  if (!r) return r;
+  frame.step = msg.step;
+  frame.time = static_cast<double>(msg.step) * track_step;
+  frame.scene_hash = msg.scene_hash;
+  frame.count = static_cast<std::uint32_t>(msg.wrenches.size());
+  for (std::uint32_t i = 0; i < frame.count; ++i) {
+    const rail_msgs::ContactWrench& m = msg.wrenches[i];
+    coupling::WheelWrench& w = frame.wheels[i];
+    w.id = m.wheel_id;
+    get(m.force, w.f_wheel_in_world);
+    get(m.moment, w.n_wheel_in_world);
+  }
+  return {};
+}
+
+}  // namespace rail::core::ros_glue

@@ -1,0 +1,58 @@
+#include "rail_core/ros/ros_transport_options.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include <ros/master.h>
+#include <ros/this_node.h>
+#include <xmlrpcpp/XmlRpcException.h>
+#include <xmlrpcpp/XmlRpcValue.h>
+
+#include "ros_transport_util.hpp"
+
+namespace rail::core::ros_glue {
+
+namespace {
+std::string num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof(buf), "%.9g", v);
+  return buf;
+}
+}  // namespace
+
+void check_options(const RosTransportOptions& o, const char* what) {
+  if (!(o.track_step > 0.0) || !std::isfinite(o.track_step))
+    throw std::runtime_error(std::string(what) + ": track_step must be > 0 s (got " + num(o.track_step) + ")");
+  if (o.wheel_capacity < 1 || o.wheel_capacity > 256)
+    throw std::runtime_error(std::string(what) + ": wheel_capacity must be in 1..256 (got " +
+                             std::to_string(o.wheel_capacity) + ")");
+  if (!(o.attach_timeout > 0.0) || !std::isfinite(o.attach_timeout))
+    throw std::runtime_error(std::string(what) + ": attach_timeout must be > 0 s (got " + num(o.attach_timeout) +
+                             ")");
+}
+
+namespace detail {
+
+std::string service_provider(const std::string& service) {
+  try {
+    XmlRpc::XmlRpcValue args, result, payload;
+    args[0] = ros::this_node::getName();
+    if (!ros::master::execute("getSystemState", args, result, payload, false)) return {};
+    // payload = [publishers, subscribers, services], each a list of [name, [node, ...]].
+    if (payload.getType() != XmlRpc::XmlRpcValue::TypeArray || payload.size() < 3) return {};
+    XmlRpc::XmlRpcValue& services = payload[2];
+    for (int i = 0; i < services.size(); ++i) {
+      XmlRpc::XmlRpcValue& entry = services[i];
+      if (entry.size() < 2 || static_cast<std::string&>(entry[0]) != service) continue;
+      if (entry[1].size() > 0) return static_cast<std::string&>(entry[1][0]);
+    }
+  } catch (const XmlRpc::XmlRpcException&) {
+    // A malformed answer from the master: the provider stays unknown (it only serves messages).
+  }
+  return {};
+}
+
+}  // namespace detail
+}  // namespace rail::core::ros_glue
