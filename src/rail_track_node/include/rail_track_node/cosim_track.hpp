@@ -1,0 +1,136 @@
+// The track side of the co-simulation (paper section 5): the track receives the wheel-centre states of
+// each track step, evaluates every wheel's contact on its rails and returns the equivalent wrench at each
+// wheel centre (eq. 13); with effects.track_model flexible it also loads the FE rails with the rail-side
+// wrenches (eq. 15 through the beam shape functions, eq. 16) and advances Newmark by one step.
+//
+//  - rigid_fe: only the track geometry is built (no FE mesh, no matrices, no factor, no integration);
+//    the contact is evaluated on the rigid rails (RigidRailDeformation), as the vehicle alone does.
+//  - flexible: the scene's FE track (buildSceneTrack) and a Newmark integrator at solver.track_step,
+//    started from the static equilibrium under the track's own weight. Coupling is explicit: the contact
+//    of step k (wheel states at t_k) is evaluated on the rails of the FE state at t_{k-1} (the state at
+//    the start of the Newmark step), and its rail-side wrenches are the contact loads f_c at the end of
+//    that step (t_k). Step 0 evaluates the contact on the initial state and does not integrate.
+//
+// Wheel centre: WheelState::p_wheel_in_world is taken as the contact code's wheel centre, the axle point
+// in the plane of the taping line (rail_contact/contact_detection.hpp); the returned moment is about that
+// point, world axes. Wheel id = 2 * wheelset + side (0 left, 1 right). The contact model is built as the
+// vehicle side builds it on the rigid track: wheel profile per vehicle.wheel_profile, nominal radius from
+// the scene, the scene's rail profile, the scene's effects as the contact options. ROS-free.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include <rail_contact/profile.hpp>
+#include <rail_contact/rail_deformation.hpp>
+#include <rail_contact/track_geometry.hpp>
+#include <rail_contact/wheel_contact.hpp>
+#include <rail_core/coupling/frames.hpp>
+#include <rail_core/scene.hpp>
+
+#include "rail_track_node/newmark.hpp"
+#include "rail_track_node/scene_track.hpp"
+#include "rail_track_node/track_simulator.hpp"
+
+namespace rail {
+namespace track {
+
+/// What the scene does not say (constant after building).
+struct CosimTrackOptions {
+  /// Contact data without a scene key (friction, materials, Polach, detection); the scene's effects
+  /// (flange_contact, spin_creepage, creep_law) override its fields, as on the vehicle side.
+  rail::contact::WheelContactOptions contact;
+  SceneTrackOptions track;         ///< rail height and gravity of the FE track (flexible only)
+  bool include_gravity = true;     ///< track self-weight f_g in every Newmark step and in the initial state
+};
+
+/// Why step() refused a frame (nothing was evaluated or integrated).
+enum class CosimStepStatus { kOk, kWrongWheelCount, kBadWheelId };
+
+/// Track side of the co-simulation: built once from a resolved scene, then advanced by step().
+class CosimTrack {
+ public:
+  /// Throws std::runtime_error (rail::core::SceneError for scene data) when the scene has no vehicle,
+  /// runs the rigid track alone, or its data are not physical. Allocates (set-up).
+  explicit CosimTrack(const rail::core::Scene& scene, const CosimTrackOptions& options = {});
+  ~CosimTrack();
+  CosimTrack(const CosimTrack&) = delete;
+  CosimTrack& operator=(const CosimTrack&) = delete;
+
+  /// Track step k = states.step (t_k): evaluates each wheel's contact on the rails (flexible: the FE
+  /// state at t_{k-1}), loads the FE rails and advances Newmark to t_k (flexible, k > 0), writes the
+  /// wheel-centre wrenches (N, N m about p_wheel_in_world, world axes) into out (ids, count; step, time
+  /// and hash copied from states). out must hold states.count wheels. Refuses (and changes nothing) when
+  /// states.count differs from the scene's wheel count or a wheel id is out of range or repeated.
+  /// No allocation, no exception, no logging.
+  CosimStepStatus step(const rail::core::coupling::WheelStateFrame& states,
+                       rail::core::coupling::WrenchFrame& out) noexcept;
+
+  bool flexible() const { return fe_ != nullptr; }
+  int wheelCount() const { return static_cast<int>(result_.size()); }
+  /// Newmark steps done since construction (always 0 with rigid_fe).
+  long newmarkSteps() const { return newmark_steps_; }
+  /// Frames stepped since construction.
+  long framesStepped() const { return frames_; }
+
+  const rail::contact::TrackGeometry& geometry() const { return *geometry_; }
+  const rail::contact::WheelContactModel& contactModel() const { return *contact_model_; }
+  /// The FE track (flexible), or nullptr (rigid_fe: not built).
+  const SceneTrack* sceneTrack() const { return fe_.get(); }
+  /// Newmark state (flexible only; d, v, a over the free DOFs); nullptr with rigid_fe.
+  const NewmarkState* state() const;
+  /// The rail motion the contact of the last step saw (flexible: nodal values of the FE state at the start
+  /// of that step); nullptr with rigid_fe.
+  const rail::contact::BeamRailDeformation* railDeformation() const { return deformation_.get(); }
+
+  /// Contact results of wheel `id` from the last step (contact points, forces, rail wrenches).
+  const rail::contact::WheelContactResult& contact(int id) const { return result_[static_cast<std::size_t>(id)]; }
+  /// Caller-visible detection counters and impact memories of wheel `id`.
+  const rail::contact::WheelContactWork& contactWork(int id) const { return work_[static_cast<std::size_t>(id)]; }
+
+  /// Adds a rail deflection section at track arc length s (m) (set-up only); returns its index. Throws
+  /// std::runtime_error when s is off the meshed rails (flexible) or off the track (rigid_fe).
+  int addSection(double s);
+  int sectionCount() const { return static_cast<int>(sections_.size()); }
+  /// Displacement (m) and small rotation (rad) of both rails' centre lines at section i from the current
+  /// state, track-frame components (x along, y left, z up). Zero with rigid_fe. No allocation.
+  void sectionDeflection(int i, RailSectionDeflection& out) const;
+  /// Same for any displacement vector d over the FE free DOFs (flexible; e.g. a static solution).
+  void sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const;
+
+ private:
+  struct RailProbe {
+    std::array<int, 12> dofs;                   // free DOFs of the element, -1 fixed
+    Eigen::Matrix<double, 3, 12> P_u, P_theta;  // element world DOFs -> track-frame displacement / rotation
+  };
+  struct Section {
+    double s;
+    std::array<RailProbe, 2> rail;
+  };
+  void fillDeformation() noexcept;
+
+  std::unique_ptr<rail::contact::TrackGeometry> rigid_geometry_;  // rigid_fe: the geometry alone
+  std::unique_ptr<SceneTrack> fe_;                                 // flexible: geometry + FE model
+  const rail::contact::TrackGeometry* geometry_ = nullptr;
+  rail::contact::WheelProfile wheel_profile_;
+  rail::contact::ProfileCurve rail_profile_;
+  std::unique_ptr<rail::contact::WheelContactModel> contact_model_;
+  std::vector<rail::contact::WheelContactWork> work_;      // per wheel id
+  std::vector<rail::contact::WheelContactResult> result_;  // per wheel id, last step
+  std::vector<unsigned char> seen_;                        // per wheel id, step() scratch
+  // Flexible only.
+  std::unique_ptr<NewmarkIntegrator> integrator_;
+  NewmarkState state_;
+  std::unique_ptr<NodalLoads> loads_;
+  std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
+  std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
+  std::vector<Section> sections_;
+  long newmark_steps_ = 0;
+  long frames_ = 0;
+};
+
+}  // namespace track
+}  // namespace rail

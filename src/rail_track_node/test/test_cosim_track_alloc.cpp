@@ -1,0 +1,155 @@
+// step() of the co-simulation track performs no heap allocation, with rigid_fe and with flexible. This file
+// replaces the C allocation functions of the whole test program with counting wrappers around glibc's
+// (malloc, calloc, realloc and the aligned variants), which also catches allocations inside CHOLMOD, Eigen
+// and the C++ runtime. Build it as its own test executable so the replacement does not affect other tests.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cerrno>
+#include <cstddef>
+#include <string>
+
+#include <rail_contact/profile.hpp>
+#include <rail_core/scene_loader.hpp>
+
+#include "rail_track_node/cosim_track.hpp"
+
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* __libc_memalign(std::size_t, std::size_t);
+void __libc_free(void*);
+}
+
+namespace {
+bool g_counting = false;
+long g_allocations = 0;
+inline void count() {
+  if (g_counting) ++g_allocations;
+}
+}  // namespace
+
+extern "C" {
+void* malloc(std::size_t n) {
+  count();
+  return __libc_malloc(n);
+}
+void* calloc(std::size_t n, std::size_t size) {
+  count();
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t n) {
+  count();
+  return __libc_realloc(p, n);
+}
+void free(void* p) { __libc_free(p); }
+void* memalign(std::size_t alignment, std::size_t n) {
+  count();
+  return __libc_memalign(alignment, n);
+}
+void* aligned_alloc(std::size_t alignment, std::size_t n) {
+  count();
+  return __libc_memalign(alignment, n);
+}
+int posix_memalign(void** out, std::size_t alignment, std::size_t n) {
+  count();
+  void* p = __libc_memalign(alignment, n);
+  if (!p) return ENOMEM;
+  *out = p;
+  return 0;
+}
+}
+
+namespace rt = rail::track;
+namespace rc = rail::contact;
+namespace cc = rail::core::coupling;
+
+namespace {
+
+std::string configDir() {
+#ifdef RAILSIM_CONFIG_DIR
+  return RAILSIM_CONFIG_DIR;
+#else
+  const std::string here = __FILE__;
+  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
+#endif
+}
+
+rail::core::Scene scene(const std::string& track_model) {
+  const std::string text =
+      "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n  data: ../track/paper_track.yaml\n"
+      "  segments:\n    - {type: straight, length: 30.0}\n"
+      "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 25.0\n  speed: 30.0\n"
+      "  back_to_back: 1.592\n  wheelsets: 4\n"
+      "effects:\n  track_model: " + track_model + "\nsolver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
+  return rail::core::load_scene_text(text, "t.yaml", configDir() + "/scenes");
+}
+
+// Eight wheels rolling at 30 m/s, 50 micrometres into the rails (loaded contacts), at step k.
+void fill(cc::WheelStateFrame& f, long k, double taping_y) {
+  const double V = 30.0, r0 = 0.445, h = 2e-5;
+  const double stations[4] = {25.0, 22.3, 8.6, 5.9};
+  f.count = 8;
+  f.step = static_cast<std::uint64_t>(k);
+  f.time = k * h;
+  for (int i = 0; i < 8; ++i) {
+    cc::WheelState& w = f.wheels[static_cast<std::size_t>(i)];
+    w.id = static_cast<std::uint32_t>(i);
+    const double s = stations[i / 2] + V * k * h;
+    w.arc_length = s;
+    w.p_wheel_in_world = Eigen::Vector3d(s, i % 2 == 0 ? taping_y : -taping_y, r0 - 5e-5);
+    w.q_wheelset_to_world = Eigen::Quaterniond::Identity();
+    w.v_wheel_in_world = Eigen::Vector3d(V, 0.0, 0.0);
+    w.omega_wheelset_in_world = Eigen::Vector3d(0.0, V / r0 * 1.001, 0.0);
+  }
+}
+
+// Steps 0..2 outside the counted region (warm starts, first searches), then counts steps 3..52.
+long allocationsPerRun(const std::string& track_model, long* newmark_steps, double* fz) {
+  rt::CosimTrack track(scene(track_model));
+  const double taping_y = 0.5 * 1.592 + rc::flangeBackY(rc::makeS1002());
+  cc::WheelStateFrame frame(8);
+  cc::WrenchFrame out(8);
+  for (long k = 0; k < 3; ++k) {
+    fill(frame, k, taping_y);
+    track.step(frame, out);
+  }
+  g_allocations = 0;
+  for (long k = 3; k < 53; ++k) {
+    fill(frame, k, taping_y);
+    g_counting = true;
+    track.step(frame, out);
+    g_counting = false;
+  }
+  *newmark_steps = track.newmarkSteps();
+  *fz = out.wheels[0].f_wheel_in_world.z();
+  return g_allocations;
+}
+
+}  // namespace
+
+// The counter itself works: an Eigen vector and a std::string allocation inside the counted region are seen.
+TEST(CosimTrackAllocation, CounterSeesAllocations) {
+  g_allocations = 0;
+  g_counting = true;
+  Eigen::VectorXd v(1000);
+  std::string s(100, 'x');
+  g_counting = false;
+  EXPECT_GE(g_allocations, 2);
+  EXPECT_EQ(v.size() + static_cast<long>(s.size()), 1100);
+}
+
+// (d) No allocation in 50 steps of 8 loaded wheels, rigid_fe and flexible (exact count). The steps did
+// work: the wheels carry load and the flexible track integrated every step after step 0.
+TEST(CosimTrackAllocation, StepAllocatesNothing) {
+  long newmark = -1;
+  double fz = 0.0;
+  EXPECT_EQ(allocationsPerRun("rigid_fe", &newmark, &fz), 0);
+  EXPECT_EQ(newmark, 0);
+  EXPECT_GT(fz, 1000.0);
+  EXPECT_EQ(allocationsPerRun("flexible", &newmark, &fz), 0);
+  EXPECT_EQ(newmark, 52);
+  EXPECT_GT(fz, 1000.0);
+}
