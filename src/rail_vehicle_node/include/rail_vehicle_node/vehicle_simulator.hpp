@@ -29,6 +29,16 @@
 
 namespace rail::vehicle {
 
+// Source of the wheel-centre wrenches when they come from outside the vehicle (the co-simulation,
+// cosim_vehicle.hpp) instead of the built-in rigid contact. Called inside every right-hand side.
+class WheelWrenchSource {
+ public:
+  virtual ~WheelWrenchSource() = default;
+  // Wrench on wheel `wheel` (2 * wheelset + side) at time t [s]: force [N] and moment about the wheel
+  // centre (load point) [N m], both in the world frame. No allocation, no exception.
+  virtual void WheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept = 0;
+};
+
 // What the scene does not say (constant after building).
 struct SimulatorSettings {
   // Contact data the scene has no key for: friction mu0, restitution e, materials, Polach parameters,
@@ -40,6 +50,10 @@ struct SimulatorSettings {
   double derailment_lift = 0.0;
   // Derailment: a wheelset centre farther than this from the track centre line, laterally [m].
   double derailment_lateral = 0.05;
+  // Co-simulation: when set, the built-in rigid contact still places and settles the vehicle, then it is
+  // switched off and every right-hand side takes the wheel-centre wrenches from this source instead
+  // (contacts() then keeps the settling evaluation). Must outlive the simulator.
+  const WheelWrenchSource* wheel_wrench_source = nullptr;
 };
 
 // One wheel centre (rail_msgs/WheelState), world frame.
@@ -127,6 +141,11 @@ class VehicleSimulator {
   // Replaces the state (e.g. a test's initial lateral offset); re-initialises the integrator.
   void ResetState(const Eigen::VectorXd& y);
   Eigen::Map<const Eigen::VectorXd> state() const { return integrator_->state(); }
+  // Dense output of the last internal step (VehicleIntegrator::InterpolateAt / LastStepInterval).
+  void InterpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const { integrator_->InterpolateAt(t, y_out); }
+  void LastStepInterval(double& t_begin, double& t_end) const { integrator_->LastStepInterval(t_begin, t_end); }
+  // Whether the wheel wrenches come from SimulatorSettings::wheel_wrench_source.
+  bool external_wheel_wrenches() const { return external_active_; }
 
   const VehicleModel& model() const { return model_; }
   VehicleData& data() { return *data_; }
@@ -169,6 +188,7 @@ class VehicleSimulator {
   double nominal_height_ = 0.0;          // nominal rolling radius [m]
   double derailment_lift_ = 0.0;
   double leading_s_ = 0.0;
+  bool external_active_ = false;         // wheel wrenches from settings_.wheel_wrench_source
   std::string message_;
   Eigen::VectorXd y_scratch_, ydot_scratch_;
   std::vector<WheelOutput> wheel_out_;

@@ -24,6 +24,34 @@ Vector3 Axial(const Matrix3& W) {
 
 const char* SideName(rc::RailSide side) { return side == rc::RailSide::kLeft ? "left" : "right"; }
 
+// The wheel-centre wrenches of a WheelWrenchSource at the right-hand side's time (data.time), applied at
+// each wheel's load point while *active is true.
+class ExternalWheelWrenchElement : public ForceElement {
+ public:
+  ExternalWheelWrenchElement(const WheelRailContactModel* model, const WheelWrenchSource* source, const bool* active)
+      : ForceElement("external_wheel_wrenches", model->wheels().front().body, kGround),
+        model_(model),
+        source_(source),
+        active_(active) {}
+  void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override {
+    if (!*active_) return;
+    Vector3 f, n;
+    for (int k = 0; k < model_->n_wheels(); ++k) {
+      const WheelDefinition& w = model_->wheels()[static_cast<std::size_t>(k)];
+      const BodyKinematics& b = data.bodies[static_cast<std::size_t>(w.body)];
+      source_->WheelWrenchAt(data.time, k, f, n);
+      ApplyForceAt(data, w.body, f, b.r + b.A * w.s_load_point_in_body, g);
+      ApplyMoment(data, w.body, n, g);
+    }
+  }
+  double PotentialEnergy(const VehicleData& /*data*/) const override { return 0.0; }
+
+ private:
+  const WheelRailContactModel* model_;
+  const WheelWrenchSource* source_;
+  const bool* active_;
+};
+
 }  // namespace
 
 IntegrationMethod ChooseMethod(const core::Solver& solver) {
@@ -278,6 +306,10 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
       Eigen::Vector2d(0.0, -rc::uic60::kCentroidDepth), options, std::move(wheels));
   contact_data_ = std::make_unique<WheelRailContactData>(*contact_model_);
   model_.AddForceElement(std::make_unique<WheelRailContactElement>(contact_model_.get(), contact_data_.get()));
+  if (settings.wheel_wrench_source != nullptr) {
+    model_.AddForceElement(std::make_unique<ExternalWheelWrenchElement>(
+        contact_model_.get(), settings.wheel_wrench_source, &external_active_));
+  }
   model_.Finalize();
   data_ = std::make_unique<VehicleData>(model_);
   derailment_lift_ = settings.derailment_lift > 0.0 ? settings.derailment_lift : rc::flangeHeight(wheel_profile_);
@@ -367,6 +399,11 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   is.max_order = method_ == IntegrationMethod::kBdf ? 5 : 12;
   for (auto& work : contact_data_->work) {
     for (auto& impact : work.impact) impact = rc::ImpactMemory();
+  }
+  if (settings.wheel_wrench_source != nullptr) {
+    // Settled on the rigid contact; from here on the wheel wrenches come from the source.
+    contact_data_->enabled = false;
+    external_active_ = true;
   }
   integrator_ = std::make_unique<VehicleIntegrator>(model_, *data_, y, 0.0, is);
 
@@ -458,8 +495,13 @@ void VehicleSimulator::UpdateOutputs() {
     o.orientation = EulerParametersFromRotation(k.A);
     wheel_s_[i] = ProjectOnTrack(*track_, o.p_in_world, wheel_s_[i], tp);
     o.arc_length = wheel_s_[i];
-    o.force_in_world = contact_data_->force_in_world[i];
-    o.moment_in_world = contact_data_->moment_in_world[i];
+    if (external_active_) {
+      settings_.wheel_wrench_source->WheelWrenchAt(integrator_->time(), static_cast<int>(i), o.force_in_world,
+                                                   o.moment_in_world);
+    } else {
+      o.force_in_world = contact_data_->force_in_world[i];
+      o.moment_in_world = contact_data_->moment_in_world[i];
+    }
   }
   for (std::size_t b = 0; b < body_out_.size(); ++b) {
     const BodyKinematics& k = data_->bodies[b];

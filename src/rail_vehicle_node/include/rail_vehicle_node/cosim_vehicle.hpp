@@ -1,0 +1,93 @@
+// The vehicle side of the co-simulation (paper section 5.3): the vehicle of VehicleSimulator (same data
+// file, placement and settling on the rigid contact) whose wheel-centre wrenches come from the track
+// through a rail_core::coupling::VehicleCoupling over any FrameTransport.
+//
+// Loop (the caller owns it):
+//   CosimVehicle v(scene, transport);
+//   v.Start();                       // step 0: initial wheel states at t = 0, wrenches of step 0
+//   while (v.Step() == RunStatus::kRunning) {}   // integrate to t_{k+1}, interpolate, exchange
+//   v.Close();
+// Inside every right-hand side the wrench of each wheel is the coupling's linear extrapolation of the last
+// two received frames at the right-hand side's time (VehicleCoupling::wrench_at). CVODE's step is capped
+// at solver.vehicle_max_step <= solver.track_step = h. World frame, SI units.
+#pragma once
+
+#include <rail_core/coupling/protocol.hpp>
+#include <rail_core/coupling/transport.hpp>
+#include <rail_core/scene.hpp>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rail_vehicle_node/vehicle_simulator.hpp"
+
+namespace rail::vehicle {
+
+class CosimVehicle {
+ public:
+  // scene: a resolved co-simulation scene (effects.track_model rigid_fe or flexible) with
+  // 0 < solver.vehicle_max_step <= solver.track_step. transport: the vehicle end, must outlive this
+  // object. Throws std::runtime_error naming the field for a scene that does not qualify (and whatever
+  // VehicleSimulator throws).
+  CosimVehicle(const core::Scene& scene, core::coupling::FrameTransport& transport,
+               const SimulatorSettings& settings = {});
+  ~CosimVehicle();
+  CosimVehicle(const CosimVehicle&) = delete;
+  CosimVehicle& operator=(const CosimVehicle&) = delete;
+
+  // Replaces the state before Start() (e.g. an initial lateral offset); throws after Start().
+  void ResetState(const Eigen::VectorXd& y);
+
+  // Step 0 at t = 0: sends the initial wheel states, receives the wrenches of step 0. kRunning on success,
+  // kIntegratorFailed with message() naming the exchange failure otherwise.
+  RunStatus Start();
+  // One track step: integrates to t_{k} = k h (the next exchange), interpolates the wheel states there
+  // (dense output), exchanges them for the wrenches of step k. Returns kRunning, kFinished once
+  // solver.end is reached (that step is still exchanged), or why the run stopped (message()); an
+  // exchange failure gives kIntegratorFailed and exchange_status() says which. No exception, no
+  // allocation on the normal path.
+  RunStatus Step();
+  // Tells the track the run is over (its next receive() returns kPeerClosed).
+  void Close();
+
+  const std::string& message() const { return message_; }
+  core::coupling::Status exchange_status() const { return exchange_status_; }
+  double time() const { return sim_->time(); }
+  std::uint64_t steps_exchanged() const { return coupling_->next_step(); }  // exchanges done so far
+  double track_step() const { return h_; }                                  // h [s]
+  // Largest internal CVODE step seen after any AdvanceTo (last step of each call) [s].
+  double max_internal_step() const { return max_internal_step_; }
+
+  // The wheel states sent last (stamped by the coupling).
+  const core::coupling::WheelStateFrame& sent_states() const { return coupling_->states(); }
+  const core::coupling::VehicleCoupling& coupling() const { return *coupling_; }
+  // The vehicle: outputs (wheelsets(), wheels(), bodies()), model, counters. Its wheels() carry the
+  // extrapolated wrenches at time().
+  VehicleSimulator& simulator() { return *sim_; }
+  const VehicleSimulator& simulator() const { return *sim_; }
+
+  // Wheel-centre states of state vector y into frame.wheels[0 .. n_wheels): load point position and
+  // velocity, wheelset orientation and angular velocity (world), arc length of the centre's projection
+  // (warm-started from the previous call). No allocation.
+  void FillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, core::coupling::WheelStateFrame& frame);
+
+ private:
+  class CouplingSource;
+  RunStatus Exchange();
+
+  double h_ = 0.0;
+  std::unique_ptr<core::coupling::VehicleCoupling> coupling_;
+  std::unique_ptr<CouplingSource> source_;
+  std::unique_ptr<VehicleSimulator> sim_;
+  std::unique_ptr<VehicleData> data_;     // kinematics of the interpolated state
+  Eigen::VectorXd y_interp_;              // state at the exchange time
+  std::vector<double> wheel_s_;           // arc-length warm starts per wheel [m]
+  double max_internal_step_ = 0.0;
+  bool started_ = false;
+  core::coupling::Status exchange_status_ = core::coupling::Status::kOk;
+  std::string message_;
+};
+
+}  // namespace rail::vehicle

@@ -1,0 +1,149 @@
+#include "rail_vehicle_node/cosim_vehicle.hpp"
+
+#include <rail_contact/track_geometry.hpp>
+
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+
+#include "rail_vehicle_node/multibody_dynamics.hpp"
+
+namespace rail::vehicle {
+
+namespace cc = rail::core::coupling;
+
+// The coupling's extrapolated wrench as the simulator's wheel-wrench source.
+class CosimVehicle::CouplingSource : public WheelWrenchSource {
+ public:
+  explicit CouplingSource(const cc::VehicleCoupling& coupling) : coupling_(coupling) {}
+  void WheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept override {
+    coupling_.wrench_at(t, wheel, force_in_world, moment_in_world);
+  }
+
+ private:
+  const cc::VehicleCoupling& coupling_;
+};
+
+namespace {
+
+// Checks what the co-simulation needs from the scene before anything is built.
+const core::Scene& CheckCosimScene(const core::Scene& scene) {
+  std::ostringstream os;
+  if (!scene.has_vehicle) {
+    os << scene.file << ": the scene has no vehicle";
+  } else if (scene.effects.track_model == core::TrackModel::kRigid) {
+    os << scene.file << ": effects.track_model: rigid runs the vehicle alone; the co-simulated vehicle needs "
+       << "rigid_fe or flexible";
+  } else if (!(scene.solver.track_step > 0.0)) {
+    os << scene.file << ": solver.track_step: must be > 0, got " << scene.solver.track_step;
+  } else if (!(scene.solver.vehicle_max_step > 0.0) ||
+             scene.solver.vehicle_max_step > scene.solver.track_step * (1.0 + 1e-12)) {
+    os << scene.file << ": solver.vehicle_max_step: must be in (0, solver.track_step = " << scene.solver.track_step
+       << "] s in co-simulation, got " << scene.solver.vehicle_max_step;
+  } else {
+    return scene;
+  }
+  throw std::runtime_error(os.str());
+}
+
+}  // namespace
+
+CosimVehicle::CosimVehicle(const core::Scene& scene, cc::FrameTransport& transport, const SimulatorSettings& settings)
+    : h_(CheckCosimScene(scene).solver.track_step) {
+  coupling_ = std::make_unique<cc::VehicleCoupling>(cc::coupling_config(scene), transport);
+  source_ = std::make_unique<CouplingSource>(*coupling_);
+  SimulatorSettings s = settings;
+  s.wheel_wrench_source = source_.get();
+  sim_ = std::make_unique<VehicleSimulator>(scene, s);
+  const int n_wheels = sim_->contact_model().n_wheels();
+  if (n_wheels != scene.wheel_count() || coupling_->states().capacity() < n_wheels) {
+    std::ostringstream os;
+    os << scene.file << ": the vehicle has " << n_wheels << " wheels, the scene's frames carry "
+       << scene.wheel_count();
+    throw std::runtime_error(os.str());
+  }
+  data_ = std::make_unique<VehicleData>(sim_->model());
+  y_interp_ = Eigen::VectorXd::Zero(sim_->model().state_size());
+  wheel_s_.assign(static_cast<std::size_t>(n_wheels), 0.0);
+  for (std::size_t i = 0; i < wheel_s_.size(); ++i) wheel_s_[i] = sim_->wheels()[i].arc_length;
+}
+
+CosimVehicle::~CosimVehicle() = default;
+
+void CosimVehicle::ResetState(const Eigen::VectorXd& y) {
+  if (started_) throw std::runtime_error("cosim vehicle: ResetState after Start()");
+  sim_->ResetState(y);
+  for (std::size_t i = 0; i < wheel_s_.size(); ++i) wheel_s_[i] = sim_->wheels()[i].arc_length;
+}
+
+void CosimVehicle::FillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, cc::WheelStateFrame& frame) {
+  const VehicleModel& model = sim_->model();
+  ComputeKinematics(model, y, *data_);
+  const auto& wheels = sim_->contact_model().wheels();
+  contact::TrackPoint tp;
+  for (std::size_t i = 0; i < wheels.size(); ++i) {
+    const WheelDefinition& wd = wheels[i];
+    const BodyKinematics& b = data_->bodies[static_cast<std::size_t>(wd.body)];
+    const Vector3 arm = b.A * wd.s_load_point_in_body;
+    cc::WheelState& w = frame.wheels[i];
+    w.id = static_cast<std::uint32_t>(i);
+    w.p_wheel_in_world = b.r + arm;
+    w.q_wheelset_to_world = Eigen::Quaterniond(b.A).normalized();
+    w.v_wheel_in_world = b.r_dot + b.omega_world.cross(arm);
+    w.omega_wheelset_in_world = b.omega_world;
+    wheel_s_[i] = ProjectOnTrack(sim_->track(), w.p_wheel_in_world, wheel_s_[i], tp);
+    w.arc_length = wheel_s_[i];
+  }
+}
+
+RunStatus CosimVehicle::Exchange() {
+  const cc::Result r = coupling_->exchange();
+  exchange_status_ = r.status;
+  if (!r.ok()) {
+    message_ = r.message;
+    return RunStatus::kIntegratorFailed;
+  }
+  return RunStatus::kRunning;
+}
+
+RunStatus CosimVehicle::Start() {
+  if (started_) {
+    message_ = "cosim vehicle: Start() called twice";
+    return RunStatus::kIntegratorFailed;
+  }
+  started_ = true;
+  FillWheelStates(sim_->state(), coupling_->states());
+  const RunStatus s = Exchange();
+  if (s == RunStatus::kRunning) sim_->UpdateOutputs();  // outputs with the step-0 wrenches
+  return s;
+}
+
+RunStatus CosimVehicle::Step() {
+  if (!started_) {
+    message_ = "cosim vehicle: Step() before Start()";
+    return RunStatus::kIntegratorFailed;
+  }
+  const double t_next = coupling_->next_exchange_time();
+  // CV_NORMAL: CVODE may take its last internal step beyond t_next (by less than one step <= h) using the
+  // extrapolation of W_{k-2}, W_{k-1}; the state at t_next is interpolated from that step, and the part
+  // beyond is kept (see doc/cosim_vehicle.md).
+  const RunStatus run = sim_->AdvanceTo(t_next);
+  double t0 = 0.0, t1 = 0.0;
+  sim_->LastStepInterval(t0, t1);
+  max_internal_step_ = std::max(max_internal_step_, std::max(t1 - t0, sim_->Counters().last_step));
+  if (run != RunStatus::kRunning && run != RunStatus::kFinished) {
+    message_ = sim_->message();
+    return run;
+  }
+  // The integrator's time is t_next (CV_NORMAL returns the interpolated state at the output time); the dense
+  // output at t_next is that same state, and stays valid after a projection re-initialised there.
+  sim_->InterpolateAt(t_next, y_interp_);
+  FillWheelStates(y_interp_, coupling_->states());
+  const RunStatus ex = Exchange();
+  if (ex != RunStatus::kRunning) return ex;
+  return run;
+}
+
+void CosimVehicle::Close() { coupling_->close(); }
+
+}  // namespace rail::vehicle
