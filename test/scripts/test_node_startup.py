@@ -47,7 +47,9 @@ class NodeStartup(unittest.TestCase):
         self.assertIn("wheel-centre wrenches from the track node over service", out_v)
         self.assertIn("handshake with /rail_track complete", out_v)
         self.assertIn("rigid FE rails: contact on the undeformed rails, no FE integration", out_t)
-        self.assertIn("handshake complete", out_t)
+        self.assertIn("handshake with /rail_vehicle complete", out_t)
+        # Then they co-simulate the scene's 0.5 s in lockstep: 25001 exchanges at the 2e-5 s track step.
+        self.assertIn("finished after 25001 steps (t = 0.5000 s), 0 Newmark steps", out_t)
 
     def test_validate_only_exits_after_the_summary(self):
         put_scene("/paper", os.path.join(SCENES, "paper_demo.yaml"))

@@ -67,11 +67,8 @@ class RigidTrackPeer {
         coupling_(cc::coupling_config(scene), end),
         work_(wheels.size()),
         result_(wheels.size()) {
-    // Taping-line point from the load point, in the wheelset frame (the frames carry the load point).
-    for (const WheelDefinition& w : wheels) {
-      d_taping_in_body_.push_back(w.s_taping_in_body - w.s_load_point_in_body);
-      side_.push_back(w.side);
-    }
+    // The frames carry the contact's wheel centre (the taping-line point) directly.
+    for (const WheelDefinition& w : wheels) side_.push_back(w.side);
     steps_.reserve(100000);
     times_.reserve(100000);
   }
@@ -118,19 +115,18 @@ class RigidTrackPeer {
   void Evaluate(const cc::WheelState& in, cc::WheelWrench& out) {
     const std::size_t i = in.id;
     const Eigen::Matrix3d R = in.q_wheelset_to_world.toRotationMatrix();
-    const Eigen::Vector3d d = R * d_taping_in_body_[i];
     rc::WheelState w;
-    w.p_centre_in_world = in.p_wheel_in_world + d;
+    w.p_centre_in_world = in.p_wheel_in_world;
     w.R_wheelset_to_world = R;
-    w.v_centre_in_world = in.v_wheel_in_world + in.omega_wheelset_in_world.cross(d);
+    w.v_centre_in_world = in.v_wheel_in_world;
     w.omega_in_world = in.omega_wheelset_in_world;
     w.s_hint = in.arc_length;
     model_.evaluate(w, side_[i], track_, rc::RigidRailDeformation(), work_[i], result_[i]);
     const Eigen::Vector3d& f = result_[i].wheel_centre.force_in_world;
     out.id = in.id;
     out.f_wheel_in_world = f;
-    // Eq. 13 moment about the taping-line point (wheelset frame) moved to the load point, world frame.
-    out.n_wheel_in_world = R * result_[i].wheel_centre.moment_in_wheelset + d.cross(f);
+    // Eq. 13 moment about the wheel centre, world frame.
+    out.n_wheel_in_world = R * result_[i].wheel_centre.moment_in_wheelset;
   }
 
   rc::TrackGeometry track_;
@@ -138,7 +134,6 @@ class RigidTrackPeer {
   cc::TrackCoupling coupling_;
   std::vector<rc::WheelContactWork> work_;
   std::vector<rc::WheelContactResult> result_;
-  std::vector<Eigen::Vector3d> d_taping_in_body_;
   std::vector<rc::RailSide> side_;
   std::vector<std::uint64_t> steps_;
   std::vector<double> times_;

@@ -1,7 +1,8 @@
 // rail_track node: ROS wiring of the track side. Reads the scene from the parameter server, validates it,
 // reports what it will simulate, then
-//  - in a co-simulation scene: waits for the vehicle node's handshake (and exits after it until the
-//    co-simulation exists);
+//  - in a co-simulation scene: waits for the vehicle node's handshake, opens the scene's transport and
+//    answers every track step with the CosimTrack (contact on the rails, FE track with flexible) until the
+//    vehicle closes, publishing contact points and rail deflections at output.rate;
 //  - in a moving-load scene: builds the flexible track, runs it to solver.end and publishes /clock
 //    (simulated time), rail deflections and markers, recording the scene's output.topics to a bag.
 // Physics lives in the ROS-free core (rail_track_node/scene_track.hpp, track_simulator.hpp).
@@ -11,6 +12,8 @@
 #include <rosgraph_msgs/Clock.h>
 #include <visualization_msgs/MarkerArray.h>
 
+#include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <memory>
@@ -23,7 +26,11 @@
 #include <rail_core/ros/scene_param.hpp>
 #include <rail_core/scene_loader.hpp>
 #include <rail_msgs/Handshake.h>
+#include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/RailDeflection.h>
+
+#include <rail_core/ros/cosim_transport.hpp>
+#include "rail_track_node/cosim_track.hpp"
 
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
@@ -33,8 +40,8 @@ namespace rt = rail::track;
 
 namespace {
 
-volatile std::sig_atomic_t g_stop = 0;
-void onSignal(int) { g_stop = 1; }
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
 
 // Answers the vehicle's handshake; remembers whether it was accepted.
 struct HandshakeServer {
@@ -42,6 +49,7 @@ struct HandshakeServer {
   bool answered = false;
   bool accepted = false;
   std::string refusal;
+  std::string peer;  // the vehicle node's name
 
   bool on_request(rail_msgs::Handshake::Request& req, rail_msgs::Handshake::Response& res) {
     HandshakeInfo theirs;
@@ -57,11 +65,13 @@ struct HandshakeServer {
     res.peer_name = mine.node;
     answered = true;
     accepted = res.accepted;
+    peer = req.node_name;
     return true;
   }
 };
 
-int runHandshake(ros::NodeHandle& nh, const Scene& scene) {
+// Serves /railsim/handshake until the vehicle called; peer: the vehicle node's name.
+int runHandshake(ros::NodeHandle& nh, const Scene& scene, std::string& peer) {
   HandshakeServer server;
   server.mine = handshake_info(scene, ros::this_node::getName());
   ros::ServiceServer srv = nh.advertiseService("/railsim/handshake", &HandshakeServer::on_request, &server);
@@ -79,11 +89,10 @@ int runHandshake(ros::NodeHandle& nh, const Scene& scene) {
     ROS_FATAL("%s: handshake refused: %s", ros::this_node::getName().c_str(), server.refusal.c_str());
     return kExitPeerRefused;
   }
-  ROS_INFO("%s: handshake complete", ros::this_node::getName().c_str());
-  // Let the service response reach the caller before the node goes away.
-  ros::WallDuration(0.2).sleep();
-  ROS_WARN("%s: scene validated; this build has no track time integration yet, exiting",
-           ros::this_node::getName().c_str());
+  ROS_INFO("%s: handshake with %s complete", ros::this_node::getName().c_str(), server.peer.c_str());
+  peer = server.peer;
+  // Let the service response reach the caller before the server goes away.
+  ros::WallDuration(0.1).sleep();
   return kExitOk;
 }
 
@@ -356,6 +365,170 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   return exit_code;
 }
 
+void fill(geometry_msgs::Point& out, const Eigen::Vector3d& v) {
+  out.x = v.x();
+  out.y = v.y();
+  out.z = v.z();
+}
+
+// The track side of the co-simulation after the handshake: opens the scene's transport, answers every
+// track step with the CosimTrack until the vehicle closes, and publishes /contact_points (world) and
+// /rail_deflection (track frame, output.deflection_sections) at output.rate. No bag: the vehicle node
+// records the run's bag. peer: the vehicle node's name.
+int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer) {
+  namespace cc = rail::core::coupling;
+  const std::string me = ros::this_node::getName();
+  std::unique_ptr<rt::CosimTrack> track;
+  try {
+    track.reset(new rt::CosimTrack(scene));
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: cannot build the track: %s", me.c_str(), e.what());
+    return kExitBadInput;
+  }
+  const bool deflections = scene.effects.rail_deflection_output && !scene.output.deflection_sections.empty();
+  if (deflections) {
+    for (std::size_t i = 0; i < scene.output.deflection_sections.size(); ++i) {
+      try {
+        track->addSection(scene.output.deflection_sections[i]);
+      } catch (const std::exception& e) {
+        ROS_FATAL("%s: %s: output.deflection_sections[%zu]: %s", me.c_str(), scene.file.c_str(), i, e.what());
+        return kExitBadInput;
+      }
+    }
+  }
+  std::unique_ptr<cc::FrameTransport> transport;
+  try {
+    transport = railsim_node::MakeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &g_stop);
+  } catch (const cc::CouplingError& e) {
+    ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), to_string(scene.solver.transport),
+              peer.c_str(), e.what());
+    return cc::exit_code(e.status());
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: cannot open the %s transport: %s", me.c_str(), to_string(scene.solver.transport), e.what());
+    return kExitBadInput;
+  }
+  ROS_INFO("%s: %s track built (%d wheels); serving the %s transport, track step %g s", me.c_str(),
+           track->flexible() ? "flexible" : "rigid", track->wheelCount(), to_string(scene.solver.transport),
+           scene.solver.track_step);
+
+  ros::Publisher points_pub, deflection_pub;
+  if (scene.effects.contact_point_output) points_pub = nh.advertise<rail_msgs::ContactPoints>("/contact_points", 100);
+  if (deflections) deflection_pub = nh.advertise<rail_msgs::RailDeflection>("/rail_deflection", 100);
+  rail_msgs::ContactPoints points_msg;
+  points_msg.header.frame_id = "world";
+  points_msg.points.resize(2 * static_cast<std::size_t>(track->wheelCount()));
+  std::vector<rail_msgs::RailDeflection> deflection_msgs(static_cast<std::size_t>(track->sectionCount()));
+  for (rail_msgs::RailDeflection& m : deflection_msgs) m.header.frame_id = "track";
+  rt::RailSectionDeflection deflection;
+
+  auto publish = [&](const ros::Time& stamp) {
+    if (scene.effects.contact_point_output) {
+      points_msg.header.stamp = stamp;
+      for (int id = 0; id < track->wheelCount(); ++id) {
+        for (int k = 0; k < 2; ++k) {
+          const rail::contact::ContactPointResult& c = track->contact(id).contact[k];
+          rail_msgs::ContactPoint& p = points_msg.points[2 * static_cast<std::size_t>(id) + static_cast<std::size_t>(k)];
+          p.wheel_id = static_cast<std::uint8_t>(id);
+          p.side = static_cast<std::uint8_t>(id % 2);
+          p.kind = k == rail::contact::kTread ? rail_msgs::ContactPoint::KIND_TREAD : rail_msgs::ContactPoint::KIND_FLANGE;
+          p.active = c.active;
+          p.arc_length = c.s_r;
+          fill(p.position, c.p_contact_in_world);
+          fill(p.normal, c.normal_in_world);
+          p.normal_force = c.N;
+          p.creep_force_longitudinal = c.F_long;
+          p.creep_force_lateral = c.F_lat;
+          p.creepage_longitudinal = c.nu_x;
+          p.creepage_lateral = c.nu_y;
+          p.creepage_spin = c.phi;
+          p.semi_axis_a = c.a;
+          p.semi_axis_b = c.b;
+          p.penetration = c.penetration;
+        }
+      }
+      points_pub.publish(points_msg);
+    }
+    for (int i = 0; i < track->sectionCount(); ++i) {
+      track->sectionDeflection(i, deflection);
+      rail_msgs::RailDeflection& m = deflection_msgs[static_cast<std::size_t>(i)];
+      m.header.stamp = stamp;
+      m.arc_length = deflection.s;
+      fill(m.left_displacement, deflection.displacement[rt::kLeftRail]);
+      fill(m.left_rotation, deflection.rotation[rt::kLeftRail]);
+      fill(m.right_displacement, deflection.displacement[rt::kRightRail]);
+      fill(m.right_rotation, deflection.rotation[rt::kRightRail]);
+      deflection_pub.publish(m);
+    }
+  };
+
+  cc::TrackCoupling coupling(cc::coupling_config(scene), *transport);
+  const double h = scene.solver.track_step;
+  const double period = 1.0 / scene.output.rate;
+  std::uint64_t n_out = 0;
+  int exit_code = kExitOk;
+  const auto wall0 = std::chrono::steady_clock::now();
+  for (;;) {
+    // Step 0 waits for the vehicle's set-up (settling): the handshake timeout; later steps the exchange
+    // timeout.
+    const cc::Result r =
+        coupling.next_step() == 0
+            ? coupling.receive(cc::Clock::now() + std::chrono::duration_cast<cc::Clock::duration>(
+                                                      std::chrono::duration<double>(scene.solver.handshake_timeout)))
+            : coupling.receive();
+    if (r.status == cc::Status::kPeerClosed) {
+      // The vehicle closes after the step that reaches solver.end; closing (or dying) earlier, with a time
+      // end, is a peer that went away.
+      const double t_last = coupling.next_step() == 0 ? -1.0 : static_cast<double>(coupling.next_step() - 1) * h;
+      if (coupling.next_step() == 0 ||
+          (scene.solver.end.kind == EndKind::kTime && t_last < scene.solver.end.value - 0.5 * h)) {
+        ROS_FATAL("%s: the vehicle node %s went away after step %lld (t = %.6f s), before solver.end: %s",
+                  me.c_str(), peer.c_str(), static_cast<long long>(coupling.next_step()) - 1, t_last,
+                  r.message.c_str());
+        exit_code = kExitPeerTimeout;
+      }
+      break;
+    }
+    if (!r) {
+      ROS_FATAL("%s: exchange with the vehicle node %s failed at step %llu: %s", me.c_str(), peer.c_str(),
+                static_cast<unsigned long long>(coupling.next_step()), r.message.c_str());
+      exit_code = cc::exit_code(r.status);
+      break;
+    }
+    const rt::CosimStepStatus st = track->step(coupling.states(), coupling.wrenches());
+    if (st != rt::CosimStepStatus::kOk) {
+      ROS_FATAL("%s: step %llu: the vehicle's frame was refused (%s)", me.c_str(),
+                static_cast<unsigned long long>(coupling.states().step),
+                st == rt::CosimStepStatus::kWrongWheelCount ? "wrong wheel count" : "bad wheel id");
+      exit_code = kExitPeerRefused;
+      break;
+    }
+    const cc::Result w = coupling.send();
+    if (!w) {
+      ROS_FATAL("%s: sending the wrenches of step %llu to the vehicle node %s failed: %s", me.c_str(),
+                static_cast<unsigned long long>(coupling.states().step), peer.c_str(), w.message.c_str());
+      exit_code = cc::exit_code(w.status);
+      break;
+    }
+    const double t = static_cast<double>(coupling.states().step) * h;
+    if (t + 1e-9 * h >= static_cast<double>(n_out) * period) {
+      publish(ros::Time(std::max(t, 1e-9)));
+      ++n_out;
+    }
+    if (g_stop || !ros::ok()) {
+      ROS_WARN("%s: stopped at t = %.4f s", me.c_str(), t);
+      exit_code = kExitInterrupted;
+      break;
+    }
+  }
+  coupling.close();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  ROS_INFO("%s: %s after %llu steps (t = %.4f s), %ld Newmark steps, %.2f s wall", me.c_str(),
+           exit_code == kExitOk ? "finished" : "stopped", static_cast<unsigned long long>(coupling.next_step()),
+           coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h,
+           track->newmarkSteps(), wall);
+  return exit_code;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -373,7 +546,12 @@ int main(int argc, char** argv) {
   }
   if (pnh.param("validate_only", false)) return kExitOk;
   try {
-    if (scene.has_vehicle) return runHandshake(nh, scene);
+    if (scene.has_vehicle) {
+      std::string peer;
+      const int rc = runHandshake(nh, scene, peer);
+      if (rc != kExitOk) return rc;
+      return runCosim(nh, pnh, scene, peer);
+    }
     return runMovingLoads(nh, pnh, scene);
   } catch (const std::exception& e) {
     ROS_FATAL("%s: internal error: %s", ros::this_node::getName().c_str(), e.what());

@@ -35,7 +35,8 @@ class WheelWrenchSource {
  public:
   virtual ~WheelWrenchSource() = default;
   // Wrench on wheel `wheel` (2 * wheelset + side) at time t [s]: force [N] and moment about the wheel
-  // centre (load point) [N m], both in the world frame. No allocation, no exception.
+  // centre (the axle point in the taping-line plane, the contact's wheel centre) [N m], both in the world
+  // frame. No allocation, no exception.
   virtual void WheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept = 0;
 };
 

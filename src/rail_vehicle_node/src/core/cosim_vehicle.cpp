@@ -84,7 +84,9 @@ void CosimVehicle::FillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, c
   for (std::size_t i = 0; i < wheels.size(); ++i) {
     const WheelDefinition& wd = wheels[i];
     const BodyKinematics& b = data_->bodies[static_cast<std::size_t>(wd.body)];
-    const Vector3 arm = b.A * wd.s_load_point_in_body;
+    // The frames' wheel centre is the contact's wheel centre: the axle point in the taping-line plane
+    // (CosimTrack evaluates the contact about it and returns the moment about it).
+    const Vector3 arm = b.A * wd.s_taping_in_body;
     cc::WheelState& w = frame.wheels[i];
     w.id = static_cast<std::uint32_t>(i);
     w.p_wheel_in_world = b.r + arm;

@@ -25,7 +25,8 @@ Vector3 Axial(const Matrix3& W) {
 const char* SideName(rc::RailSide side) { return side == rc::RailSide::kLeft ? "left" : "right"; }
 
 // The wheel-centre wrenches of a WheelWrenchSource at the right-hand side's time (data.time), applied at
-// each wheel's load point while *active is true.
+// each wheel's centre as the co-simulation frames define it (the axle point in the taping-line plane, the
+// point the moment is taken about) while *active is true.
 class ExternalWheelWrenchElement : public ForceElement {
  public:
   ExternalWheelWrenchElement(const WheelRailContactModel* model, const WheelWrenchSource* source, const bool* active)
@@ -40,7 +41,7 @@ class ExternalWheelWrenchElement : public ForceElement {
       const WheelDefinition& w = model_->wheels()[static_cast<std::size_t>(k)];
       const BodyKinematics& b = data.bodies[static_cast<std::size_t>(w.body)];
       source_->WheelWrenchAt(data.time, k, f, n);
-      ApplyForceAt(data, w.body, f, b.r + b.A * w.s_load_point_in_body, g);
+      ApplyForceAt(data, w.body, f, b.r + b.A * w.s_taping_in_body, g);
       ApplyMoment(data, w.body, n, g);
     }
   }

@@ -1,8 +1,10 @@
 // rail_vehicle node: ROS wiring of the vehicle side. Reads the scene from the parameter server, validates
 // it and reports what it will simulate. On the rigid track (effects.track_model: rigid) it runs the
 // VehicleSimulator to solver.end, publishing /clock, wheel states, contact points and wrenches, wheelset
-// kinematics and tf frames, and records output.topics to output.bag. In a co-simulation it checks with the
-// track node that both run the same scene (the coupled run is not built yet). Physics lives in the core.
+// kinematics and tf frames, and records output.topics to output.bag. In a co-simulation (rigid_fe or
+// flexible) it checks with the track node that both run the same scene (handshake), opens the scene's
+// transport (service, topic or shm) and runs the CosimVehicle in lockstep with the track to solver.end,
+// with the same outputs and bag; the contact points are then the track node's. Physics lives in the core.
 #include <ros/ros.h>
 #include <rosbag/bag.h>
 #include <rosgraph_msgs/Clock.h>
@@ -18,7 +20,10 @@
 #include <rail_msgs/Handshake.h>
 #include <rail_msgs/WheelStates.h>
 #include <rail_msgs/WheelsetKinematics.h>
+#include <rail_vehicle_node/cosim_vehicle.hpp>
 #include <rail_vehicle_node/vehicle_simulator.hpp>
+
+#include <rail_core/ros/cosim_transport.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -39,7 +44,8 @@ namespace {
 std::atomic<bool> g_stop{false};
 void OnSignal(int) { g_stop = true; }
 
-int handshake(const Scene& scene) {
+// peer: set to the track node's name once it answered.
+int handshake(const Scene& scene, std::string& peer) {
   const std::string service = "/railsim/handshake";
   const ros::Duration timeout(scene.solver.handshake_timeout);
   if (!ros::service::waitForService(service, timeout)) {
@@ -65,6 +71,7 @@ int handshake(const Scene& scene) {
               srv.response.peer_name.c_str(), srv.response.message.c_str());
     return kExitPeerRefused;
   }
+  peer = srv.response.peer_name;
   ROS_INFO("%s: handshake with %s complete", ros::this_node::getName().c_str(), srv.response.peer_name.c_str());
   return kExitOk;
 }
@@ -217,25 +224,59 @@ const char* StatusName(rv::RunStatus s) {
   return "?";
 }
 
-int RunRigid(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
+// Runs the vehicle to solver.end: alone on the rigid track, or (scene.cosimulation()) as the vehicle side of
+// the co-simulation over the scene's transport, after the handshake. Returns the exit code.
+// peer: the track node's name (handshake).
+int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& peer) {
   const std::string node = ros::this_node::getName();
-  std::unique_ptr<rv::VehicleSimulator> sim;
-  try {
-    sim = std::make_unique<rv::VehicleSimulator>(scene);
-  } catch (const std::exception& e) {
-    ROS_FATAL("%s: cannot build the vehicle: %s", node.c_str(), e.what());
-    return kExitBadInput;
+  const bool cosim = scene.cosimulation();
+  std::unique_ptr<rail::core::coupling::FrameTransport> transport;
+  std::unique_ptr<rv::CosimVehicle> cosim_vehicle;
+  std::unique_ptr<rv::VehicleSimulator> sim_alone;
+  rv::VehicleSimulator* sim = nullptr;
+  if (cosim) {
+    try {
+      transport = railsim_node::MakeTransport(scene, rail::core::coupling::Role::kVehicle, nh, pnh, peer,
+                                              &g_stop);
+    } catch (const rail::core::coupling::CouplingError& e) {
+      ROS_FATAL("%s: cannot open the %s transport to the track node: %s", node.c_str(),
+                to_string(scene.solver.transport), e.what());
+      return rail::core::coupling::exit_code(e.status());
+    } catch (const std::exception& e) {
+      ROS_FATAL("%s: cannot open the %s transport: %s", node.c_str(), to_string(scene.solver.transport), e.what());
+      return kExitBadInput;
+    }
+    try {
+      cosim_vehicle = std::make_unique<rv::CosimVehicle>(scene, *transport);
+    } catch (const std::exception& e) {
+      ROS_FATAL("%s: cannot build the co-simulated vehicle: %s", node.c_str(), e.what());
+      transport->close();
+      return kExitBadInput;
+    }
+    sim = &cosim_vehicle->simulator();
+  } else {
+    try {
+      sim_alone = std::make_unique<rv::VehicleSimulator>(scene);
+    } catch (const std::exception& e) {
+      ROS_FATAL("%s: cannot build the vehicle: %s", node.c_str(), e.what());
+      return kExitBadInput;
+    }
+    sim = sim_alone.get();
   }
   ROS_INFO("%s: vehicle settled on the rails (lowered %.4f mm, wheel loads %.1f N of %.1f N); integrating with "
-           "%s, rtol %g, atol %g, max step %g s", node.c_str(), -sim->settle_lift() * 1e3,
+           "%s, rtol %g, atol %g, max step %g s%s", node.c_str(), -sim->settle_lift() * 1e3,
            sim->settled_wheel_load_sum(), sim->static_load(),
            sim->method() == rv::IntegrationMethod::kBdf ? "BDF" : "Adams", scene.solver.vehicle_rtol,
-           scene.solver.vehicle_atol, scene.solver.vehicle_max_step);
+           scene.solver.vehicle_atol, scene.solver.vehicle_max_step,
+           cosim ? (std::string("; co-simulation with the track over ") + to_string(scene.solver.transport) +
+                    ", track step " + std::to_string(scene.solver.track_step) + " s").c_str() : "");
 
   ros::Publisher pub_clock = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   ros::Publisher pub_states = nh.advertise<rail_msgs::WheelStates>("wheel_states", 100);
   ros::Publisher pub_points;
-  if (scene.effects.contact_point_output) pub_points = nh.advertise<rail_msgs::ContactPoints>("contact_points", 100);
+  // In a co-simulation the contact is evaluated by the track node, which publishes the contact points.
+  const bool own_points = scene.effects.contact_point_output && !cosim;
+  if (own_points) pub_points = nh.advertise<rail_msgs::ContactPoints>("contact_points", 100);
   ros::Publisher pub_wrenches = nh.advertise<rail_msgs::ContactWrenches>("contact_wrenches", 100);
   ros::Publisher pub_kinematics = nh.advertise<rail_msgs::WheelsetKinematics>("wheelset_kinematics", 100);
   tf2_ros::TransformBroadcaster tf_broadcaster;
@@ -259,7 +300,7 @@ int RunRigid(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     }().c_str(), bag_path.c_str());
   }
   const bool rec_states = bag.isOpen() && Records(scene, "wheel_states");
-  const bool rec_points = bag.isOpen() && Records(scene, "contact_points") && scene.effects.contact_point_output;
+  const bool rec_points = bag.isOpen() && Records(scene, "contact_points") && own_points;
   const bool rec_wrenches = bag.isOpen() && Records(scene, "contact_wrenches");
   const bool rec_kinematics = bag.isOpen() && Records(scene, "wheelset_kinematics");
   const bool rec_tf = bag.isOpen() && Records(scene, "tf");
@@ -275,7 +316,7 @@ int RunRigid(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     out.Update(*sim, stamp, step);
     pub_clock.publish(out.clock);
     pub_states.publish(out.wheel_states);
-    if (scene.effects.contact_point_output) pub_points.publish(out.contact_points);
+    if (own_points) pub_points.publish(out.contact_points);
     pub_wrenches.publish(out.contact_wrenches);
     pub_kinematics.publish(out.kinematics);
     tf_broadcaster.sendTransform(out.tf.transforms);
@@ -290,32 +331,73 @@ int RunRigid(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   int rc = kExitOk;
   const auto wall0 = std::chrono::steady_clock::now();
   auto last_report = wall0;
+  auto report = [&] {
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last_report).count() < 5.0) return;
+    last_report = now;
+    const double wall = std::chrono::duration<double>(now - wall0).count();
+    const double rtf = sim->time() / std::max(wall, 1e-9);
+    const double eta = (t_estimate - sim->time()) / std::max(rtf, 1e-12);
+    ROS_INFO("%s: t = %.3f s (%.1f %%), leading wheelset at s = %.2f m, real-time factor %.3f, ETA %.0f s",
+             node.c_str(), sim->time(), 100.0 * sim->time() / std::max(t_estimate, 1e-9),
+             sim->leading_arc_length(), rtf, std::max(eta, 0.0));
+  };
   try {
-    publish(0);
-    rv::RunStatus status = rv::RunStatus::kRunning;
-    for (std::uint64_t step = 1; status == rv::RunStatus::kRunning; ++step) {
-      if (g_stop || !ros::ok()) {
-        ROS_WARN("%s: stopped at t = %.4f s (signal or ROS shutdown); closing the bag", node.c_str(), sim->time());
-        rc = kExitInterrupted;
-        break;
+    if (!cosim) {
+      publish(0);
+      rv::RunStatus status = rv::RunStatus::kRunning;
+      for (std::uint64_t step = 1; status == rv::RunStatus::kRunning; ++step) {
+        if (g_stop || !ros::ok()) {
+          ROS_WARN("%s: stopped at t = %.4f s (signal or ROS shutdown); closing the bag", node.c_str(), sim->time());
+          rc = kExitInterrupted;
+          break;
+        }
+        const double t_next = std::min(static_cast<double>(step) * dt, t_limit);
+        status = sim->AdvanceTo(t_next);
+        publish(step);
+        report();
+        if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
+          ROS_ERROR("%s: run stopped (%s): %s", node.c_str(), StatusName(status), sim->message().c_str());
+          rc = kExitInternal;
+        }
       }
-      const double t_next = std::min(static_cast<double>(step) * dt, t_limit);
-      status = sim->AdvanceTo(t_next);
-      publish(step);
-      const auto now = std::chrono::steady_clock::now();
-      const double wall = std::chrono::duration<double>(now - wall0).count();
-      if (std::chrono::duration<double>(now - last_report).count() >= 5.0) {
-        last_report = now;
-        const double rtf = sim->time() / std::max(wall, 1e-9);
-        const double eta = (t_estimate - sim->time()) / std::max(rtf, 1e-12);
-        ROS_INFO("%s: t = %.3f s (%.1f %%), leading wheelset at s = %.2f m, real-time factor %.3f, ETA %.0f s",
-                 node.c_str(), sim->time(), 100.0 * sim->time() / std::max(t_estimate, 1e-9),
-                 sim->leading_arc_length(), rtf, std::max(eta, 0.0));
+    } else {
+      // Lockstep: every Step() is one track step h (one exchange); outputs at the exchange that reaches each
+      // output time k / output.rate (the exchange times are k h exactly).
+      rv::CosimVehicle& v = *cosim_vehicle;
+      const double h = v.track_step();
+      std::uint64_t n_out = 0;
+      rv::RunStatus status = v.Start();
+      while (true) {
+        if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
+          if (status == rv::RunStatus::kIntegratorFailed &&
+              v.exchange_status() != rail::core::coupling::Status::kOk) {
+            ROS_FATAL("%s: exchange with the track node failed at step %llu (t = %.6f s): %s", node.c_str(),
+                      static_cast<unsigned long long>(v.steps_exchanged()), v.time(), v.message().c_str());
+            rc = rail::core::coupling::exit_code(v.exchange_status());
+          } else {
+            ROS_ERROR("%s: run stopped (%s) at t = %.6f s: %s", node.c_str(), StatusName(status), v.time(),
+                      v.message().c_str());
+            rc = kExitInternal;
+          }
+          break;
+        }
+        if (v.time() + 1e-9 * h >= static_cast<double>(n_out) * dt || status == rv::RunStatus::kFinished) {
+          publish(n_out);
+          ++n_out;
+          report();
+        }
+        if (status == rv::RunStatus::kFinished) break;
+        if (g_stop || !ros::ok()) {
+          ROS_WARN("%s: stopped at t = %.4f s (signal or ROS shutdown); closing the bag", node.c_str(), v.time());
+          rc = kExitInterrupted;
+          break;
+        }
+        status = v.Step();
       }
-      if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
-        ROS_ERROR("%s: run stopped (%s): %s", node.c_str(), StatusName(status), sim->message().c_str());
-        rc = kExitInternal;
-      }
+      v.Close();
+      ROS_INFO("%s: %llu steps exchanged with the track node, largest CVODE step %.3g s", node.c_str(),
+               static_cast<unsigned long long>(v.steps_exchanged()), v.max_internal_step());
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     const rv::IntegratorCounters c = sim->Counters();
@@ -327,6 +409,7 @@ int RunRigid(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   } catch (const std::exception& e) {
     ROS_FATAL("%s: internal error at t = %.4f s: %s", node.c_str(), sim->time(), e.what());
     rc = kExitInternal;
+    if (cosim_vehicle) cosim_vehicle->Close();
   }
   if (bag.isOpen()) {
     bag.close();
@@ -352,13 +435,12 @@ int main(int argc, char** argv) {
     return kExitOk;
   }
   if (pnh.param("validate_only", false)) return kExitOk;
+  std::string peer;
   if (scene.cosimulation()) {
-    const int rc = handshake(scene);
+    const int rc = handshake(scene, peer);
     if (rc != kExitOk) return rc;
-    ROS_WARN("%s: scene validated; the co-simulated run is not built yet, exiting", ros::this_node::getName().c_str());
-    return kExitOk;
   }
-  const int rc = RunRigid(scene, nh, pnh);
+  const int rc = RunVehicle(scene, nh, pnh, peer);
   ros::shutdown();
   return rc;
 }

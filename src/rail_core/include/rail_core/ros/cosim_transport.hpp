@@ -1,0 +1,89 @@
+// ROS glue shared by rail_vehicle and rail_track: opens the scene's co-simulation transport
+// (solver.transport: service, topic or shm) for one end, and derives the shm run id both nodes agree on.
+// Header-only, used at set-up only (allocates, may throw).
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include <rail_core/coupling/protocol.hpp>
+#include <rail_core/coupling/shm_transport.hpp>
+#include <rail_core/coupling/transport.hpp>
+#include <rail_core/ros/service_transport.hpp>
+#include <rail_core/ros/topic_transport.hpp>
+#include <rail_core/scene.hpp>
+
+#include <atomic>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+namespace railsim_node {
+
+// The run id of the shm regions: ~run_id, else /railsim/run_id (cosim.launch sets it with $(anon run)),
+// else "run". A value that is not 1..48 characters of [A-Za-z0-9_.-] is replaced by its 64-bit FNV-1a
+// hash in hex, so both nodes derive the same id from the same parameter.
+inline std::string ShmRunId(ros::NodeHandle& pnh) {
+  std::string id;
+  if (!pnh.getParam("run_id", id) && !ros::param::get("/railsim/run_id", id)) id = "run";
+  bool ok = !id.empty() && id.size() <= 48;
+  for (const char c : id) {
+    const bool allowed = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+                         c == '.' || c == '-';
+    ok = ok && allowed;
+  }
+  if (ok) return id;
+  std::uint64_t h = 1469598103934665603ull;  // FNV-1a 64-bit offset basis
+  for (const char c : id) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;  // FNV-1a 64-bit prime
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+// Opens this end of the scene's transport. peer_node: the peer's node name from the handshake. Waits up to
+// solver.handshake_timeout for the peer. Throws rail::core::coupling::CouplingError (timeout, refused) or
+// std::runtime_error (bad options).
+inline std::unique_ptr<rail::core::coupling::FrameTransport> MakeTransport(
+    const rail::core::Scene& scene, rail::core::coupling::Role role, ros::NodeHandle& nh, ros::NodeHandle& pnh,
+    const std::string& peer_node, const std::atomic<bool>* interrupt) {
+  using namespace rail::core;
+  switch (scene.solver.transport) {
+    case Transport::kShm: {
+      coupling::ShmOptions o;
+      o.role = role;
+      o.scene_hash = scene.hash;
+      o.wheel_capacity = scene.wheel_count();
+      o.run_id = ShmRunId(pnh);
+      o.attach_timeout = scene.solver.handshake_timeout;
+      o.interrupt = interrupt;
+      return std::make_unique<coupling::ShmTransport>(o);
+    }
+    case Transport::kService: {
+      ros_glue::ServiceTransportOptions o;
+      o.role = role;
+      o.track_step = scene.solver.track_step;
+      o.wheel_capacity = scene.wheel_count();
+      o.attach_timeout = scene.solver.handshake_timeout;
+      o.peer_node = peer_node;
+      o.interrupt = interrupt;
+      o.reply_timeout = scene.solver.exchange_timeout;
+      return std::make_unique<ros_glue::ServiceTransport>(nh, o);
+    }
+    case Transport::kTopic: {
+      ros_glue::TopicTransportOptions o;
+      o.role = role;
+      o.track_step = scene.solver.track_step;
+      o.wheel_capacity = scene.wheel_count();
+      o.attach_timeout = scene.solver.handshake_timeout;
+      o.peer_node = peer_node;
+      o.interrupt = interrupt;
+      return std::make_unique<ros_glue::TopicTransport>(nh, o);
+    }
+  }
+  throw std::runtime_error("solver.transport: unknown transport");
+}
+
+}  // namespace railsim_node
