@@ -29,6 +29,7 @@
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/RailDeflection.h>
 
+#include <rail_core/ros/contact_point_message.hpp>
 #include <rail_core/ros/cosim_transport.hpp>
 #include "rail_track_node/cosim_track.hpp"
 
@@ -365,12 +366,6 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   return exit_code;
 }
 
-void fill(geometry_msgs::Point& out, const Eigen::Vector3d& v) {
-  out.x = v.x();
-  out.y = v.y();
-  out.z = v.z();
-}
-
 // The track side of the co-simulation after the handshake: opens the scene's transport, answers every
 // track step with the CosimTrack until the vehicle closes, and publishes /contact_points (world) and
 // /rail_deflection (track frame, output.deflection_sections) at output.rate. No bag: the vehicle node
@@ -428,22 +423,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         for (int k = 0; k < 2; ++k) {
           const rail::contact::ContactPointResult& c = track->contact(id).contact[k];
           rail_msgs::ContactPoint& p = points_msg.points[2 * static_cast<std::size_t>(id) + static_cast<std::size_t>(k)];
-          p.wheel_id = static_cast<std::uint8_t>(id);
-          p.side = static_cast<std::uint8_t>(id % 2);
-          p.kind = k == rail::contact::kTread ? rail_msgs::ContactPoint::KIND_TREAD : rail_msgs::ContactPoint::KIND_FLANGE;
-          p.active = c.active;
-          p.arc_length = c.s_r;
-          fill(p.position, c.p_contact_in_world);
-          fill(p.normal, c.normal_in_world);
-          p.normal_force = c.N;
-          p.creep_force_longitudinal = c.F_long;
-          p.creep_force_lateral = c.F_lat;
-          p.creepage_longitudinal = c.nu_x;
-          p.creepage_lateral = c.nu_y;
-          p.creepage_spin = c.phi;
-          p.semi_axis_a = c.a;
-          p.semi_axis_b = c.b;
-          p.penetration = c.penetration;
+          rail::core::ros_glue::to_message(c, id, id % 2, k, p);
         }
       }
       points_pub.publish(points_msg);

@@ -23,6 +23,7 @@
 #include <rail_vehicle_node/cosim_vehicle.hpp>
 #include <rail_vehicle_node/vehicle_simulator.hpp>
 
+#include <rail_core/ros/contact_point_message.hpp>
 #include <rail_core/ros/cosim_transport.hpp>
 
 #include <algorithm>
@@ -152,22 +153,7 @@ struct Outputs {
       for (int k = 0; k < 2; ++k) {
         const rc::ContactPointResult& c = sim.contacts()[i].contact[k];
         rail_msgs::ContactPoint& p = contact_points.points[2 * i + static_cast<std::size_t>(k)];
-        p.wheel_id = m.wheel_id;
-        p.side = m.side;
-        p.kind = k == rc::kTread ? rail_msgs::ContactPoint::KIND_TREAD : rail_msgs::ContactPoint::KIND_FLANGE;
-        p.active = c.active;
-        p.arc_length = c.s_r;
-        Fill(p.position, c.p_contact_in_world);
-        Fill(p.normal, c.normal_in_world);
-        p.normal_force = c.N;
-        p.creep_force_longitudinal = c.F_long;
-        p.creep_force_lateral = c.F_lat;
-        p.creepage_longitudinal = c.nu_x;
-        p.creepage_lateral = c.nu_y;
-        p.creepage_spin = c.phi;
-        p.semi_axis_a = c.a;
-        p.semi_axis_b = c.b;
-        p.penetration = c.penetration;
+        rail::core::ros_glue::to_message(c, m.wheel_id, m.side, k, p);
       }
     }
     for (std::size_t w = 0; w < sim.wheelsets().size(); ++w) {
