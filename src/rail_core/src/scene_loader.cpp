@@ -3,6 +3,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -480,7 +481,84 @@ std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t seed) {
   return h;
 }
 
-Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir) {
+SceneOverrides split_overrides(const std::string& text) {
+  // Whitespace separates overrides except inside quotes and YAML flow collections, so that
+  // "solver.end={time: 1.5} output.bag='a b.bag'" gives two.
+  SceneOverrides out;
+  std::string item;
+  int depth = 0;
+  char quote = 0;
+  for (const char c : text) {
+    if (quote != 0) {
+      if (c == quote) quote = 0;
+    } else if (c == '\'' || c == '"') {
+      quote = c;
+    } else if (c == '{' || c == '[') {
+      ++depth;
+    } else if ((c == '}' || c == ']') && depth > 0) {
+      --depth;
+    } else if (depth == 0 && std::isspace(static_cast<unsigned char>(c))) {
+      if (!item.empty()) out.push_back(item);
+      item.clear();
+      continue;
+    }
+    item += c;
+  }
+  if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+namespace {
+
+// Sets node[parts[i]][parts[i+1]]... = value, creating missing maps. yaml-cpp nodes are handles: each
+// level gets a fresh handle (a parameter), never a reassigned one.
+void set_at(YAML::Node node, const std::vector<std::string>& parts, std::size_t i, const YAML::Node& value,
+            const std::string& file, const std::string& item) {
+  if (i + 1 == parts.size()) {
+    node[parts[i]] = value;
+    return;
+  }
+  const YAML::Node child = node[parts[i]];
+  if (!child.IsDefined() || child.IsNull()) {
+    node[parts[i]] = YAML::Node(YAML::NodeType::Map);
+  } else if (!child.IsMap()) {
+    fail_at(file, item.substr(0, item.find('=')), "override '" + item + "': " + parts[i] + " is not a map of keys", 0);
+  }
+  set_at(node[parts[i]], parts, i + 1, value, file, item);
+}
+
+// Applies "a.b.c=value" to doc (a map). Throws SceneError naming the override.
+void apply_override(YAML::Node& doc, const std::string& file, const std::string& item) {
+  const std::size_t eq = item.find('=');
+  const std::string key = eq == std::string::npos ? std::string() : item.substr(0, eq);
+  if (eq == std::string::npos || key.empty()) {
+    fail_at(file, "", "override '" + item + "': expected key=value (e.g. effects.track_model=flexible)", 0);
+  }
+  // "key=" (nothing after '='): the key keeps the file's value (launch arguments left empty).
+  if (eq + 1 == item.size()) return;
+  YAML::Node value;
+  try {
+    value = YAML::Load(item.substr(eq + 1));
+  } catch (const YAML::Exception& e) {
+    fail_at(file, key, "override '" + item + "': the value is not valid YAML: " + e.msg, 0);
+  }
+  std::vector<std::string> parts;
+  for (std::size_t start = 0;;) {
+    const std::size_t dot = key.find('.', start);
+    parts.push_back(key.substr(start, dot == std::string::npos ? std::string::npos : dot - start));
+    if (dot == std::string::npos) break;
+    start = dot + 1;
+  }
+  for (const std::string& part : parts) {
+    if (part.empty()) fail_at(file, key, "override '" + item + "': empty key", 0);
+  }
+  set_at(doc, parts, 0, value, file, item);
+}
+
+}  // namespace
+
+Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir,
+                      const SceneOverrides& overrides) {
   YAML::Node doc;
   try {
     doc = YAML::Load(text);
@@ -488,6 +566,8 @@ Scene load_scene_text(const std::string& text, const std::string& file, const st
     fail_at(file, "", "not valid YAML: " + e.msg, e.mark.line >= 0 ? e.mark.line + 1 : 0);
   }
   if (!doc.IsDefined() || doc.IsNull()) fail_at(file, "", "is empty", 0);
+  if (!overrides.empty() && !doc.IsMap()) fail_at(file, "", "must be a map of keys to values", 1);
+  for (const std::string& item : overrides) apply_override(doc, file, item);
   const Context ctx{file, base_dir.empty() ? "." : base_dir};
   MapReader root(doc, "", file);
   Scene s;
@@ -527,16 +607,16 @@ Scene load_scene_text(const std::string& text, const std::string& file, const st
   return s;
 }
 
-Scene load_scene_handed_over(const std::string& text, const std::string& file) {
-  return load_scene_text(text, file, dir_of(file));
+Scene load_scene_handed_over(const std::string& text, const std::string& file, const SceneOverrides& overrides) {
+  return load_scene_text(text, file, dir_of(file), overrides);
 }
 
-Scene load_scene_file(const std::string& path) {
+Scene load_scene_file(const std::string& path, const SceneOverrides& overrides) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot read the scene file: " + std::strerror(errno));
   std::ostringstream ss;
   ss << in.rdbuf();
-  return load_scene_text(ss.str(), path, dir_of(path));
+  return load_scene_text(ss.str(), path, dir_of(path), overrides);
 }
 
 }  // namespace rail::core

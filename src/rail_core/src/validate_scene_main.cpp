@@ -1,8 +1,10 @@
 // railsim_validate_scene: checks a scene without starting ROS.
-//   railsim_validate_scene <scene.yaml> [--summary | --hash | --plan]
+//   railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan]
 // Prints the fully resolved scene and exits 0, or prints the one error naming the file and field and
 // exits 1. --summary: what a run simulates; --hash: the scene hash; --plan: which launch file runs it
-// (vehicle_standalone, cosim or track_standalone).
+// (vehicle_standalone, cosim or track_standalone). --set applies an override (scene_loader.hpp), as the
+// launch files' `overrides` argument does. `railsim_validate_scene --split "<overrides>"` prints the
+// overrides of such an argument one per line.
 #include <cstdio>
 #include <cstring>
 #include <iostream>
@@ -12,15 +14,27 @@
 int main(int argc, char** argv) {
   const char* path = nullptr;
   bool summary = false, hash_only = false, plan = false;
+  rail::core::SceneOverrides overrides;
+  if (argc == 3 && std::strcmp(argv[1], "--split") == 0) {
+    // One override per line, as the launch files' `overrides` argument splits them (for scripts).
+    for (const std::string& o : rail::core::split_overrides(argv[2])) std::cout << o << "\n";
+    return 0;
+  }
   for (int i = 1; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--summary") == 0) {
+    if (std::strcmp(argv[i], "--set") == 0) {
+      if (i + 1 >= argc) {
+        std::cerr << "railsim_validate_scene: --set needs key=value\n";
+        return 1;
+      }
+      overrides.push_back(argv[++i]);
+    } else if (std::strcmp(argv[i], "--summary") == 0) {
       summary = true;
     } else if (std::strcmp(argv[i], "--plan") == 0) {
       plan = true;
     } else if (std::strcmp(argv[i], "--hash") == 0) {
       hash_only = true;
     } else if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "--help") == 0) {
-      std::cout << "usage: railsim_validate_scene <scene.yaml> [--summary | --hash | --plan]\n"
+      std::cout << "usage: railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan]\n"
                    "  prints the resolved scene (exit 0) or the error (exit 1)\n";
       return 0;
     } else if (path == nullptr) {
@@ -31,11 +45,11 @@ int main(int argc, char** argv) {
     }
   }
   if (path == nullptr) {
-    std::cerr << "usage: railsim_validate_scene <scene.yaml> [--summary | --hash | --plan]\n";
+    std::cerr << "usage: railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan]\n";
     return 1;
   }
   try {
-    const rail::core::Scene scene = rail::core::load_scene_file(path);
+    const rail::core::Scene scene = rail::core::load_scene_file(path, overrides);
     if (plan) {
       std::cout << (!scene.has_vehicle ? "track_standalone" : scene.cosimulation() ? "cosim" : "vehicle_standalone")
                 << "\n";

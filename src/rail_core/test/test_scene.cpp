@@ -226,3 +226,49 @@ TEST(Scene, DescribeListsEffectsAndComponents) {
   const std::string t = describe(s, Role::kTrack);
   EXPECT_NE(t.find("rigid FE rails: contact on the undeformed rails, no FE integration"), std::string::npos) << t;
 }
+
+TEST(Scene, OverridesChangeKeysAsIfTheFileSaidSo) {
+  // One scene run with each track model and a shorter end: the override gives the scene (and the hash) the
+  // file would give with those keys written in it.
+  const Scene over = load_scene_text(kBase, "scene.yaml", kData,
+                                     {"effects.track_model=flexible", "solver.end={time: 0.5}", "output.bag=x.bag"});
+  std::string edited = replaced(kBase, "track_model: rigid_fe", "track_model: flexible");
+  edited = replaced(edited, "  vehicle_max_step: 1.0e-5\n", "  vehicle_max_step: 1.0e-5\n  end: {time: 0.5}\n");
+  edited = replaced(edited, "output:\n", "output:\n  bag: x.bag\n");
+  const Scene file = load(edited);
+  EXPECT_EQ(over.effects.track_model, TrackModel::kFlexible);
+  EXPECT_EQ(over.solver.end.kind, EndKind::kTime);
+  EXPECT_DOUBLE_EQ(over.solver.end.value, 0.5);
+  EXPECT_EQ(over.output.bag, "x.bag");
+  EXPECT_EQ(over.hash, file.hash);
+  EXPECT_EQ(to_yaml(over), to_yaml(file));
+  // An empty value keeps the file's value (a launch argument left empty).
+  EXPECT_EQ(load_scene_text(kBase, "scene.yaml", kData, {"effects.track_model="}).hash, load(kBase).hash);
+  // A missing map is created.
+  EXPECT_EQ(load_scene_text(kBase, "scene.yaml", kData, {"effects.irregularities=false"}).effects.irregularities,
+            false);
+  EXPECT_EQ(split_overrides("  a=1 b.c=2\tc= "), (SceneOverrides{"a=1", "b.c=2", "c="}));
+  EXPECT_EQ(split_overrides("solver.end={time: 1.5} output.bag='a b.bag' t=[x, y]"),
+            (SceneOverrides{"solver.end={time: 1.5}", "output.bag='a b.bag'", "t=[x, y]"}));
+}
+
+TEST(Scene, BadOverridesAreRefusedNamingTheOverride) {
+  auto error = [](const SceneOverrides& o) -> std::string {
+    try {
+      load_scene_text(kBase, "scene.yaml", kData, o);
+    } catch (const SceneError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(error({"effects.track_model"}),
+            "scene.yaml: override 'effects.track_model': expected key=value (e.g. effects.track_model=flexible)");
+  EXPECT_EQ(error({"track.segments.length=3"}),
+            "scene.yaml: track.segments.length: override 'track.segments.length=3': segments is not a map of keys");
+  EXPECT_EQ(error({"effects..x=1"}), "scene.yaml: effects..x: override 'effects..x=1': empty key");
+  // The overridden value is validated like any other.
+  EXPECT_NE(error({"effects.track_model=elastic"})
+                .find("scene.yaml: effects.track_model: must be one of rigid, rigid_fe, flexible, got 'elastic'"),
+            std::string::npos);
+  EXPECT_NE(error({"effects.flange_contat=true"}).find("effects.flange_contat: unknown key"), std::string::npos);
+}

@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "rail_core/scene.hpp"
 
@@ -15,16 +16,30 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// Changes to a scene applied before it is read, each "dotted.key=value" with a YAML value, e.g.
+// "effects.track_model=flexible", "solver.end={time: 1.5}", "output.bag=run.bag". Keys of maps are
+// created when absent; a key that walks through a non-map (e.g. into a list) is refused; "key=" with
+// nothing after '=' changes nothing (a launch argument left empty). The scene
+// then validates as if its file said so (the summary and the hash include the change). Used by the
+// three-run launch files and the runner to run one scene with each track model.
+using SceneOverrides = std::vector<std::string>;
+
+// Splits a whitespace-separated list of overrides (the launch files' `overrides` argument); spaces inside
+// quotes or a YAML flow collection ({...}, [...]) do not separate.
+SceneOverrides split_overrides(const std::string& text);
+
 // Reads, validates and resolves a scene file. Throws SceneError.
-Scene load_scene_file(const std::string& path);
+Scene load_scene_file(const std::string& path, const SceneOverrides& overrides = {});
 
 // The same from the file's text (e.g. handed over the ROS parameter server): `file` names the scene in
 // messages and `base_dir` is where relative data-file paths start.
-Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir);
+Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir,
+                      const SceneOverrides& overrides = {});
 
 // The same, for a scene handed over as text with the path it was read from (relative data files are taken
 // from that path's directory).
-Scene load_scene_handed_over(const std::string& text, const std::string& file);
+Scene load_scene_handed_over(const std::string& text, const std::string& file,
+                             const SceneOverrides& overrides = {});
 
 // The fully resolved scene as YAML (every default filled in). Loading this text again gives the same
 // scene (same hash).

@@ -17,8 +17,11 @@ bool read_scene(ros::NodeHandle& private_nh, Scene& scene) {
     return false;
   }
   ros::param::param<std::string>(ns + "/scene_file", file, ns + "/scene_yaml");
+  // Overrides of the scene's keys (launch argument `overrides`), the same for both nodes.
+  std::string overrides;
+  ros::param::param<std::string>(ns + "/scene_overrides", overrides, "");
   try {
-    scene = load_scene_handed_over(text, file);
+    scene = load_scene_handed_over(text, file, split_overrides(overrides));
   } catch (const SceneError& e) {
     ROS_FATAL("%s: scene refused: %s", node.c_str(), e.what());
     return false;
