@@ -110,6 +110,35 @@ bool makeDirs(const std::string& dir) {
   return true;
 }
 
+// Where a bag named in the scene goes: absolute as given, else under the node's ~output_dir (default
+// $ROS_HOME/railsim).
+std::string bagPath(ros::NodeHandle& pnh, const std::string& name) {
+  if (!name.empty() && name[0] == '/') return name;
+  std::string dir = pnh.param<std::string>("output_dir", "");
+  if (dir.empty()) {
+    const char* ros_home = std::getenv("ROS_HOME");
+    const char* home = std::getenv("HOME");
+    dir = std::string(ros_home ? ros_home : (std::string(home ? home : ".") + "/.ros")) + "/railsim";
+  }
+  return dir + "/" + name;
+}
+
+// Opens path for writing (creating its directory); false after one FATAL message naming the scene key.
+bool openBag(const std::string& me, const Scene& scene, const std::string& path, rosbag::Bag& bag) {
+  const std::string bag_dir = path.substr(0, path.rfind('/'));
+  if (!bag_dir.empty() && !makeDirs(bag_dir)) {
+    ROS_FATAL("%s: %s: output.bag: cannot create the directory %s", me.c_str(), scene.file.c_str(), bag_dir.c_str());
+    return false;
+  }
+  try {
+    bag.open(path, rosbag::bagmode::Write);
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: %s: output.bag: cannot write %s: %s", me.c_str(), scene.file.c_str(), path.c_str(), e.what());
+    return false;
+  }
+  return true;
+}
+
 bool contains(const std::vector<std::string>& v, const std::string& x) {
   for (const std::string& s : v)
     if (s == x) return true;
@@ -272,25 +301,9 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   bool bag_deflection = false, bag_markers = false, bag_clock = false;
   std::string bag_path;
   if (!scene.output.bag.empty()) {
-    std::string dir = pnh.param<std::string>("output_dir", "");
-    if (dir.empty()) {
-      const char* ros_home = std::getenv("ROS_HOME");
-      const char* home = std::getenv("HOME");
-      dir = std::string(ros_home ? ros_home : (std::string(home ? home : ".") + "/.ros")) + "/railsim";
-    }
-    bag_path = scene.output.bag[0] == '/' ? scene.output.bag : dir + "/" + scene.output.bag;
-    const std::string bag_dir = bag_path.substr(0, bag_path.rfind('/'));
-    if (!bag_dir.empty() && !makeDirs(bag_dir)) {
-      ROS_FATAL("%s: %s: output.bag: cannot create the directory %s", me.c_str(), scene.file.c_str(), bag_dir.c_str());
-      return kExitBadInput;
-    }
-    try {
-      bag.open(bag_path, rosbag::bagmode::Write);
-      bag_open = true;
-    } catch (const std::exception& e) {
-      ROS_FATAL("%s: %s: output.bag: cannot write %s: %s", me.c_str(), scene.file.c_str(), bag_path.c_str(), e.what());
-      return kExitBadInput;
-    }
+    bag_path = bagPath(pnh, scene.output.bag);
+    if (!openBag(me, scene, bag_path, bag)) return kExitBadInput;
+    bag_open = true;
     bag_deflection = deflections && contains(scene.output.topics, "rail_deflection");
     bag_markers = markers && contains(scene.output.topics, "markers");
     bag_clock = contains(scene.output.topics, "clock");
@@ -368,8 +381,9 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
 
 // The track side of the co-simulation after the handshake: opens the scene's transport, answers every
 // track step with the CosimTrack until the vehicle closes, and publishes /contact_points (world) and
-// /rail_deflection (track frame, output.deflection_sections) at output.rate. No bag: the vehicle node
-// records the run's bag. peer: the vehicle node's name.
+// /rail_deflection (track frame, output.deflection_sections) at output.rate. The vehicle node records the
+// run's bag (output.bag); what only the track has (contact_points, rail_deflection, when output.topics
+// names them) goes to a companion bag beside it, <stem>.track.bag. peer: the vehicle node's name.
 int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer) {
   namespace cc = rail::core::coupling;
   const std::string me = ros::this_node::getName();
@@ -409,6 +423,30 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   ros::Publisher points_pub, deflection_pub;
   if (scene.effects.contact_point_output) points_pub = nh.advertise<rail_msgs::ContactPoints>("/contact_points", 100);
   if (deflections) deflection_pub = nh.advertise<rail_msgs::RailDeflection>("/rail_deflection", 100);
+  // Companion bag of the track's outputs.
+  rosbag::Bag bag;
+  std::string bag_path;
+  const bool rec_points = scene.effects.contact_point_output && contains(scene.output.topics, "contact_points");
+  const bool rec_deflection = deflections && contains(scene.output.topics, "rail_deflection");
+  if (!scene.output.bag.empty() && (rec_points || rec_deflection)) {
+    bag_path = bagPath(pnh, scene.output.bag);
+    const std::size_t dot = bag_path.rfind(".bag");
+    bag_path = (dot != std::string::npos && dot + 4 == bag_path.size() ? bag_path.substr(0, dot) : bag_path) +
+               ".track.bag";
+    if (!openBag(me, scene, bag_path, bag)) return kExitBadInput;
+    ROS_INFO("%s: recording the track's outputs to %s", me.c_str(), bag_path.c_str());
+  }
+  // rviz markers of the deflected rails and sleepers (effects.rviz_markers, flexible track only: the rigid
+  // FE track has no mesh), at ~marker_rate.
+  ros::Publisher marker_pub;
+  std::unique_ptr<TrackMarkers> markers;
+  double marker_period = 0.0, next_marker = 0.0;
+  if (scene.effects.rviz_markers && track->flexible()) {
+    marker_pub = nh.advertise<visualization_msgs::MarkerArray>("/markers", 2, true);
+    markers.reset(new TrackMarkers(track->sceneTrack()->model, pnh.param<std::string>("frame_id", "world"),
+                                   pnh.param("marker_scale", 200.0), pnh.param("marker_colour_range", 1.0e-3)));
+    marker_period = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
+  }
   rail_msgs::ContactPoints points_msg;
   points_msg.header.frame_id = "world";
   points_msg.points.resize(2 * static_cast<std::size_t>(track->wheelCount()));
@@ -427,6 +465,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         }
       }
       points_pub.publish(points_msg);
+      if (rec_points && bag.isOpen()) bag.write("/contact_points", stamp, points_msg);
     }
     for (int i = 0; i < track->sectionCount(); ++i) {
       track->sectionDeflection(i, deflection);
@@ -438,6 +477,11 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       fill(m.right_displacement, deflection.displacement[rt::kRightRail]);
       fill(m.right_rotation, deflection.rotation[rt::kRightRail]);
       deflection_pub.publish(m);
+      if (rec_deflection && bag.isOpen()) bag.write("/rail_deflection", stamp, m);
+    }
+    if (markers && stamp.toSec() + 1e-12 >= next_marker) {
+      next_marker += marker_period;
+      marker_pub.publish(markers->update(track->state()->d, stamp));
     }
   };
 
@@ -501,6 +545,10 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
   }
   coupling.close();
+  if (bag.isOpen()) {
+    bag.close();
+    ROS_INFO("%s: bag closed: %s", me.c_str(), bag_path.c_str());
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   ROS_INFO("%s: %s after %llu steps (t = %.4f s), %ld Newmark steps, %.2f s wall", me.c_str(),
            exit_code == kExitOk ? "finished" : "stopped", static_cast<unsigned long long>(coupling.next_step()),

@@ -9,6 +9,7 @@
 #include <rosbag/bag.h>
 #include <rosgraph_msgs/Clock.h>
 #include <tf2_msgs/TFMessage.h>
+#include <visualization_msgs/MarkerArray.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <rail_core/exit_codes.hpp>
@@ -29,6 +30,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cerrno>
 #include <csignal>
 #include <cstdlib>
@@ -93,6 +95,7 @@ struct Outputs {
   rail_msgs::WheelsetKinematics kinematics;
   tf2_msgs::TFMessage tf;
   rosgraph_msgs::Clock clock;
+  rail::contact::TrackPoint track_point_;  // scratch of Update
 
   Outputs(const rv::VehicleSimulator& sim, const Scene& scene) {
     const std::size_t n = sim.wheels().size();
@@ -166,6 +169,14 @@ struct Outputs {
       m.angle_of_attack = o.angle_of_attack;
       m.roll = o.roll;
       m.spin_speed = o.spin;
+      // Wheel forces in the canted track frame at the wheelset's station (Y lateral, Q vertical).
+      sim.track().centre(o.arc_length, track_point_);
+      for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
+        const rv::WheelOutput& wheel = sim.wheels()[i];
+        if (wheel.wheelset != o.wheelset) continue;
+        const rv::Vector3 f_in_track = track_point_.R_track_to_world.transpose() * wheel.force_in_world;
+        Fill(wheel.side == 0 ? m.left_force_in_track : m.right_force_in_track, f_in_track);
+      }
     }
     for (std::size_t b = 0; b < sim.bodies().size(); ++b) {
       geometry_msgs::TransformStamped& t = tf.transforms[b];
@@ -175,6 +186,89 @@ struct Outputs {
       t.transform.translation.z = sim.bodies()[b].p_in_world.z();
       Fill(t.transform.rotation, sim.bodies()[b].orientation);
     }
+  }
+};
+
+// rviz markers of the vehicle (effects.rviz_markers): a box per body sized by its kind (carbody, bogie
+// frame, axlebox), each wheelset as its axle and two wheels, and the contact force on each wheel as an
+// arrow from the wheel's lowest point (force scaled by `force_scale`, m/N). Built once; Update refills poses
+// and arrows in place. Sizes are for the picture only (the model has no geometry beyond its points).
+struct VehicleMarkers {
+  visualization_msgs::MarkerArray array;
+  std::vector<int> body_marker;         // per body: its marker, or -1 (wheelsets: the axle)
+  std::vector<int> wheel_marker;        // per wheel: its disc
+  std::vector<int> arrow_marker;        // per wheel: the force arrow
+  double force_scale = 1e-5;            // m per N: 100 kN draws 1 m
+  double wheel_radius = 0.445;          // m
+
+  VehicleMarkers(const rv::VehicleSimulator& sim, double radius, double scale) : force_scale(scale), wheel_radius(radius) {
+    const std::size_t nb = sim.bodies().size();
+    body_marker.assign(nb, -1);
+    auto add = [&](const std::string& ns, int type, double sx, double sy, double sz, float r, float g, float b) {
+      visualization_msgs::Marker m;
+      m.header.frame_id = "world";
+      m.ns = ns;
+      m.id = static_cast<int>(array.markers.size());
+      m.type = type;
+      m.action = visualization_msgs::Marker::ADD;
+      m.scale.x = sx, m.scale.y = sy, m.scale.z = sz;
+      m.color.r = r, m.color.g = g, m.color.b = b, m.color.a = 0.8f;
+      m.pose.orientation.w = 1.0;
+      array.markers.push_back(m);
+      return static_cast<int>(array.markers.size()) - 1;
+    };
+    for (std::size_t b = 0; b < nb; ++b) {
+      const std::string name = Outputs::FrameName(sim, static_cast<int>(b));
+      if (name == "carbody") {
+        body_marker[b] = add("carbody", visualization_msgs::Marker::CUBE, 24.0, 2.9, 2.6, 0.7f, 0.7f, 0.75f);
+        array.markers[static_cast<std::size_t>(body_marker[b])].color.a = 0.35f;
+      } else if (name.rfind("bogie", 0) == 0) {
+        body_marker[b] = add("bogie_frames", visualization_msgs::Marker::CUBE, 2.8, 2.0, 0.3, 0.2f, 0.3f, 0.6f);
+      } else if (name.rfind("wheelset", 0) == 0) {
+        body_marker[b] = add("wheelsets", visualization_msgs::Marker::CYLINDER, 0.16, 0.16, 1.9, 0.3f, 0.3f, 0.3f);
+      } else {
+        body_marker[b] = add("axleboxes", visualization_msgs::Marker::CUBE, 0.35, 0.25, 0.25, 0.5f, 0.5f, 0.2f);
+      }
+    }
+    for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
+      wheel_marker.push_back(add("wheels", visualization_msgs::Marker::CYLINDER, 2 * radius, 2 * radius, 0.13,
+                                 0.25f, 0.25f, 0.25f));
+    }
+    for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
+      arrow_marker.push_back(add("contact_forces", visualization_msgs::Marker::ARROW, 0.05, 0.12, 0.15,
+                                 0.9f, 0.2f, 0.1f));
+      array.markers.back().points.resize(2);
+    }
+  }
+
+  // q * (rotation of +90 deg about x): a cylinder's axis (z) along the body's y (the axle).
+  static void AxleOrientation(const rv::Vector4& q, geometry_msgs::Quaternion& out) {
+    const double c = std::sqrt(0.5), w = q[0], x = q[1], y = q[2], z = q[3];
+    out.w = c * (w - x), out.x = c * (x + w), out.y = c * (y + z), out.z = c * (z - y);
+  }
+
+  const visualization_msgs::MarkerArray& Update(const rv::VehicleSimulator& sim, const ros::Time& stamp) {
+    for (auto& m : array.markers) m.header.stamp = stamp;
+    for (std::size_t b = 0; b < sim.bodies().size(); ++b) {
+      visualization_msgs::Marker& m = array.markers[static_cast<std::size_t>(body_marker[b])];
+      Fill(m.pose.position, sim.bodies()[b].p_in_world);
+      if (m.ns == "wheelsets") {
+        AxleOrientation(sim.bodies()[b].orientation, m.pose.orientation);
+      } else {
+        Fill(m.pose.orientation, sim.bodies()[b].orientation);
+      }
+    }
+    for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
+      const rv::WheelOutput& w = sim.wheels()[i];
+      visualization_msgs::Marker& disc = array.markers[static_cast<std::size_t>(wheel_marker[i])];
+      Fill(disc.pose.position, w.p_in_world);
+      AxleOrientation(w.orientation, disc.pose.orientation);
+      visualization_msgs::Marker& arrow = array.markers[static_cast<std::size_t>(arrow_marker[i])];
+      const rv::Vector3 foot = w.p_in_world - rv::Vector3(0.0, 0.0, wheel_radius);
+      Fill(arrow.points[0], foot - force_scale * w.force_in_world);
+      Fill(arrow.points[1], foot);
+    }
+    return array;
   }
 };
 
@@ -266,6 +360,15 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   ros::Publisher pub_wrenches = nh.advertise<rail_msgs::ContactWrenches>("contact_wrenches", 100);
   ros::Publisher pub_kinematics = nh.advertise<rail_msgs::WheelsetKinematics>("wheelset_kinematics", 100);
   tf2_ros::TransformBroadcaster tf_broadcaster;
+  // rviz markers (effects.rviz_markers): built only when on, published at ~marker_rate (default 25 Hz).
+  ros::Publisher pub_markers;
+  std::unique_ptr<VehicleMarkers> markers;
+  double marker_period = 0.0, next_marker = 0.0;
+  if (scene.effects.rviz_markers) {
+    pub_markers = nh.advertise<visualization_msgs::MarkerArray>("/vehicle_markers", 2);
+    markers.reset(new VehicleMarkers(*sim, scene.vehicle.nominal_radius, pnh.param("force_scale", 1e-5)));
+    marker_period = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
+  }
 
   rosbag::Bag bag;
   std::string bag_path;
@@ -306,6 +409,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     pub_wrenches.publish(out.contact_wrenches);
     pub_kinematics.publish(out.kinematics);
     tf_broadcaster.sendTransform(out.tf.transforms);
+    if (markers && sim->time() + 1e-12 >= next_marker) {
+      next_marker += marker_period;
+      pub_markers.publish(markers->Update(*sim, stamp));
+    }
     if (rec_states) bag.write("/wheel_states", stamp, out.wheel_states);
     if (rec_points) bag.write("/contact_points", stamp, out.contact_points);
     if (rec_wrenches) bag.write("/contact_wrenches", stamp, out.contact_wrenches);
