@@ -15,12 +15,15 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <string>
 #include <sys/stat.h>
 #include <vector>
 
+#include <rail_core/cost_profile.hpp>
+#include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/handshake.hpp>
 #include <rail_core/ros/scene_param.hpp>
@@ -387,6 +390,8 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
 int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer) {
   namespace cc = rail::core::coupling;
   const std::string me = ros::this_node::getName();
+  CostProfile cost;
+  const auto setup0 = std::chrono::steady_clock::now();
   std::unique_ptr<rt::CosimTrack> track;
   try {
     track.reset(new rt::CosimTrack(scene));
@@ -455,6 +460,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   rt::RailSectionDeflection deflection;
 
   auto publish = [&](const ros::Time& stamp) {
+    CostProfile::Scope timing(cost, CostProfile::kPublish);
     if (scene.effects.contact_point_output) {
       points_msg.header.stamp = stamp;
       for (int id = 0; id < track->wheelCount(); ++id) {
@@ -465,7 +471,10 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         }
       }
       points_pub.publish(points_msg);
-      if (rec_points && bag.isOpen()) bag.write("/contact_points", stamp, points_msg);
+      if (rec_points && bag.isOpen()) {
+        CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
+        bag.write("/contact_points", stamp, points_msg);
+      }
     }
     for (int i = 0; i < track->sectionCount(); ++i) {
       track->sectionDeflection(i, deflection);
@@ -477,7 +486,10 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       fill(m.right_displacement, deflection.displacement[rt::kRightRail]);
       fill(m.right_rotation, deflection.rotation[rt::kRightRail]);
       deflection_pub.publish(m);
-      if (rec_deflection && bag.isOpen()) bag.write("/rail_deflection", stamp, m);
+      if (rec_deflection && bag.isOpen()) {
+        CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
+        bag.write("/rail_deflection", stamp, m);
+      }
     }
     if (markers && stamp.toSec() + 1e-12 >= next_marker) {
       next_marker += marker_period;
@@ -485,12 +497,14 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
   };
 
-  cc::TrackCoupling coupling(cc::coupling_config(scene), *transport);
+  cc::TimedTransport timed_transport(*transport, cost);  // adds exchange waits to `cost`
+  cc::TrackCoupling coupling(cc::coupling_config(scene), timed_transport);
   const double h = scene.solver.track_step;
   const double period = 1.0 / scene.output.rate;
   std::uint64_t n_out = 0;
   int exit_code = kExitOk;
   const auto wall0 = std::chrono::steady_clock::now();
+  cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count());
   for (;;) {
     // Step 0 waits for the vehicle's set-up (settling): the handshake timeout; later steps the exchange
     // timeout.
@@ -518,7 +532,11 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       exit_code = cc::exit_code(r.status);
       break;
     }
-    const rt::CosimStepStatus st = track->step(coupling.states(), coupling.wrenches());
+    rt::CosimStepStatus st;
+    {
+      CostProfile::Scope timing(cost, CostProfile::kTrackStep);
+      st = track->step(coupling.states(), coupling.wrenches());
+    }
     if (st != rt::CosimStepStatus::kOk) {
       ROS_FATAL("%s: step %llu: the vehicle's frame was refused (%s)", me.c_str(),
                 static_cast<unsigned long long>(coupling.states().step),
@@ -545,11 +563,21 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
   }
   coupling.close();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+  const double t_end = coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h;
+  cost.add(CostProfile::kPublish, -cost.seconds(CostProfile::kBagWrite));  // bag writes are inside publishing
+  cost.set_count("track_steps", static_cast<double>(coupling.next_step()));
+  cost.set_count("newmark_steps", static_cast<double>(track->newmarkSteps()));
+  ROS_INFO_STREAM(cost.to_text(me, wall, t_end));
   if (bag.isOpen()) {
     bag.close();
     ROS_INFO("%s: bag closed: %s", me.c_str(), bag_path.c_str());
+    const std::string cost_path = bag_path.substr(0, bag_path.size() - 4) + ".cost.yaml";  // <stem>.track.cost.yaml
+    if (std::FILE* f = std::fopen(cost_path.c_str(), "w")) {
+      std::fputs(cost.to_yaml(me, scene, wall, t_end).c_str(), f);
+      std::fclose(f);
+    }
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   ROS_INFO("%s: %s after %llu steps (t = %.4f s), %ld Newmark steps, %.2f s wall", me.c_str(),
            exit_code == kExitOk ? "finished" : "stopped", static_cast<unsigned long long>(coupling.next_step()),
            coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h,

@@ -12,6 +12,8 @@
 #include <visualization_msgs/MarkerArray.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <rail_core/cost_profile.hpp>
+#include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/handshake.hpp>
 #include <rail_core/ros/scene_param.hpp>
@@ -33,6 +35,7 @@
 #include <cmath>
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <string>
@@ -272,6 +275,20 @@ struct VehicleMarkers {
   }
 };
 
+// Writes a cost profile beside the bag: <bag stem><suffix>. Nothing without a bag.
+void WriteCost(const std::string& bag_path, const char* suffix, const std::string& yaml, const std::string& node) {
+  if (bag_path.empty()) return;
+  const std::size_t dot = bag_path.rfind(".bag");
+  const std::string path = (dot != std::string::npos ? bag_path.substr(0, dot) : bag_path) + suffix;
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) {
+    ROS_WARN("%s: cannot write the cost profile %s", node.c_str(), path.c_str());
+    return;
+  }
+  std::fputs(yaml.c_str(), f);
+  std::fclose(f);
+}
+
 std::string OutputDir(ros::NodeHandle& pnh) {
   std::string dir;
   if (pnh.getParam("output_dir", dir) && !dir.empty()) return dir;
@@ -310,7 +327,10 @@ const char* StatusName(rv::RunStatus s) {
 int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& peer) {
   const std::string node = ros::this_node::getName();
   const bool cosim = scene.cosimulation();
+  CostProfile cost;
+  const auto setup0 = std::chrono::steady_clock::now();
   std::unique_ptr<rail::core::coupling::FrameTransport> transport;
+  std::unique_ptr<rail::core::coupling::TimedTransport> timed_transport;  // adds exchange waits to `cost`
   std::unique_ptr<rv::CosimVehicle> cosim_vehicle;
   std::unique_ptr<rv::VehicleSimulator> sim_alone;
   rv::VehicleSimulator* sim = nullptr;
@@ -327,7 +347,8 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
       return kExitBadInput;
     }
     try {
-      cosim_vehicle = std::make_unique<rv::CosimVehicle>(scene, *transport);
+      timed_transport = std::make_unique<rail::core::coupling::TimedTransport>(*transport, cost);
+      cosim_vehicle = std::make_unique<rv::CosimVehicle>(scene, *timed_transport);
     } catch (const std::exception& e) {
       ROS_FATAL("%s: cannot build the co-simulated vehicle: %s", node.c_str(), e.what());
       transport->close();
@@ -401,6 +422,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   // A time end stops exactly there; an arc-length end when the leading wheelset passes it.
   const double t_limit = scene.solver.end.kind == EndKind::kTime ? scene.solver.end.value : 1e9;
   auto publish = [&](std::uint64_t step) {
+    CostProfile::Scope timing(cost, CostProfile::kPublish);
     const ros::Time stamp(std::max(sim->time(), 1e-9));
     out.Update(*sim, stamp, step);
     pub_clock.publish(out.clock);
@@ -413,6 +435,8 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
       next_marker += marker_period;
       pub_markers.publish(markers->Update(*sim, stamp));
     }
+    if (!bag.isOpen()) return;
+    CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
     if (rec_states) bag.write("/wheel_states", stamp, out.wheel_states);
     if (rec_points) bag.write("/contact_points", stamp, out.contact_points);
     if (rec_wrenches) bag.write("/contact_wrenches", stamp, out.contact_wrenches);
@@ -423,6 +447,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
 
   int rc = kExitOk;
   const auto wall0 = std::chrono::steady_clock::now();
+  cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count());
   auto last_report = wall0;
   auto report = [&] {
     const auto now = std::chrono::steady_clock::now();
@@ -446,7 +471,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
           break;
         }
         const double t_next = std::min(static_cast<double>(step) * dt, t_limit);
-        status = sim->AdvanceTo(t_next);
+        {
+          CostProfile::Scope timing(cost, CostProfile::kVehicleIntegration);
+          status = sim->AdvanceTo(t_next);
+        }
         publish(step);
         report();
         if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
@@ -460,7 +488,11 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
       rv::CosimVehicle& v = *cosim_vehicle;
       const double h = v.track_step();
       std::uint64_t n_out = 0;
-      rv::RunStatus status = v.Start();
+      rv::RunStatus status;
+      {
+        CostProfile::Scope timing(cost, CostProfile::kVehicleIntegration);
+        status = v.Start();
+      }
       while (true) {
         if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
           if (status == rv::RunStatus::kIntegratorFailed &&
@@ -486,6 +518,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
           rc = kExitInterrupted;
           break;
         }
+        CostProfile::Scope timing(cost, CostProfile::kVehicleIntegration);
         status = v.Step();
       }
       v.Close();
@@ -494,6 +527,20 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     const rv::IntegratorCounters c = sim->Counters();
+    // The exchange waits were timed inside the steps too: the integration is what remains.
+    if (cosim) {
+      cost.add(CostProfile::kVehicleIntegration, -cost.seconds(CostProfile::kTransportWait));
+    }
+    // Bag writes happen inside the publishing scope: publishing is what remains.
+    cost.add(CostProfile::kPublish, -cost.seconds(CostProfile::kBagWrite));
+    cost.set_count("cvode_steps", static_cast<double>(c.steps));
+    cost.set_count("rhs_evaluations", static_cast<double>(c.rhs_evals));
+    cost.set_count("rhs_for_jacobians", static_cast<double>(c.rhs_evals_jacobian));
+    cost.set_count("jacobians", static_cast<double>(c.jacobian_evals));
+    cost.set_count("projections", static_cast<double>(c.projections));
+    if (cosim) cost.set_count("exchanges", static_cast<double>(cosim_vehicle->steps_exchanged()));
+    ROS_INFO_STREAM(cost.to_text(node, wall, sim->time()));
+    WriteCost(bag_path, ".cost.yaml", cost.to_yaml(node, scene, wall, sim->time()), node);
     ROS_INFO("%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
              "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections", node.c_str(),
              rc == kExitOk ? "finished" : "stopped", sim->time(), sim->leading_arc_length(), wall,
