@@ -132,6 +132,27 @@ void evalRail(const TrackGeometry& track, RailSide side, const ProfileCurve& rai
 
 }  // namespace
 
+const ProfileCurve& ContactDetector::profileCurveAt(int surface, double u, double& u_local) const noexcept {
+  if (surface == 0 && u > tread_.uMax()) {
+    u_local = u - tread_.uMax();  // tread continued onto the flange
+    return flange_;
+  }
+  if (surface == 1 && u < 0.0) {
+    u_local = tread_.uMax() + u;  // flange continued onto the tread
+    return tread_;
+  }
+  u_local = u;
+  return surface == 0 ? tread_ : flange_;
+}
+
+double ContactDetector::surfaceUMin(int surface) const noexcept {
+  return surface == 0 ? tread_.uMin() : -options_.split_overlap;
+}
+
+double ContactDetector::surfaceUMax(int surface) const noexcept {
+  return surface == 0 ? tread_.uMax() + options_.split_overlap : flange_.uMax();
+}
+
 ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radius, const ProfileCurve& rail,
                                  const Vector2d& section_centre_yz, const DetectionOptions& options)
     : tread_(wheel.tread), flange_(wheel.flange), rail_(rail), r0_(nominal_radius),
@@ -143,6 +164,12 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
   }
   if (!section_centre_yz.allFinite()) throw std::runtime_error("ContactDetector: section centre is not finite");
   const DetectionOptions& o = options_;
+  if (!(o.split_overlap >= 0.0) || !(o.split_overlap < 0.5 * std::min(wheel.tread.uMax(), wheel.flange.uMax()))) {
+    std::ostringstream m;
+    m << "ContactDetector: DetectionOptions.split_overlap = " << o.split_overlap
+      << " m must be >= 0 and below half the shorter wheel surface";
+    throw std::runtime_error(m.str());
+  }
   if (o.max_iterations < 1 || !(o.tolerance > 0.0) || !(o.max_step_length > 0.0) || !(o.max_step_angle > 0.0) ||
       !(o.max_penetration > 0.0) || !(o.min_normal_opposition > 0.0 && o.min_normal_opposition <= 1.0) ||
       !(o.search_cell > 0.0) || !(o.search_margin > 0.0) || !(o.search_spacing > 0.0))
@@ -158,14 +185,15 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
   wheel_normal_sign_[1] = normalSign(flange_);
   rail_normal_sign_ = normalSign(rail_);
 
-  // Wheel profile samples for the search.
+  // Wheel profile samples for the search, over each surface continued across the split by split_overlap.
   for (int k = 0; k < 2; ++k) {
-    const ProfileCurve& c = k == 0 ? tread_ : flange_;
-    const int n = std::max(3, static_cast<int>(std::ceil(c.uMax() / o.search_spacing)) + 1);
+    const double u0 = surfaceUMin(k), u1 = surfaceUMax(k);
+    const int n = std::max(3, static_cast<int>(std::ceil((u1 - u0) / o.search_spacing)) + 1);
     samples_[k].resize(n);
     for (int i = 0; i < n; ++i) {
-      const double u = c.uMax() * i / (n - 1);
-      const Vector2d p = c.position(u);
+      const double u = u0 + (u1 - u0) * i / (n - 1);
+      double u_local = 0.0;
+      const Vector2d p = profileCurveAt(k, u, u_local).position(u_local);
       samples_[k][i] = {u, p.x(), p.y()};
     }
   }
@@ -310,16 +338,21 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     return;
   }
   const int k = static_cast<int>(surface);
-  const ProfileCurve& wc = k == 0 ? tread_ : flange_;
-  const double wsign = wheel_normal_sign_[k];
+  const double u_lo = surfaceUMin(k), u_hi = surfaceUMax(k);
   const DetectionOptions& opt = options_;
   WheelEval w;
   RailEval e;
+  // Wheel surface k at (th, u), continued across the split (profileCurveAt).
+  auto wheelAt = [&](double th, double u) {
+    double u_local = 0.0;
+    const ProfileCurve& c = profileCurveAt(k, u, u_local);
+    evalWheel(c, wheel_normal_sign_[&c == &tread_ ? 0 : 1], wf, r0_, th, u_local, w);
+  };
 
   // Newton on eq. 4 from x; true when converged to a valid point pair (w, e evaluated at the solution).
   auto newton = [&](Vector4d& x) -> bool {
     for (int it = 0; it <= opt.max_iterations; ++it) {
-      evalWheel(wc, wsign, wf, r0_, x[0], x[1], w);
+      wheelAt(x[0], x[1]);
       evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
       const Vector3d d = w.p - e.r;
       const Vector4d F(d.dot(e.t_s), d.dot(e.t_u), w.n.dot(e.t_s), w.n.dot(e.t_u));
@@ -328,7 +361,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
           std::abs(F[2]) * r0_ < opt.tolerance && std::abs(F[3]) * r0_ < opt.tolerance) {
         // Converged: check the bounds and that this is a contact-type pair.
         const double eps = 1e-7;
-        if (x[1] < wc.uMin() - eps || x[1] > wc.uMax() + eps) return false;
+        if (x[1] < u_lo - eps || x[1] > u_hi + eps) return false;
         if (x[3] < rail_.uMin() - eps || x[3] > rail_.uMax() + eps) return false;
         if (x[2] < track.sStart() || x[2] > track.sEnd()) return false;
         if (std::cos(x[0]) < 0.5) return false;
@@ -370,7 +403,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
       ++work.newton_iterations;
       // Far outside the surfaces: give up early.
       const double far = 0.02;
-      if (x[1] < wc.uMin() - far || x[1] > wc.uMax() + far || x[3] < rail_.uMin() - far ||
+      if (x[1] < u_lo - far || x[1] > u_hi + far || x[3] < rail_.uMin() - far ||
           x[3] > rail_.uMax() + far || x[2] < track.sStart() - far || x[2] > track.sEnd() + far ||
           std::abs(x[0]) > 1.2)
         return false;
@@ -401,7 +434,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     if (!ok) {
       // Approximate: the search's best pair.
       x = seed;
-      evalWheel(wc, wsign, wf, r0_, x[0], x[1], w);
+      wheelAt(x[0], x[1]);
       evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
       w.p = p_seed;
       status = DetectionStatus::kApproximate;
@@ -434,7 +467,9 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   }
   out.wheel_radius = w.rho;
   out.cos_normal_radial = std::abs(e.n.dot(w.e_r));
-  out.wheel_curvature = wc.curvature(x[1]);
+  double u_local = 0.0;
+  out.wheel_curvature = profileCurveAt(k, x[1], u_local).curvature(u_local);
+  out.on_own_surface = k == 0 ? x[1] <= tread_.uMax() : x[1] >= 0.0;
   out.rail_curvature = rail_.curvature(x[3]);
   out.wheel_y = w.q.x();
   out.wheel_z = w.q.y();

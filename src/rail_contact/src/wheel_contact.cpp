@@ -54,6 +54,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const Eigen::Vector3d axle = ws.R_wheelset_to_world.col(1).normalized();
   const double ls = side == RailSide::kLeft ? -1.0 : 1.0;
 
+  bool tread_on_own_surface = true;
   for (int k = 0; k < 2; ++k) {
     ContactPointResult& c = out.contact[k];
     c = ContactPointResult();
@@ -72,6 +73,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
       update_impact_memory(work.impact[k], -1.0, 0.0);
       continue;
     }
+    if (k == kTread) tread_on_own_surface = g.on_own_surface;
     c.s_r = g.s_r;
     c.p_wheel_in_world = g.p_wheel_in_world;
     c.p_rail_in_world = g.p_rail_in_world;
@@ -104,9 +106,13 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     c.hertz_flags = hz.flags;
     if (k == kFlange && out.contact[kTread].penetration > 0.0 &&
         (out.contact[kTread].p_wheel_in_world - g.p_wheel_in_world).norm() < options_.merge_distance) {
-      // One patch across the split: keep the deeper of the two.
+      // One patch across the split: keep one of the two. Each surface continues a little past the split
+      // (DetectionOptions::split_overlap); a point found there belongs to the other surface, which keeps
+      // its own point. Two points on their own surfaces (or both past the split): the deeper one.
       ContactPointResult& t = out.contact[kTread];
-      if (c.penetration > t.penetration) {
+      const bool flange_keeps = g.on_own_surface != tread_on_own_surface ? g.on_own_surface
+                                                                          : c.penetration > t.penetration;
+      if (flange_keeps) {
         t.active = false;
         t.merged = true;
         t.N = t.F_long = t.F_lat = t.a = t.b = 0.0;

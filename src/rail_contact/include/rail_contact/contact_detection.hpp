@@ -56,6 +56,15 @@ struct DetectionOptions {
   double search_cell = 0.5e-3;           ///< cell of the rail signed-distance grid, m
   double search_margin = 0.04;           ///< grid margin around the rail profile, m
   double search_spacing = 0.5e-3;        ///< spacing of the wheel profile samples in the search, m
+  /// Each wheel surface is continued across the tread/flange split by this profile arc length (m): a
+  /// contact point drifting just past the split stays a converged point of the surface that followed it
+  /// instead of a failed Newton (search fallback, grid estimate kApproximate, or no contact), which makes
+  /// the force a discontinuous, history-dependent function of the pose. WheelContactModel keeps one of two
+  /// reports of the same patch. 0 = no continuation (surfaces end at the split). 5 mm by default, the same
+  /// for the vehicle on the rigid track and the track node, so that both sides evaluate the same contact
+  /// (rail_vehicle_node doc/simulator.md has the measurements: without it the integrator's step collapses
+  /// to ~1e-7 s while a flange-root contact crosses the split).
+  double split_overlap = 5e-3;
 };
 
 /// Caller-owned per-pair state: warm start and counters (one per wheel surface and wheel).
@@ -99,6 +108,7 @@ struct ContactGeometry {
   double wheel_y = 0.0, wheel_z = 0.0;  ///< contact point in the wheel profile frame, m
   double rail_y = 0.0, rail_z = 0.0;    ///< contact point in the rail profile frame, m
   int iterations = 0;             ///< Newton iterations of this call
+  bool on_own_surface = true;     ///< u_w inside the surface itself, not in its continuation past the split
 };
 
 /// Detector for one wheel profile on one rail profile. Constant after building; shared by all wheels
@@ -126,6 +136,13 @@ class ContactDetector {
   /// Signed distance (m, > 0 outside the rail) of a point of the rail profile frame to the rail profile,
   /// from the precomputed grid (bilinear), and the parameter of the closest rail point (nearest cell).
   double railSignedDistance(const Eigen::Vector2d& p_yz, double* u_closest = nullptr) const noexcept;
+
+  /// Parameter range of wheel surface `surface` (0 tread, 1 flange) including its continuation across the
+  /// split (DetectionOptions::split_overlap): tread [0, L_tread + overlap], flange [-overlap, L_flange].
+  double surfaceUMin(int surface) const noexcept;
+  double surfaceUMax(int surface) const noexcept;
+  /// Profile curve and local parameter of surface `surface` at its parameter u (possibly continued).
+  const ProfileCurve& profileCurveAt(int surface, double u, double& u_local) const noexcept;
 
  private:
   struct Sample {

@@ -40,12 +40,18 @@ class WheelWrenchSource {
   virtual void WheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept = 0;
 };
 
+// rail_contact's defaults, whose wheel surfaces continue 5 mm across the tread/flange split
+// (DetectionOptions::split_overlap): a flange-root contact crossing the split stays a converged point.
+// Without it the root contact of a flanging wheel falls back to the search's grid estimate and back every
+// few evaluations, and the integrator's step collapses to ~1e-7 s (doc/simulator.md).
+contact::WheelContactOptions DefaultVehicleContactOptions();
+
 // What the scene does not say (constant after building).
 struct SimulatorSettings {
   // Contact data the scene has no key for: friction mu0, restitution e, materials, Polach parameters,
   // detection settings. The effects (flange_contact, spin_creepage, creep_law) come from the scene and
   // override these fields.
-  contact::WheelContactOptions contact;
+  contact::WheelContactOptions contact = DefaultVehicleContactOptions();
   // Derailment: a wheel centre more than this above its settled height relative to the track plane [m];
   // 0 = the wheel profile's flange height.
   double derailment_lift = 0.0;

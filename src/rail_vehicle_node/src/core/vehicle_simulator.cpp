@@ -55,6 +55,11 @@ class ExternalWheelWrenchElement : public ForceElement {
 
 }  // namespace
 
+contact::WheelContactOptions DefaultVehicleContactOptions() {
+  // rail_contact's defaults include the 5 mm split overlap (the track node uses the same).
+  return contact::WheelContactOptions{};
+}
+
 IntegrationMethod ChooseMethod(const core::Solver& solver) {
   switch (solver.vehicle_method) {
     case core::VehicleMethod::kBdf: return IntegrationMethod::kBdf;
