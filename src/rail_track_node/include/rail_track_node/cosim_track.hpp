@@ -6,10 +6,13 @@
 //  - rigid_fe: only the track geometry is built (no FE mesh, no matrices, no factor, no integration);
 //    the contact is evaluated on the rigid rails (RigidRailDeformation), as the vehicle alone does.
 //  - flexible: the scene's FE track (buildSceneTrack) and a Newmark integrator at solver.track_step,
-//    started from the static equilibrium under the track's own weight. Coupling is explicit: the contact
-//    of step k (wheel states at t_k) is evaluated on the rails of the FE state at t_{k-1} (the state at
-//    the start of the Newmark step), and its rail-side wrenches are the contact loads f_c at the end of
-//    that step (t_k). Step 0 evaluates the contact on the initial state and does not integrate.
+//    started from the static equilibrium under the track's own weight. The contact of step k (wheel
+//    states at t_k) loads the rails at the end of the Newmark step t_{k-1} -> t_k. Default coupling
+//    (kSemiImplicit): the contact geometry is found on the rails predicted at t_k, and the contact forces
+//    are solved together with the step, so that they are the contact law's at the rails' state of t_k and
+//    exactly the loads the rails carry. kExplicit: the contact on the rails of t_{k-1}, loads as computed
+//    (section 5.3 read literally; unstable with contact damping, see doc/cosim_track.md). Step 0
+//    evaluates the contact on the initial state and does not integrate.
 //
 // Wheel centre: WheelState::p_wheel_in_world is taken as the contact code's wheel centre, the axle point
 // in the plane of the taping line (rail_contact/contact_detection.hpp); the returned moment is about that
@@ -38,6 +41,19 @@
 namespace rail {
 namespace track {
 
+/// How the contact of track step k is coupled to the FE rails (flexible only).
+enum class CosimCoupling {
+  /// Contact evaluated on the rails of t_{k-1}; its loads end the Newmark step (one solve, no iteration).
+  /// Unstable with the default contact damping and at low speed: the normal damper and the creep forces
+  /// act on a one-step-old rail velocity (doc/cosim_track.md). Kept as the reference of section 5.3.
+  kExplicit,
+  /// Contact geometry evaluated on the rails predicted at t_k (d + h v); the contact forces then solved
+  /// with the Newmark step: the law (eq. 9, creepages, Polach) along the rail contact point's motion at
+  /// t_k, Newton on 3 force components per contact through a low-rank update of the K_eff solve
+  /// (influence columns of the existing factor, cached per rail node). One sparse solve per step.
+  kSemiImplicit,
+};
+
 /// What the scene does not say (constant after building).
 struct CosimTrackOptions {
   /// Contact data without a scene key (friction, materials, Polach, detection); the scene's effects
@@ -45,6 +61,10 @@ struct CosimTrackOptions {
   rail::contact::WheelContactOptions contact;
   SceneTrackOptions track;         ///< rail height and gravity of the FE track (flexible only)
   bool include_gravity = true;     ///< track self-weight f_g in every Newmark step and in the initial state
+  CosimCoupling coupling = CosimCoupling::kSemiImplicit;  ///< flexible only
+  /// kSemiImplicit: an influence column K_eff^{-1} e_j is stored over the DOF window where it exceeds this
+  /// fraction of its largest entry (the DOFs are numbered plane by plane along the track).
+  double influence_tolerance = 1e-12;
 };
 
 /// Why step() refused a frame (nothing was evaluated or integrated).
@@ -60,8 +80,8 @@ class CosimTrack {
   CosimTrack(const CosimTrack&) = delete;
   CosimTrack& operator=(const CosimTrack&) = delete;
 
-  /// Track step k = states.step (t_k): evaluates each wheel's contact on the rails (flexible: the FE
-  /// state at t_{k-1}), loads the FE rails and advances Newmark to t_k (flexible, k > 0), writes the
+  /// Track step k = states.step (t_k): evaluates each wheel's contact on the rails (flexible: see
+  /// CosimCoupling), loads the FE rails and advances Newmark to t_k (flexible, k > 0), writes the
   /// wheel-centre wrenches (N, N m about p_wheel_in_world, world axes) into out (ids, count; step, time
   /// and hash copied from states). out must hold states.count wheels. Refuses (and changes nothing) when
   /// states.count differs from the scene's wheel count or a wheel id is out of range or repeated.
@@ -75,6 +95,16 @@ class CosimTrack {
   long newmarkSteps() const { return newmark_steps_; }
   /// Frames stepped since construction.
   long framesStepped() const { return frames_; }
+  CosimCoupling coupling() const { return coupling_; }
+  /// kSemiImplicit: influence columns solved so far (6 per rail node a wheel reaches), columns cut to the
+  /// window capacity (0 unless the window estimate of the build was short), window capacity (DOFs).
+  long influenceSolves() const;
+  long influenceClipped() const;
+  int influenceWindow() const;
+  /// kSemiImplicit: Newton iterations of the contact forces summed over the steps, and steps that ended
+  /// without reaching the tolerance (contact points within 1e-12 m, forces within 1e-9 relative).
+  long newtonIterations() const;
+  long newtonUnconverged() const;
 
   const rail::contact::TrackGeometry& geometry() const { return *geometry_; }
   const rail::contact::WheelContactModel& contactModel() const { return *contact_model_; }
@@ -82,11 +112,13 @@ class CosimTrack {
   const SceneTrack* sceneTrack() const { return fe_.get(); }
   /// Newmark state (flexible only; d, v, a over the free DOFs); nullptr with rigid_fe.
   const NewmarkState* state() const;
-  /// The rail motion the contact of the last step saw (flexible: nodal values of the FE state at the start
-  /// of that step); nullptr with rigid_fe.
+  /// Rail nodal displacements and velocities of the FE state after the last step (t_k; the initial state
+  /// before the first), for a contact evaluation on the current rails; nullptr with rigid_fe.
   const rail::contact::BeamRailDeformation* railDeformation() const { return deformation_.get(); }
 
-  /// Contact results of wheel `id` from the last step (contact points, forces, rail wrenches).
+  /// Contact results of wheel `id` from the last step (contact points, forces, rail wrenches). With
+  /// kSemiImplicit the geometry is that found on the predicted rails; the normal and creep forces, the
+  /// ellipse, creepages and penetration (rate) are those solved at t_k.
   const rail::contact::WheelContactResult& contact(int id) const { return result_[static_cast<std::size_t>(id)]; }
   /// Caller-visible detection counters and impact memories of wheel `id`.
   const rail::contact::WheelContactWork& contactWork(int id) const { return work_[static_cast<std::size_t>(id)]; }
@@ -110,7 +142,18 @@ class CosimTrack {
     double s;
     std::array<RailProbe, 2> rail;
   };
+  struct Implicit;  // semi-implicit coupling: influence cache and this step's contact links
   void fillDeformation() noexcept;
+  void fillPredictedDeformation() noexcept;
+  void predictRail(int g, double& d_p, double& v_p) const noexcept;
+  void evaluateContacts(const rail::core::coupling::WheelStateFrame& states,
+                        rail::core::coupling::WrenchFrame& out) noexcept;
+  void writeWrench(int i, const rail::contact::WheelState& ws, const rail::contact::WheelContactResult& res,
+                   rail::core::coupling::WrenchFrame& out) const noexcept;
+  void implicitCorrection(const rail::core::coupling::WheelStateFrame& states,
+                          rail::core::coupling::WrenchFrame& out) noexcept;
+  int ensureNodeColumns(int rail, int node) noexcept;
+  void solveColumn(int dof, int& lo, int& len) noexcept;
 
   std::unique_ptr<rail::contact::TrackGeometry> rigid_geometry_;  // rigid_fe: the geometry alone
   std::unique_ptr<SceneTrack> fe_;                                 // flexible: geometry + FE model
@@ -128,6 +171,8 @@ class CosimTrack {
   std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
   std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
   std::vector<Section> sections_;
+  CosimCoupling coupling_ = CosimCoupling::kSemiImplicit;
+  std::unique_ptr<Implicit> implicit_;
   long newmark_steps_ = 0;
   long frames_ = 0;
 };

@@ -63,7 +63,20 @@ class NewmarkIntegrator {
   NewmarkState initialState(const Eigen::VectorXd& d0, const NodalLoads* loads = nullptr) const;
 
   /// Advances state by dt with the external loads at the end of the step (t + dt). No allocation.
+  /// Same as solveStep(state, loads) then completeStep(state).
   void step(NewmarkState& state, const NodalLoads& loads);
+
+  /// First half of step(): solves K_eff d_{n+1} = f_{n+1} + M (c0 d + c1 v + a) + C (c2 d + v) into
+  /// stepDisplacement() without changing state. A caller may then correct stepDisplacement() (e.g. by the
+  /// response K_eff^{-1} f to extra loads f found after the solve) before completeStep(). No allocation.
+  void solveStep(const NewmarkState& state, const NodalLoads& loads);
+  /// d_{n+1} of the last solveStep() (m, rad over the free DOFs), writable.
+  Eigen::VectorXd& stepDisplacement() { return d_new_; }
+  /// Second half of step(): a_{n+1}, v_{n+1} from stepDisplacement() and state; state becomes t + dt.
+  /// No allocation.
+  void completeStep(NewmarkState& state);
+  /// x = K_eff^{-1} b (b, x of size n; x preallocated). No allocation.
+  void solveEffective(const Eigen::VectorXd& b, Eigen::VectorXd& x) { factor_->solve(b, x); }
 
   double dt() const { return dt_; }
   const SparseCholesky& factor() const { return *factor_; }

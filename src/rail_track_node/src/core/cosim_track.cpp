@@ -3,9 +3,11 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include <rail_contact/beam_shape.hpp>
@@ -21,6 +23,73 @@ namespace rc = rail::contact;
 namespace cc = rail::core::coupling;
 using rail::core::Scene;
 using rail::core::SceneError;
+
+namespace {
+constexpr int kNodeDofs = 6;
+using Vector12d = rc::Vector12d;
+}  // namespace
+
+// Semi-implicit coupling state (flexible, kSemiImplicit). Everything is sized at construction.
+//
+// Influence columns: for the free DOF g of a rail node, a_g = K_eff^{-1} e_g, stored over the window of DOF
+// indices where |a_g| > tolerance * max |a_g| (the response to a point load decays within metres of
+// rail; the DOFs are numbered plane by plane along the track). Slots hold the 6 columns of one rail node;
+// a wheel needs the 2 nodes of each contact element, so 4 slots per wheel are never short; a slot is
+// reused least-recently-used when a wheel reaches a node not cached.
+struct CosimTrack::Implicit {
+  int n = 0;           // free DOFs
+  int window = 0;      // column capacity, entries
+  double tolerance = 1e-12;
+  int slots = 0;
+  std::vector<double> values;                 // slot-major: (slot * 6 + j) * window
+  std::vector<int> lo, len;                   // per column: first DOF index, entries
+  std::vector<int> slot_rail, slot_node;      // key of each slot (-1 free)
+  std::vector<long> slot_used;                // frame of last use
+  std::array<std::vector<int>, 2> node_slot;  // per rail node: its slot or -1
+  Eigen::VectorXd unit, column;               // solve scratch
+  long solves = 0, clipped = 0;
+
+  // One contact of this step in the implicit solve: its geometry (point, frame, Hertz and Kalker data)
+  // frozen at the predicted state, its force a function of the rail contact point's motion u (world).
+  struct Link {
+    int frame_index = 0, wheel = 0, contact = 0, rail = 0, element = 0;
+    std::array<int, 12> dofs{};      // free DOFs of the element (node q then q + 1), -1 fixed
+    Eigen::Matrix<double, 12, 3> W;  // nodal loads of unit world forces at the rail contact point; W' d_e = u
+    Eigen::Matrix3d R_contact_to_world;
+    Eigen::Vector3d v_wheel, v_rail_p, omega_wheel, omega_rail_p;  // material-point / body velocities
+    double V_p = 0.0;                // rolling speed of the evaluation, m/s
+    double K = 0.0, a_coeff = 0.0, b_coeff = 0.0;  // N = K delta^n (1 + ...); a = a_coeff N^(1/3)
+    rail::contact::KalkerCoefficients kalker;
+    double v_impact = 0.0, delta_p = 0.0;
+    Eigen::Vector3d u_p, u0, base_dot;  // W'd_p; W'x0; u_dot = (2/h) u - base_dot
+    Eigen::Vector3d f_p, f;          // force on the rail at the prediction (its loads are in x0) and now, N
+    Eigen::Vector3d u, u_start, du;  // Newton iterate of the rail contact-point displacement, m
+    Eigen::Vector3d F_wheel, R;      // law's force on the wheel at u; residual of u, m
+    Eigen::Matrix3d J;               // d F_wheel / d u (Newmark velocity included), N/m
+  };
+  // Contact law at rail contact-point displacement u (eq. 9, creepages, Polach), results into out.
+  struct LawOut {
+    Eigen::Vector3d F_wheel = Eigen::Vector3d::Zero();
+    double N = 0.0, F_long = 0.0, F_lat = 0.0, a = 0.0, b = 0.0, delta = 0.0, delta_dot = 0.0;
+    double nu_x = 0.0, nu_y = 0.0, phi = 0.0;
+  };
+  std::vector<Link> links;       // capacity 2 per wheel
+  std::vector<Eigen::Vector3d> memory;  // per (wheel, contact): K, a_coeff, b_coeff last seen with N > 0
+  Eigen::MatrixXd G, S;          // W_c' K_eff^{-1} W_e (3 x 3 blocks) and the Newton matrix, 6 per wheel
+  Eigen::VectorXd rhs;
+  std::vector<int> pivot;
+  rail::contact::PolachOptions polach;
+  long newton_iterations = 0, unconverged = 0;
+
+  void law(const rail::contact::WheelContactModel& model, double h, const Link& L, const Eigen::Vector3d& u,
+           LawOut& o) const noexcept;
+  double entry(int col, int row) const {
+    const int r = row - lo[static_cast<std::size_t>(col)];
+    return (r >= 0 && r < len[static_cast<std::size_t>(col)])
+               ? values[static_cast<std::size_t>(col) * static_cast<std::size_t>(window) + static_cast<std::size_t>(r)]
+               : 0.0;
+  }
+};
 
 CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
   if (!scene.has_vehicle) throw SceneError(scene.file + ": the co-simulation track needs a vehicle (none in the scene)");
@@ -94,11 +163,68 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
   deformation_ = std::make_unique<rc::BeamRailDeformation>(
       mesh.s_start, mesh.sleeper_spacing / mesh.rail_elements_between_sleepers, std::move(elements));
   fillDeformation();
+
+  coupling_ = options.coupling;
+  if (coupling_ != CosimCoupling::kSemiImplicit) return;
+  if (!(options.influence_tolerance > 0.0 && options.influence_tolerance < 1e-3)) {
+    std::ostringstream os;
+    os << "CosimTrackOptions::influence_tolerance: must be in (0, 1e-3), got " << options.influence_tolerance;
+    throw std::runtime_error(os.str());
+  }
+  for (int r = 0; r < 2; ++r)
+    for (std::size_t q = 0; q < mesh.rail_beams[r].size(); ++q)
+      if (mesh.rail_beams[r][q] != mesh.rail_beams[r].front() + static_cast<int>(q))
+        throw std::runtime_error("CosimTrack: the rail beams of rail " + std::to_string(r) +
+                                 " are not numbered consecutively along s (semi-implicit coupling needs it)");
+  implicit_ = std::make_unique<Implicit>();
+  Implicit& im = *implicit_;
+  im.n = model.system.size();
+  im.tolerance = options.influence_tolerance;
+  im.unit.setZero(im.n);
+  im.column.setZero(im.n);
+  // Window capacity: the widest column of a rail node at mid-track (both rails, 6 DOFs), plus a quarter
+  // and two sleeper bays of DOFs for nodes where the track differs.
+  int widest = 0;
+  for (int r = 0; r < 2; ++r) {
+    const int k_mid = static_cast<int>(mesh.rail_nodes[r].size()) / 2;
+    for (int j = 0; j < kNodeDofs; ++j) {
+      const int g = mesh.dofIndex(mesh.rail_nodes[r][static_cast<std::size_t>(k_mid)], j);
+      if (g < 0) continue;
+      int lo = 0, len = 0;
+      im.window = im.n;  // no clipping while measuring
+      solveColumn(g, lo, len);
+      widest = std::max(widest, len);
+    }
+  }
+  const int bay_dofs = static_cast<int>(im.n / std::max(1, mesh.n_sleepers));
+  im.window = std::min(im.n, widest + widest / 4 + 2 * bay_dofs);
+  im.solves = 0;
+  im.slots = 4 * n_wheels;
+  im.values.assign(static_cast<std::size_t>(im.slots) * kNodeDofs * static_cast<std::size_t>(im.window), 0.0);
+  im.lo.assign(static_cast<std::size_t>(im.slots) * kNodeDofs, 0);
+  im.len.assign(static_cast<std::size_t>(im.slots) * kNodeDofs, 0);
+  im.slot_rail.assign(static_cast<std::size_t>(im.slots), -1);
+  im.slot_node.assign(static_cast<std::size_t>(im.slots), -1);
+  im.slot_used.assign(static_cast<std::size_t>(im.slots), -1);
+  for (int r = 0; r < 2; ++r) im.node_slot[r].assign(mesh.rail_nodes[r].size(), -1);
+  im.links.reserve(static_cast<std::size_t>(2 * n_wheels));
+  im.memory.assign(static_cast<std::size_t>(2 * n_wheels), Eigen::Vector3d::Zero());
+  im.G.setZero(6 * n_wheels, 6 * n_wheels);
+  im.S.setZero(6 * n_wheels, 6 * n_wheels);
+  im.rhs.setZero(6 * n_wheels);
+  im.pivot.assign(static_cast<std::size_t>(6 * n_wheels), 0);
+  im.polach = contact_model_->options().polach;
+  im.polach.spin = contact_model_->options().spin;
 }
 
 CosimTrack::~CosimTrack() = default;
 
 const NewmarkState* CosimTrack::state() const { return fe_ ? &state_ : nullptr; }
+long CosimTrack::influenceSolves() const { return implicit_ ? implicit_->solves : 0; }
+long CosimTrack::influenceClipped() const { return implicit_ ? implicit_->clipped : 0; }
+int CosimTrack::influenceWindow() const { return implicit_ ? implicit_->window : 0; }
+long CosimTrack::newtonIterations() const { return implicit_ ? implicit_->newton_iterations : 0; }
+long CosimTrack::newtonUnconverged() const { return implicit_ ? implicit_->unconverged : 0; }
 
 void CosimTrack::fillDeformation() noexcept {
   for (int r = 0; r < 2; ++r) {
@@ -114,29 +240,57 @@ void CosimTrack::fillDeformation() noexcept {
   }
 }
 
-CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
-  const int n = wheelCount();
-  if (static_cast<int>(states.count) != n || states.capacity() < n || out.capacity() < n)
-    return CosimStepStatus::kWrongWheelCount;
-  for (int i = 0; i < n; ++i) seen_[static_cast<std::size_t>(i)] = 0;
-  for (int i = 0; i < n; ++i) {
-    const std::uint32_t id = states.wheels[static_cast<std::size_t>(i)].id;
-    if (id >= static_cast<std::uint32_t>(n) || seen_[id]) return CosimStepStatus::kBadWheelId;
-    seen_[id] = 1;
-  }
+// Rails predicted at t_k = t_{k-1} + h for the contact geometry: d_p = d + h v, v_p = v. (Holding the
+// acceleration too gives the same forces; Newmark's accelerations jump after a load step.)
+void CosimTrack::predictRail(int g, double& d_p, double& v_p) const noexcept {
+  v_p = state_.v(g);
+  d_p = state_.d(g) + integrator_->dt() * v_p;
+}
 
-  // Contact of every wheel on the rails at the start of the step.
+void CosimTrack::fillPredictedDeformation() noexcept {
+  for (int r = 0; r < 2; ++r) {
+    const rc::RailSide side = r == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight;
+    double* q = deformation_->nodalDisplacements(side);
+    double* qd = deformation_->nodalVelocities(side);
+    const std::vector<int>& dofs = rail_dofs_[r];
+    for (std::size_t i = 0; i < dofs.size(); ++i) {
+      const int g = dofs[i];
+      if (g >= 0) {
+        predictRail(g, q[i], qd[i]);
+      } else {
+        q[i] = qd[i] = 0.0;
+      }
+    }
+  }
+}
+
+void CosimTrack::writeWrench(int i, const rc::WheelState& ws, const rc::WheelContactResult& res,
+                             cc::WrenchFrame& out) const noexcept {
+  cc::WheelWrench& w = out.wheels[static_cast<std::size_t>(i)];
+  w.f_wheel_in_world = res.wheel_centre.force_in_world;
+  w.n_wheel_in_world = ws.R_wheelset_to_world * res.wheel_centre.moment_in_wheelset;
+}
+
+static rc::WheelState contactWheelState(const cc::WheelState& in) {
+  rc::WheelState ws;
+  ws.p_centre_in_world = in.p_wheel_in_world;
+  ws.R_wheelset_to_world = in.q_wheelset_to_world.normalized().toRotationMatrix();
+  ws.v_centre_in_world = in.v_wheel_in_world;
+  ws.omega_in_world = in.omega_wheelset_in_world;
+  ws.s_hint = in.arc_length;
+  return ws;
+}
+
+// Every wheel's contact on the rails as deformation_ holds them; the FE loads of the active contacts
+// (flexible) and the wheel-centre wrenches.
+void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
+  const int n = wheelCount();
   if (fe_) loads_->clear();
   for (int i = 0; i < n; ++i) {
     const cc::WheelState& in = states.wheels[static_cast<std::size_t>(i)];
     const std::size_t id = in.id;
     const rc::RailSide side = (in.id % 2 == 0) ? rc::RailSide::kLeft : rc::RailSide::kRight;
-    rc::WheelState ws;
-    ws.p_centre_in_world = in.p_wheel_in_world;
-    ws.R_wheelset_to_world = in.q_wheelset_to_world.normalized().toRotationMatrix();
-    ws.v_centre_in_world = in.v_wheel_in_world;
-    ws.omega_in_world = in.omega_wheelset_in_world;
-    ws.s_hint = in.arc_length;
+    const rc::WheelState ws = contactWheelState(in);
     rc::WheelContactResult& res = result_[id];
     if (fe_) {
       contact_model_->evaluate(ws, side, *geometry_, *deformation_, work_[id], res);
@@ -151,24 +305,407 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
     } else {
       contact_model_->evaluate(ws, side, *geometry_, rc::RigidRailDeformation(), work_[id], res);
     }
-    cc::WheelWrench& w = out.wheels[static_cast<std::size_t>(i)];
-    w.id = in.id;
-    w.f_wheel_in_world = res.wheel_centre.force_in_world;
-    w.n_wheel_in_world = ws.R_wheelset_to_world * res.wheel_centre.moment_in_wheelset;
+    out.wheels[static_cast<std::size_t>(i)].id = in.id;
+    writeWrench(i, ws, res, out);
+  }
+}
+
+CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
+  const int n = wheelCount();
+  if (static_cast<int>(states.count) != n || states.capacity() < n || out.capacity() < n)
+    return CosimStepStatus::kWrongWheelCount;
+  for (int i = 0; i < n; ++i) seen_[static_cast<std::size_t>(i)] = 0;
+  for (int i = 0; i < n; ++i) {
+    const std::uint32_t id = states.wheels[static_cast<std::size_t>(i)].id;
+    if (id >= static_cast<std::uint32_t>(n) || seen_[id]) return CosimStepStatus::kBadWheelId;
+    seen_[id] = 1;
   }
   out.count = static_cast<std::uint32_t>(n);
   out.step = states.step;
   out.time = states.time;
   out.scene_hash = states.scene_hash;
 
-  // Flexible: advance the FE track to t_k with these contact loads, then expose its rails to the next step.
-  if (fe_ && states.step > 0) {
-    integrator_->step(state_, *loads_);
+  const bool integrate = fe_ && states.step > 0;
+  // The rails the contact sees: t_{k-1} (explicit, and step 0) or predicted at t_k.
+  if (integrate && coupling_ != CosimCoupling::kExplicit) fillPredictedDeformation();
+  evaluateContacts(states, out);
+
+  if (integrate) {
+    switch (coupling_) {
+      case CosimCoupling::kExplicit:
+        integrator_->step(state_, *loads_);
+        break;
+      case CosimCoupling::kSemiImplicit:
+        integrator_->solveStep(state_, *loads_);
+        implicitCorrection(states, out);
+        integrator_->completeStep(state_);
+        break;
+    }
     ++newmark_steps_;
     fillDeformation();
   }
   ++frames_;
   return CosimStepStatus::kOk;
+}
+
+// x = K_eff^{-1} e_dof into im.column; its window [lo, lo + len) where |x| > tolerance * max |x|, cut to the
+// capacity around dof if wider.
+void CosimTrack::solveColumn(int dof, int& lo, int& len) noexcept {
+  Implicit& im = *implicit_;
+  im.unit(dof) = 1.0;
+  integrator_->solveEffective(im.unit, im.column);
+  im.unit(dof) = 0.0;
+  ++im.solves;
+  const double cut = im.tolerance * im.column.cwiseAbs().maxCoeff();
+  int first = 0, last = im.n - 1;
+  while (first < dof && std::abs(im.column(first)) <= cut) ++first;
+  while (last > dof && std::abs(im.column(last)) <= cut) --last;
+  len = last - first + 1;
+  lo = first;
+  if (len > im.window) {
+    ++im.clipped;
+    lo = std::min(std::max(0, dof - im.window / 2), im.n - im.window);
+    len = im.window;
+  }
+}
+
+// Slot holding the influence columns of rail node (rail, node), solving them if not cached.
+int CosimTrack::ensureNodeColumns(int rail, int node) noexcept {
+  Implicit& im = *implicit_;
+  int& cached = im.node_slot[rail][static_cast<std::size_t>(node)];
+  if (cached >= 0) {
+    im.slot_used[static_cast<std::size_t>(cached)] = frames_;
+    return cached;
+  }
+  int slot = 0;
+  for (int s = 1; s < im.slots; ++s)
+    if (im.slot_used[static_cast<std::size_t>(s)] < im.slot_used[static_cast<std::size_t>(slot)]) slot = s;
+  if (im.slot_rail[static_cast<std::size_t>(slot)] >= 0)
+    im.node_slot[im.slot_rail[static_cast<std::size_t>(slot)]]
+                [static_cast<std::size_t>(im.slot_node[static_cast<std::size_t>(slot)])] = -1;
+  im.slot_rail[static_cast<std::size_t>(slot)] = rail;
+  im.slot_node[static_cast<std::size_t>(slot)] = node;
+  im.slot_used[static_cast<std::size_t>(slot)] = frames_;
+  cached = slot;
+  const TrackMesh& mesh = fe_->model.mesh;
+  const int mesh_node = mesh.rail_nodes[rail][static_cast<std::size_t>(node)];
+  for (int j = 0; j < kNodeDofs; ++j) {
+    const std::size_t col = static_cast<std::size_t>(slot) * kNodeDofs + static_cast<std::size_t>(j);
+    const int g = mesh.dofIndex(mesh_node, j);
+    if (g < 0) {
+      im.lo[col] = 0;
+      im.len[col] = 0;
+      continue;
+    }
+    solveColumn(g, im.lo[col], im.len[col]);
+    std::copy(im.column.data() + im.lo[col], im.column.data() + im.lo[col] + im.len[col],
+              im.values.begin() + static_cast<std::ptrdiff_t>(col * static_cast<std::size_t>(im.window)));
+  }
+  return slot;
+}
+
+// The contact law of link L with the rail contact point displaced by u (world) from the start of the step
+// and moving at u_dot = (2/h) u - base_dot (Newmark), everything else frozen at the predicted state:
+// the same sequence as WheelContactModel::evaluate (eq. 9, creepages, Kalker, Polach, eq. 12).
+void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, const Link& L, const Eigen::Vector3d& u,
+                               LawOut& o) const noexcept {
+  const rc::WheelContactOptions& opt = model.options();
+  const Eigen::Vector3d& n = L.R_contact_to_world.col(2);
+  const Eigen::Vector3d& t_w = L.R_contact_to_world.col(0);
+  const Eigen::Vector3d dv_rail = (2.0 / h) * u - L.base_dot;
+  const Eigen::Vector3d v_rail = L.v_rail_p + dv_rail;
+  o = LawOut();
+  o.delta = L.delta_p + n.dot(u - L.u_p);
+  o.delta_dot = -(L.v_wheel - v_rail).dot(n);
+  o.N = rc::damped_normal_force(L.K, o.delta, o.delta_dot, L.v_impact, opt.damping);
+  if (!(o.N > 0.0)) return;
+  const double cbrt_N = std::cbrt(o.N);
+  o.a = L.a_coeff * cbrt_N;
+  o.b = L.b_coeff * cbrt_N;
+  const rc::Creepages cr = rc::compute_creepages(L.v_wheel, v_rail, L.omega_wheel, L.omega_rail_p,
+                                                 L.R_contact_to_world, L.V_p - dv_rail.dot(t_w), opt.creepage);
+  o.nu_x = cr.nu_x;
+  o.nu_y = cr.nu_y;
+  o.phi = opt.spin ? cr.phi : 0.0;
+  if (o.a > 0.0 && o.b > 0.0) {
+    rc::PolachInput pin;
+    pin.nu_x = o.nu_x;
+    pin.nu_y = o.nu_y;
+    pin.phi = o.phi;
+    pin.N = o.N;
+    pin.a = o.a;
+    pin.b = o.b;
+    pin.G = model.shearModulus();
+    pin.mu0 = opt.friction;
+    pin.V = cr.V_ref;
+    pin.c = L.kalker;
+    const rc::PolachResult pr = rc::polach_forces(pin, polach);
+    o.F_long = pr.Fx;
+    o.F_lat = pr.Fy;
+  }
+  o.F_wheel = rc::contact_force_in_world(L.R_contact_to_world, o.F_long, o.F_lat, o.N);
+}
+
+// Semi-implicit coupling, after the solve x0 = K_eff^{-1} (rhs + contact loads at the predicted state).
+// Each contact c in contact at the predicted state keeps its geometry and gets its force from the
+// contact law along the rail motion of t_k, to first order in the rail contact point's displacement
+//   u_c = W_c' d  (W_c: nodal loads of unit world forces at the point, eq. 16),
+//   u_dot_c = W_c' v,  v = (2/h) (d - d_{k-1}) - v_{k-1}  (Newmark).
+// Its rail load W_c f_c makes d = x0 + sum_e K_eff^{-1} W_e (f_e - f_p,e), so
+//   u_c = W_c' x0 + sum_e G_ce (f_e - f_p,e),   G_ce = W_c' K_eff^{-1} W_e  (cached influence columns),
+// and the rail forces f solve f_c + F_wheel,c(u_c(f)) = 0 by Newton (3 unknowns per contact, law
+// Jacobian by differences). d, the contact results and the wheel wrenches take the final forces.
+void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
+  Implicit& im = *implicit_;
+  const TrackMesh& mesh = fe_->model.mesh;
+  const double h = integrator_->dt();
+  const rc::NormalDampingParams& damping = contact_model_->options().damping;
+  Eigen::VectorXd& d_new = integrator_->stepDisplacement();
+  im.links.clear();
+  const int n = wheelCount();
+  for (int i = 0; i < n; ++i) {
+    const cc::WheelState& in = states.wheels[static_cast<std::size_t>(i)];
+    const rc::WheelContactResult& res = result_[in.id];
+    const int rail = in.id % 2 == 0 ? kLeftRail : kRightRail;
+    const rc::RailSide side = rail == kLeftRail ? rc::RailSide::kLeft : rc::RailSide::kRight;
+    for (int c = 0; c < 2; ++c) {
+      const rc::ContactPointResult& cp = res.contact[c];
+      if (!cp.active || !(cp.penetration > 0.0)) continue;
+      Eigen::Vector3d& memory = im.memory[static_cast<std::size_t>(2 * in.id + c)];
+      const double v_impact = work_[in.id].impact[c].impact_velocity;
+      // Eq. 9's K and the Hertz semi-axis coefficients: from this evaluation when N > 0, else the last seen.
+      const double D = 0.75 * (1.0 - damping.restitution * damping.restitution) /
+                       std::max(std::abs(v_impact), damping.impact_velocity_floor);
+      const double factor = 1.0 + D * cp.penetration_rate;
+      if (cp.N > 0.0 && factor > 0.0 && cp.a > 0.0 && cp.b > 0.0) {
+        const double cbrt_N = std::cbrt(cp.N);
+        memory = Eigen::Vector3d(cp.N / (std::pow(cp.penetration, damping.exponent) * factor), cp.a / cbrt_N,
+                                 cp.b / cbrt_N);
+      }
+      if (!(memory(0) > 0.0)) continue;
+      int beam = 0;
+      double xi = 0.0;
+      if (!mesh.locateRail(rail, cp.s_r, beam, xi)) continue;
+      Implicit::Link L;
+      L.frame_index = i;
+      L.wheel = static_cast<int>(in.id);
+      L.contact = c;
+      L.rail = rail;
+      L.element = beam - mesh.rail_beams[rail].front();
+      const BeamElement& b = mesh.beams[static_cast<std::size_t>(beam)];
+      for (int j = 0; j < kNodeDofs; ++j) {
+        L.dofs[static_cast<std::size_t>(j)] = mesh.dofIndex(b.node_i, j);
+        L.dofs[static_cast<std::size_t>(kNodeDofs + j)] = mesh.dofIndex(b.node_j, j);
+      }
+      const Eigen::Vector3d arm = cp.p_rail_in_world - cp.p_section_centre_in_world;
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d e = Eigen::Vector3d::Unit(k);
+        L.W.col(k) = rc::beamEquivalentNodalLoadsWorld(xi, b.length, b.R_local_to_world, e, arm.cross(e));
+      }
+      L.R_contact_to_world = cp.R_contact_to_world;
+      const rc::WheelState ws = contactWheelState(in);
+      L.v_wheel = ws.v_centre_in_world + ws.omega_in_world.cross(cp.p_wheel_in_world - ws.p_centre_in_world);
+      rc::RailSectionMotion motion;
+      deformation_->sectionMotion(side, cp.s_r, motion);
+      L.v_rail_p = motion.u_dot + motion.theta_dot.cross(arm);
+      L.omega_wheel = ws.omega_in_world;
+      L.omega_rail_p = motion.theta_dot;
+      L.V_p = (ws.v_centre_in_world - motion.u_dot).dot(cp.R_contact_to_world.col(0));
+      L.K = memory(0);
+      L.a_coeff = memory(1);
+      L.b_coeff = memory(2);
+      L.kalker = rc::KalkerTable::builtin().evaluate(L.a_coeff / L.b_coeff, contact_model_->poissonRatio());
+      L.v_impact = v_impact;
+      L.delta_p = cp.penetration;
+      L.u_p.setZero();
+      L.u0.setZero();
+      L.base_dot.setZero();
+      for (int j = 0; j < 12; ++j) {
+        const int g = L.dofs[static_cast<std::size_t>(j)];
+        if (g < 0) continue;
+        double d_p = 0.0, v_p = 0.0;
+        predictRail(g, d_p, v_p);
+        L.u_p += L.W.row(j).transpose() * d_p;
+        L.u0 += L.W.row(j).transpose() * d_new(g);
+        L.base_dot += L.W.row(j).transpose() * ((2.0 / h) * state_.d(g) + state_.v(g) + v_p);
+      }
+      L.f_p = -cp.force_on_wheel_in_world;
+      L.f = L.f_p;
+      ensureNodeColumns(rail, L.element);
+      ensureNodeColumns(rail, L.element + 1);
+      im.links.push_back(L);
+    }
+  }
+  const int m = static_cast<int>(im.links.size());
+  if (m == 0) return;
+
+  // G = W' K_eff^{-1} W from the influence columns (3 x 3 blocks).
+  for (int e = 0; e < m; ++e) {
+    const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
+    for (int c = 0; c < m; ++c) {
+      const Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+      Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
+      for (int j = 0; j < 12; ++j) {
+        const int node = Le.element + j / kNodeDofs;
+        const int col = im.node_slot[Le.rail][static_cast<std::size_t>(node)] * kNodeDofs + j % kNodeDofs;
+        Eigen::Vector3d a_w = Eigen::Vector3d::Zero();  // W_c' K_eff^{-1} e_j
+        for (int i = 0; i < 12; ++i)
+          if (Lc.dofs[static_cast<std::size_t>(i)] >= 0)
+            a_w += Lc.W.row(i).transpose() * im.entry(col, Lc.dofs[static_cast<std::size_t>(i)]);
+        g += a_w * Le.W.row(j);
+      }
+      im.G.block<3, 3>(3 * c, 3 * e) = g;
+    }
+  }
+
+  // Newton on the rail contact-point displacements u (3 per contact):
+  //   r_c(u) = u_c - u0_c - sum_e G_ce (f_e(u_e) - f_p,e) = 0,  f_e(u_e) = -F_wheel,e(u_e),
+  // Jacobian I + G J (J_e = d F_wheel,e / d u_e by differences), with a backtracking line search on |r|^2:
+  // the creep law saturates within micrometres of slip at low speed, where undamped steps overshoot.
+  constexpr int kMaxIterations = 40;
+  constexpr double kDu = 1e-11;  // m, difference step of the law Jacobian (rail velocity step 2 kDu / h)
+  bool converged = false;
+  Implicit::LawOut lo, lp;
+  const int N3 = 3 * m;
+  auto residuals = [&](bool jacobian) {
+    double merit = 0.0;
+    for (int c = 0; c < m; ++c) {
+      Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+      im.law(*contact_model_, h, Lc, Lc.u, lo);
+      Lc.F_wheel = lo.F_wheel;
+      if (jacobian)
+        for (int k = 0; k < 3; ++k) {
+          im.law(*contact_model_, h, Lc, Lc.u + kDu * Eigen::Vector3d::Unit(k), lp);
+          Lc.J.col(k) = (lp.F_wheel - lo.F_wheel) / kDu;
+        }
+    }
+    for (int c = 0; c < m; ++c) {
+      Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+      Lc.R = Lc.u - Lc.u0;
+      for (int e = 0; e < m; ++e) {
+        const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
+        Lc.R += im.G.block<3, 3>(3 * c, 3 * e) * (Le.F_wheel + Le.f_p);
+      }
+      merit += Lc.R.squaredNorm();
+    }
+    return merit;
+  };
+  for (int c = 0; c < m; ++c) im.links[static_cast<std::size_t>(c)].u = im.links[static_cast<std::size_t>(c)].u0;
+  double merit = residuals(true);
+  for (int it = 0; it < kMaxIterations; ++it) {
+    ++im.newton_iterations;
+    // Converged when every contact point is within 1e-12 m of where its force puts it (rail velocity
+    // error 2e-12 / h) and the force mismatch J r is below 1e-9 of its force (+ 1 N).
+    bool done = true;
+    for (int c = 0; c < m; ++c) {
+      const Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+      done = done && Lc.R.norm() <= 1e-12 && (Lc.J * Lc.R).norm() <= 1e-9 * (1.0 + Lc.F_wheel.norm());
+    }
+    if (done) {
+      converged = true;
+      break;
+    }
+    // (I + G J) du = -r, dense LU with partial pivoting.
+    for (int c = 0; c < m; ++c) {
+      for (int e = 0; e < m; ++e)
+        im.S.block<3, 3>(3 * c, 3 * e).noalias() =
+            im.G.block<3, 3>(3 * c, 3 * e) * im.links[static_cast<std::size_t>(e)].J;
+      im.S.block<3, 3>(3 * c, 3 * c) += Eigen::Matrix3d::Identity();
+      im.rhs.segment<3>(3 * c) = -im.links[static_cast<std::size_t>(c)].R;
+    }
+    for (int k = 0; k < N3; ++k) {
+      int p = k;
+      for (int i = k + 1; i < N3; ++i)
+        if (std::abs(im.S(i, k)) > std::abs(im.S(p, k))) p = i;
+      if (p != k) {
+        for (int j = 0; j < N3; ++j) std::swap(im.S(k, j), im.S(p, j));
+        std::swap(im.rhs(k), im.rhs(p));
+      }
+      const double piv = im.S(k, k);
+      for (int i = k + 1; i < N3; ++i) {
+        const double l = im.S(i, k) / piv;
+        if (l == 0.0) continue;
+        for (int j = k + 1; j < N3; ++j) im.S(i, j) -= l * im.S(k, j);
+        im.rhs(i) -= l * im.rhs(k);
+      }
+    }
+    for (int k = N3 - 1; k >= 0; --k) {
+      double v = im.rhs(k);
+      for (int j = k + 1; j < N3; ++j) v -= im.S(k, j) * im.rhs(j);
+      im.rhs(k) = v / im.S(k, k);
+    }
+    for (int c = 0; c < m; ++c) {
+      Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+      Lc.u_start = Lc.u;
+      Lc.du = im.rhs.segment<3>(3 * c);
+    }
+    double alpha = 1.0, trial = 0.0;
+    for (int halving = 0; halving < 40; ++halving) {
+      for (int c = 0; c < m; ++c) {
+        Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+        Lc.u = Lc.u_start + alpha * Lc.du;
+      }
+      trial = residuals(false);
+      if (trial <= (1.0 - 1e-4 * alpha) * merit) break;
+      alpha *= 0.5;
+    }
+    merit = residuals(true);
+  }
+  if (!converged) ++im.unconverged;
+  for (int c = 0; c < m; ++c) {
+    Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+    Lc.f = -Lc.F_wheel;
+  }
+
+  // d = x0 + K_eff^{-1} W (f - f_p); contact results and wrenches with the final forces.
+  for (int c = 0; c < m; ++c) {
+    Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+    im.law(*contact_model_, h, Lc, Lc.u, lo);
+    rc::ContactPointResult& cp = result_[static_cast<std::size_t>(Lc.wheel)].contact[Lc.contact];
+    cp.N = lo.N;
+    cp.F_long = lo.F_long;
+    cp.F_lat = lo.F_lat;
+    cp.a = lo.a;
+    cp.b = lo.b;
+    cp.nu_x = lo.nu_x;
+    cp.nu_y = lo.nu_y;
+    cp.phi = lo.phi;
+    cp.penetration = lo.delta;
+    cp.penetration_rate = lo.delta_dot;
+    cp.force_on_wheel_in_world = lo.F_wheel;  // = -f, the force the rails carry
+    cp.rail_wrench = rc::rail_section_wrench(Lc.f, Eigen::Vector3d::Zero(),
+                                             cp.p_rail_in_world - cp.p_section_centre_in_world,
+                                             Eigen::Vector3d::Zero());
+    const Eigen::Matrix<double, 12, 1> df = Lc.W * (Lc.f - Lc.f_p);
+    for (int j = 0; j < 12; ++j) {
+      if (df(j) == 0.0) continue;
+      const int node = Lc.element + j / kNodeDofs;
+      const std::size_t col =
+          static_cast<std::size_t>(im.node_slot[Lc.rail][static_cast<std::size_t>(node)] * kNodeDofs + j % kNodeDofs);
+      const int lo_i = im.lo[col], len = im.len[col];
+      d_new.segment(lo_i, len) +=
+          df(j) * Eigen::Map<const Eigen::VectorXd>(im.values.data() + col * static_cast<std::size_t>(im.window), len);
+    }
+  }
+  // Wheel-centre wrenches (eq. 13) and the rail-section resultant (eq. 15) of the wheels concerned.
+  for (int e = 0; e < m; ++e) {
+    const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
+    if (e > 0 && im.links[static_cast<std::size_t>(e - 1)].wheel == Le.wheel) continue;
+    const rc::WheelState ws = contactWheelState(states.wheels[static_cast<std::size_t>(Le.frame_index)]);
+    rc::WheelContactResult& res = result_[static_cast<std::size_t>(Le.wheel)];
+    const rc::ContactPointResult& tr = res.contact[rc::kTread];
+    const rc::ContactPointResult& fl = res.contact[rc::kFlange];
+    const Eigen::Matrix3d& A = ws.R_wheelset_to_world;
+    res.wheel_centre = rc::wheel_centre_wrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
+                                               A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
+                                               A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
+    const rc::ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
+    res.rail_section_s = ref.s_r;
+    res.rail_section = rc::rail_section_wrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
+                                               tr.p_rail_in_world - ref.p_section_centre_in_world,
+                                               fl.p_rail_in_world - ref.p_section_centre_in_world);
+    writeWrench(Le.frame_index, ws, res, out);
+  }
 }
 
 int CosimTrack::addSection(double s) {

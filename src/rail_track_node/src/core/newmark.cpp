@@ -57,6 +57,11 @@ NewmarkState NewmarkIntegrator::initialState(const Eigen::VectorXd& d0, const No
 }
 
 void NewmarkIntegrator::step(NewmarkState& st, const NodalLoads& loads) {
+  solveStep(st, loads);
+  completeStep(st);
+}
+
+void NewmarkIntegrator::solveStep(const NewmarkState& st, const NodalLoads& loads) {
   const double h = dt_;
   const double c0 = 4.0 / (h * h), c1 = 4.0 / h, c2 = 2.0 / h;
   // K_eff d_{n+1} = f_{n+1} + M (c0 d + c1 v + a) + C (c2 d + v)
@@ -67,6 +72,11 @@ void NewmarkIntegrator::step(NewmarkState& st, const NodalLoads& loads) {
   if (include_gravity_) rhs_ += sys_.f_gravity;
   for (int k = 0; k < loads.size(); ++k) rhs_(loads.index(k)) += loads.value(k);
   factor_->solve(rhs_, d_new_);
+}
+
+void NewmarkIntegrator::completeStep(NewmarkState& st) {
+  const double h = dt_;
+  const double c0 = 4.0 / (h * h), c1 = 4.0 / h;
   // a_{n+1} = c0 (d_{n+1} - d_n) - c1 v_n - a_n ;  v_{n+1} = v_n + h/2 (a_n + a_{n+1})
   a_new_ = c0 * (d_new_ - st.d) - c1 * st.v - st.a;
   st.v += (0.5 * h) * (st.a + a_new_);
