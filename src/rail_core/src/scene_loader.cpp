@@ -454,8 +454,10 @@ void check_consistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     if (t == "contact_points" && !s.effects.contact_point_output) needs = "effects.contact_point_output: true";
     if (t == "markers" && !s.effects.rviz_markers) needs = "effects.rviz_markers: true";
     if (needs) fail_at(file, key, "'" + t + "' is recorded only with " + needs, 0);
-    if (t == "rail_deflection" && !s.runs_fe_integration()) {
-      fail_at(file, key, "'rail_deflection' needs effects.track_model: flexible", 0);
+    if (t == "rail_deflection" && s.effects.track_model == TrackModel::kRigid) {
+      fail_at(file, key,
+              "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
+              "move: zeros)", 0);
     }
     if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches") && !s.has_vehicle) {
       fail_at(file, key, "'" + t + "' needs a vehicle in the scene", 0);

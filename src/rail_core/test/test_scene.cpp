@@ -184,8 +184,11 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
       {"vehicle step above the track step", replaced(kBase, "vehicle_max_step: 1.0e-5", "vehicle_max_step: 5.0e-5"),
        "scene.yaml: solver.vehicle_max_step: must be <= solver.track_step (2e-05 s) in co-simulation, got 5e-05 "
        "(line 18)"},
-      {"output needs an effect", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, rail_deflection]"),
-       "scene.yaml: output.topics[1]: 'rail_deflection' needs effects.track_model: flexible"},
+      {"output needs a track node",
+       replaced(replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, rail_deflection]"),
+                "track_model: rigid_fe", "track_model: rigid"),
+       "scene.yaml: output.topics[1]: 'rail_deflection' needs a track node: effects.track_model flexible, or "
+       "rigid_fe (rails that do not move: zeros)"},
       {"unknown topic", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_state]"),
        "scene.yaml: output.topics[0]: unknown topic 'wheel_state' (known: wheel_states, contact_wrenches, "
        "contact_points, rail_deflection, wheelset_kinematics, markers, tf, clock) (line 20)"},
