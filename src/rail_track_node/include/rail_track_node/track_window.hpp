@@ -1,0 +1,220 @@
+// Moving active window of the flexible track (paper section 3 on a part of the line only): the FE track
+// is meshed and integrated over [s_begin, s_end], a whole number of sleeper bays that follows the vehicle
+// (from `behind` metres behind its last wheel to at least `ahead` metres ahead of its first one). The cost
+// of a step depends on the window length, not on the length of the line. ROS-free. Design, figures and
+// commands: doc/track_window.md.
+//
+// State by superposition (the model is linear): the displacement of the track is
+//   d = d_g + w
+// with d_g the static state under the track's own weight (K d_g = f_g on the current window) and w the
+// motion caused by the external (wheel) loads, integrated by Newmark from M w'' + C w' + K w = f_c.
+//
+// Window ends: at each artificial end the line beyond it (boundary_length metres of straight track with the
+// end's cant) is statically condensed onto the end plane (Guyan: K, C, M and the self-weight load of the
+// track outside, which so follows the end plane quasi-statically instead of being cut off), plus grounded
+// absorbing dashpots at the rail ends (absorbingEndDashpots). At the line's own ends the scene's
+// effects.absorbing_ends decides, as for the full model.
+//
+// Move: when [s_rear - behind, s_front + ahead] leaves the window, the window moves by a whole number of
+// shift distances. The model over the new range is built (mesh, M, C, K, f_g, K_eff factor, d_g); when it
+// is a translated copy of the current one (straight line) the current matrices, factor and d_g are kept.
+// (w, w', w'') of every node in both windows (same sleeper / rail node index along the line, world-axis
+// DOFs) is copied; the entering nodes get the static continuation of the carried field (K_ee x_e =
+// -K_ec x_c), which is what the condensed end held them at. A move allocates; step() does not.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <array>
+#include <memory>
+#include <vector>
+
+#include <rail_contact/rail_deformation.hpp>
+#include <rail_contact/track_geometry.hpp>
+#include <rail_core/scene.hpp>
+
+#include "rail_track_node/newmark.hpp"
+#include "rail_track_node/scene_track.hpp"
+#include "rail_track_node/track_model.hpp"
+#include "rail_track_node/track_simulator.hpp"
+
+namespace rail {
+namespace track {
+
+/// Settings of a window (constant after building). Lengths in m.
+struct TrackWindowSettings {
+  double behind = 5.0;          ///< kept behind the last wheel (load), m
+  double ahead = 5.0;           ///< kept ahead of the first wheel (load), m
+  double shift = 3.0;           ///< distance of one move, m; rounded up to whole sleeper bays
+  double vehicle_length = 0.0;  ///< first to last wheel (load), m
+  /// Window length, m, rounded up to whole sleeper bays; 0 = the minimum,
+  /// vehicle_length + behind + ahead + shift. A shorter window is refused.
+  double length = 0.0;
+  double dt = 0.0;              ///< Newmark step, s; 0 = the scene's solver.track_step
+  /// Entering nodes start at the static continuation of the carried-over w, w', w'' (K_ee x_e = -K_ec x_c);
+  /// false: at rest (x_e = 0).
+  bool entering_static = true;
+  /// Artificial window ends carry the line beyond them statically condensed (Guyan) onto the end plane:
+  /// K, C, M and the self-weight load of boundary_length metres of track, so that the track outside
+  /// follows the end plane quasi-statically instead of being cut off. false: the window ends are free.
+  bool condensed_ends = true;
+  double boundary_length = 120.0;  ///< m of track condensed at each artificial end
+  bool end_dashpots = true;     ///< absorbing dashpots at the rail ends of every artificial end
+  bool include_gravity = true;  ///< d_g (self-weight static state) in the rails' and sections' output
+  SceneTrackOptions track;      ///< rail height and gravity
+};
+
+/// Figures of the window since construction.
+struct TrackWindowStats {
+  long steps = 0;            ///< Newmark steps
+  int shifts = 0;            ///< moves of the window
+  int rebuilds = 0;          ///< moves that built new matrices and factors (the others reused them)
+  double last_shift_s = 0.0; ///< wall time of the last move, s
+  double total_shift_s = 0.0;///< wall time of all moves, s
+};
+
+class TrackWindow {
+ public:
+  /// Builds the line's geometry and track data from the scene and the first window around the vehicle
+  /// whose last and first wheels are at arc lengths s_rear <= s_front (m); w = 0. Throws
+  /// std::runtime_error (rail::core::SceneError for scene data) on non-physical settings, e.g. a window
+  /// shorter than vehicle_length + behind + ahead + shift (the message states the minimum length).
+  /// Allocates (set-up).
+  TrackWindow(const rail::core::Scene& scene, const TrackWindowSettings& settings, double s_rear, double s_front);
+  ~TrackWindow();
+  TrackWindow(const TrackWindow&) = delete;
+  TrackWindow& operator=(const TrackWindow&) = delete;
+
+  /// Keeps [s_rear - behind, s_front + ahead] (m) inside the window: moves it (forward or backward, by
+  /// whole shift distances, never beyond the line's ends) when that range leaves it. Returns true when it
+  /// moved; then mesh(), model(), the state's DOF numbering and the rail element frames are those of the
+  /// new window (loads must be built on mesh() after this call). No allocation unless it moves; a move
+  /// builds a model and may throw what building throws (std::bad_alloc, a factorisation failure).
+  bool follow(double s_rear, double s_front);
+
+  /// One Newmark step t -> t + dt of w with the external loads (built on mesh(), at t + dt); then the rail
+  /// nodal arrays of railDeformation() hold d_g + w and w' of the new state. No allocation, no exception.
+  void step(const NodalLoads& loads) noexcept;
+
+  /// For a coupling that splits the step (e.g. a semi-implicit contact correcting the solved displacement
+  /// before the step completes): the current window's integrator over w and the state it advances. The
+  /// caller advances state() with it and then calls finishStep(). Both change at a move.
+  NewmarkIntegrator& integrator();
+  NewmarkState& mutableState() { return state_; }
+  /// After a step done through integrator(): refreshes the rail arrays and counts the step. No allocation.
+  void finishStep() noexcept;
+
+  /// Sets w to the static solution K w = f_c (w' = w'' = 0) under loads built on mesh(): a start at
+  /// static equilibrium under the initial wheel loads. Factorises K (set-up; allocates).
+  void setStaticState(const NodalLoads& loads);
+
+  /// Window range on the centre line (first and last sleeper), m.
+  double sBegin() const;
+  double sEnd() const;
+  /// True when [s_min, s_max] (m) lies on the window's rails.
+  bool covers(double s_min, double s_max) const { return s_min >= sBegin() && s_max <= sEnd(); }
+  /// Index (from the line's first sleeper) of the window's first sleeper, and the number of sleeper bays.
+  int firstSleeper() const;
+  int bays() const { return window_bays_; }
+  /// Sleeper bays of one move, and the minimum window length for the settings (m, whole bays).
+  int shiftBays() const { return shift_bays_; }
+  double minimumLength() const { return min_length_; }
+
+  /// The current window's FE model and mesh (DOF numbering of state()); changes at a move.
+  const TrackModel& model() const;
+  const TrackMesh& mesh() const { return model().mesh; }
+  /// Dynamic part w (m, rad; m/s, ...) over the current window's free DOFs; t is the time since set-up.
+  const NewmarkState& state() const { return state_; }
+  /// Self-weight static state d_g over the current window's free DOFs (zero when include_gravity is off).
+  const Eigen::VectorXd& staticState() const;
+  /// The rails for the contact search over the current window: nodal d_g + w and w' (world axes). The
+  /// object stays the same across moves (its layout is rebuilt in place at a move).
+  const rail::contact::BeamRailDeformation& railDeformation() const { return *deformation_; }
+  /// The line's geometry (the whole line) and the track data (scene applied; its absorbing_ends flag is
+  /// off because the window places its end dashpots itself).
+  const rail::contact::TrackGeometry& geometry() const { return geometry_; }
+  const TrackData& data() const { return data_; }
+  double dt() const { return dt_; }
+  const TrackWindowSettings& settings() const { return settings_; }
+  const TrackWindowStats& stats() const { return stats_; }
+
+  /// Mechanical energy of w, 1/2 w'^T M w' + 1/2 w^T K w (J), over the current window. No allocation.
+  double dynamicEnergy() const;
+
+  /// Adds a rail deflection section at arc length s (m) on the line (set-up only); returns its index. Its
+  /// self-weight static value is solved once on a line piece of 2 * static_half_length around s.
+  /// Throws std::runtime_error when s is off the line's meshable range.
+  int addSection(double s, double static_half_length = 10.0);
+  int sectionCount() const { return static_cast<int>(sections_.size()); }
+  /// Displacement (m) and small rotation (rad) of both rails' centre lines at section i, track-frame
+  /// components (x along, y left, z up): the section's static value (if include_gravity) + w, where w is
+  /// interpolated in the window, taken from the condensed end's static shapes beyond a condensed end
+  /// (within boundary_length), and 0 farther away. No allocation.
+  void sectionDeflection(int i, RailSectionDeflection& out) const;
+  /// The same without the static value (w only).
+  void sectionDynamicDeflection(int i, RailSectionDeflection& out) const;
+
+ private:
+  struct Window;
+  /// Track beyond an end statically condensed onto the end plane's 8 nodes (6 sleeper nodes right to left,
+  /// then the left and right rail node; 6 DOFs each), track-frame axes.
+  struct CondensedEnd {
+    Eigen::MatrixXd K, C, M;  ///< 48 x 48
+    Eigen::MatrixXd G;        ///< 48 x 3: condensed self-weight load per unit gravity along track x, y, z
+    TrackMesh piece;          ///< the condensed piece (straight, track axes), for sections beyond the end
+    std::vector<int> pos;     ///< piece free DOF -> row of X
+    Eigen::MatrixXd X;        ///< piece DOFs (rows by pos) per end-plane DOF: the static shapes [I; Phi]
+  };
+  static CondensedEnd condenseEnd(const TrackData& data, int bays, bool front);
+  void addCondensedEnd(Window& w, bool front) const;
+  struct RailProbe {
+    std::array<int, 12> dofs;                   // free DOFs of the element, -1 fixed
+    Eigen::Matrix<double, 3, 12> P_u, P_theta;  // element world DOFs -> track-frame displacement / rotation
+  };
+  struct Section {
+    double s = 0.0;
+    bool inside = false;                        // on the current window's rails
+    std::array<RailProbe, 2> rail;
+    // Beyond a condensed window end (within boundary_length): end-plane DOFs and the maps from their
+    // values to the section's track-frame displacement / rotation through the static shapes.
+    bool beyond = false;
+    std::array<int, 48> plane_dofs;
+    std::array<Eigen::Matrix<double, 3, 48>, 2> Q_u, Q_theta;
+    RailSectionDeflection static_value;         // self-weight static state at s
+  };
+
+  std::unique_ptr<Window> buildWindow(int first_sleeper) const;
+  void moveTo(int first_sleeper);
+  void extrapolateEntering(const std::vector<char>& carried, NewmarkState& st) const;
+  void setRails();
+  void fillRails() noexcept;
+  void placeSections();
+  void placeSection(Section& sec) const;
+
+  TrackWindowSettings settings_;
+  rail::contact::TrackGeometry geometry_;
+  TrackData data_;               // scene applied, absorbing ends off (the window adds its own)
+  bool line_ends_absorb_ = false;
+  Vector6d c_end_;               // window-end dashpots (rail local frame)
+  std::array<CondensedEnd, 2> condensed_;  // [0] rear end (line behind), [1] front end (line ahead)
+  double seat_below_centre_ = 0.0;
+  double dt_ = 0.0;
+  double s_line_ = 0.0;          // arc length of the line's first sleeper, m
+  int line_bays_ = 0;            // sleeper bays of the whole line
+  int window_bays_ = 0;
+  int shift_bays_ = 0;
+  double min_length_ = 0.0;
+  std::unique_ptr<Window> window_;
+  NewmarkState state_;           // w, w', w''
+  mutable Eigen::VectorXd energy_scratch_;  // dynamicEnergy(): M w', K w
+  std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
+  std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
+  std::vector<Section> sections_;
+  TrackWindowStats stats_;
+};
+
+/// Distance (m) from the first to the last load of a moving-load set (largest minus smallest offset).
+double movingLoadsLength(const rail::core::MovingLoads& loads);
+
+}  // namespace track
+}  // namespace rail
