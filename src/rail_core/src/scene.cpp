@@ -225,6 +225,13 @@ std::string to_yaml(const Scene& s) {
   num(e, "handshake_timeout", v.handshake_timeout);
   e << YAML::Key << "end" << YAML::Value << YAML::BeginMap;
   num(e, to_string(v.end.kind), v.end.value);
+  e << YAML::EndMap;
+  e << YAML::Key << "track_window" << YAML::Value << YAML::BeginMap;
+  kv(e, "enabled", v.track_window.enabled);
+  num(e, "behind", v.track_window.behind);
+  num(e, "ahead", v.track_window.ahead);
+  num(e, "shift", v.track_window.shift);
+  num(e, "length", v.track_window.length);
   e << YAML::EndMap << YAML::EndMap;
 
   const Output& o = s.output;
@@ -313,6 +320,11 @@ std::string describe(const Scene& s, Role role) {
   o << "solver: " << (v.end.kind == EndKind::kTime ? "until t = " + fixed(v.end.value, 3) + " s"
                                                    : "until s = " + fixed(v.end.value, 1) + " m");
   if (s.needs_track_node()) o << ", track step " << format_double(v.track_step) << " s";
+  if (s.runs_fe_integration() && s.has_vehicle) {
+    o << (v.track_window.enabled ? ", moving track window (" + fixed(v.track_window.behind, 1) + " m behind, " +
+                                       fixed(v.track_window.ahead, 1) + " m ahead)"
+                                 : ", whole track integrated");
+  }
   if (s.has_vehicle) {
     o << ", vehicle rtol " << format_double(v.vehicle_rtol) << " atol " << format_double(v.vehicle_atol)
       << " max step " << format_double(v.vehicle_max_step) << " s (" << to_string(v.vehicle_method) << ")";

@@ -358,6 +358,20 @@ void read_solver(MapReader& root, Scene& s) {
   in_range(r, "exchange_timeout", v.exchange_timeout, 0.01, 3600.0, "s");
   r.number("handshake_timeout", v.handshake_timeout);
   in_range(r, "handshake_timeout", v.handshake_timeout, 0.01, 3600.0, "s");
+  if (const YAML::Node wn = r.child("track_window")) {
+    MapReader wr(wn, "solver.track_window", root.file());
+    TrackWindow& w = v.track_window;
+    wr.boolean("enabled", w.enabled);
+    wr.number("behind", w.behind);
+    in_range(wr, "behind", w.behind, 0.0, 1e4, "m");
+    wr.number("ahead", w.ahead);
+    in_range(wr, "ahead", w.ahead, 0.0, 1e4, "m");
+    wr.number("shift", w.shift);
+    in_range(wr, "shift", w.shift, 1e-3, 1e4, "m");
+    wr.number("length", w.length);
+    in_range(wr, "length", w.length, 0.0, 1e6, "m");
+    wr.finish();
+  }
   if (const YAML::Node en = r.child("end")) {
     MapReader er(en, "solver.end", root.file());
     const bool has_time = er.has("time"), has_s = er.has("arc_length");

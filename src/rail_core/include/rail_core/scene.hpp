@@ -127,6 +127,16 @@ struct End {
   double value = 0.0;                    // [s] or [m]; arc length 0 in the file = track end
 };
 
+// The flexible track integrated over a window that moves with the vehicle (rail_track_node
+// doc/track_window.md): its cost per step no longer grows with the track's length. Off: the whole track.
+struct TrackWindow {
+  bool enabled = false;                  // off: the full-length FE track (the reference)
+  double behind = 5.0;                   // kept behind the last wheel [m]
+  double ahead = 5.0;                    // kept ahead of the first wheel [m]
+  double shift = 3.0;                    // distance of one move [m], whole sleeper bays
+  double length = 0.0;                   // window length [m]; 0 = the minimum the vehicle and margins need
+};
+
 struct Solver {
   double track_step = 2.0e-5;            // Newmark fixed step [s] (the paper's converged value)
   double vehicle_rtol = 1.0e-6;          // CVODE relative tolerance
@@ -137,6 +147,7 @@ struct Solver {
   double exchange_timeout = 10.0;        // longest wait for the peer during a run [s]
   double handshake_timeout = 30.0;       // longest wait for the peer to appear [s]
   End end;
+  TrackWindow track_window;              // flexible track only
 };
 
 struct Output {

@@ -13,6 +13,11 @@
 //    exactly the loads the rails carry. kExplicit: the contact on the rails of t_{k-1}, loads as computed
 //    (section 5.3 read literally; unstable with contact damping, see doc/cosim_track.md). Step 0
 //    evaluates the contact on the initial state and does not integrate.
+//  - flexible with solver.track_window.enabled: the FE track is a TrackWindow (track_window.hpp) that
+//    follows the wheels (follow() before each step from the frame's wheel arc lengths); d = d_g + w with
+//    only w integrated; the contact sees d_g + w. A window move renumbers the DOFs: the influence
+//    columns of the semi-implicit coupling are dropped when the move refactorised K_eff and kept when it
+//    reused it (same matrices and numbering); the rail arrays are rebuilt. A move allocates.
 //
 // Wheel centre: WheelState::p_wheel_in_world is taken as the contact code's wheel centre, the axle point
 // in the plane of the taping line (rail_contact/contact_detection.hpp); the returned moment is about that
@@ -37,6 +42,7 @@
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
+#include "rail_track_node/track_window.hpp"
 
 namespace rail {
 namespace track {
@@ -65,10 +71,22 @@ struct CosimTrackOptions {
   /// kSemiImplicit: an influence column K_eff^{-1} e_j is stored over the DOF window where it exceeds this
   /// fraction of its largest entry (the DOFs are numbered plane by plane along the track).
   double influence_tolerance = 1e-12;
+  /// With solver.track_window.enabled: the window settings the scene does not hold (entering_static,
+  /// condensed_ends, boundary_length, end_dashpots). behind, ahead, shift and length come from the scene,
+  /// dt from solver.track_step, include_gravity and track from the fields above. vehicle_length (m, first
+  /// to last wheel): 0 = the spread in x of the vehicle data file's load_points (wheel centres).
+  TrackWindowSettings window;
 };
 
-/// Why step() refused a frame (nothing was evaluated or integrated).
-enum class CosimStepStatus { kOk, kWrongWheelCount, kBadWheelId };
+/// Why step() refused a frame (nothing was evaluated or integrated; with a track window, the window may have
+/// moved, carrying its state).
+enum class CosimStepStatus {
+  kOk,
+  kWrongWheelCount,
+  kBadWheelId,
+  kWheelOutsideWindow,  ///< track window: a wheel's arc length is off the window (or not finite) after follow()
+  kWindowMoveFailed,    ///< track window: building the moved window threw (out of memory, factorisation)
+};
 
 /// Track side of the co-simulation: built once from a resolved scene, then advanced by step().
 class CosimTrack {
@@ -89,7 +107,17 @@ class CosimTrack {
   CosimStepStatus step(const rail::core::coupling::WheelStateFrame& states,
                        rail::core::coupling::WrenchFrame& out) noexcept;
 
-  bool flexible() const { return fe_ != nullptr; }
+  /// FE track integrated (flexible; full-length or windowed).
+  bool flexible() const { return fe_ != nullptr || window_ != nullptr; }
+  /// The moving window (flexible with solver.track_window.enabled), or nullptr.
+  const TrackWindow* trackWindow() const { return window_.get(); }
+  /// Track window: moves, moves that refactorised K_eff (the others reused it), influence-column caches
+  /// dropped (one per refactorising move, semi-implicit), wall time of all moves including the rail and
+  /// cache updates of this object (s). 0 without a window.
+  int windowMoves() const;
+  int windowRebuilds() const;
+  int influenceCacheDrops() const { return cache_drops_; }
+  double windowMoveSeconds() const { return window_move_s_; }
   int wheelCount() const { return static_cast<int>(result_.size()); }
   /// Newmark steps done since construction (always 0 with rigid_fe).
   long newmarkSteps() const { return newmark_steps_; }
@@ -108,9 +136,11 @@ class CosimTrack {
 
   const rail::contact::TrackGeometry& geometry() const { return *geometry_; }
   const rail::contact::WheelContactModel& contactModel() const { return *contact_model_; }
-  /// The FE track (flexible), or nullptr (rigid_fe: not built).
+  /// The full-length FE track (flexible without a window), or nullptr (rigid_fe, or a track window: see
+  /// trackWindow()).
   const SceneTrack* sceneTrack() const { return fe_.get(); }
-  /// Newmark state (flexible only; d, v, a over the free DOFs); nullptr with rigid_fe.
+  /// Newmark state (flexible only; d, v, a over the free DOFs); nullptr with rigid_fe. With a track
+  /// window: w, w', w'' over the current window (the total displacement is trackWindow()->staticState() + d).
   const NewmarkState* state() const;
   /// Rail nodal displacements and velocities of the FE state after the last step (t_k; the initial state
   /// before the first), for a contact evaluation on the current rails; nullptr with rigid_fe.
@@ -124,13 +154,16 @@ class CosimTrack {
   const rail::contact::WheelContactWork& contactWork(int id) const { return work_[static_cast<std::size_t>(id)]; }
 
   /// Adds a rail deflection section at track arc length s (m) (set-up only); returns its index. Throws
-  /// std::runtime_error when s is off the meshed rails (flexible) or off the track (rigid_fe).
+  /// std::runtime_error when s is off the meshed rails (flexible) or off the track (rigid_fe). With a
+  /// track window the section is the window's (TrackWindow::addSection: anywhere on the line).
   int addSection(double s);
-  int sectionCount() const { return static_cast<int>(sections_.size()); }
+  int sectionCount() const;
   /// Displacement (m) and small rotation (rad) of both rails' centre lines at section i from the current
-  /// state, track-frame components (x along, y left, z up). Zero with rigid_fe. No allocation.
+  /// state, track-frame components (x along, y left, z up). Zero with rigid_fe. With a track window:
+  /// TrackWindow::sectionDeflection (self-weight static value + w). No allocation.
   void sectionDeflection(int i, RailSectionDeflection& out) const;
-  /// Same for any displacement vector d over the FE free DOFs (flexible; e.g. a static solution).
+  /// Same for any displacement vector d over the FE free DOFs (flexible full-length; e.g. a static
+  /// solution). Throws std::runtime_error with a track window (its DOFs change at every move).
   void sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const;
 
  private:
@@ -143,6 +176,12 @@ class CosimTrack {
     std::array<RailProbe, 2> rail;
   };
   struct Implicit;  // semi-implicit coupling: influence cache and this step's contact links
+  NewmarkIntegrator& integ() noexcept { return window_ ? window_->integrator() : *integrator_; }
+  NewmarkState& st() noexcept { return window_ ? window_->mutableState() : state_; }
+  const NewmarkState& st() const noexcept { return window_ ? window_->state() : state_; }
+  const TrackMesh& feMesh() const noexcept { return window_ ? window_->mesh() : fe_->model.mesh; }
+  void buildRails();  // deformation_ and rail_dofs_ on feMesh() (set-up, window move)
+  void onWindowMove();  // after a move: rails, influence cache (allocates)
   void fillDeformation() noexcept;
   void fillPredictedDeformation() noexcept;
   void predictRail(int g, double& d_p, double& v_p) const noexcept;
@@ -156,7 +195,8 @@ class CosimTrack {
   void solveColumn(int dof, int& lo, int& len) noexcept;
 
   std::unique_ptr<rail::contact::TrackGeometry> rigid_geometry_;  // rigid_fe: the geometry alone
-  std::unique_ptr<SceneTrack> fe_;                                 // flexible: geometry + FE model
+  std::unique_ptr<SceneTrack> fe_;                                 // flexible full-length: geometry + FE model
+  std::unique_ptr<TrackWindow> window_;                            // flexible windowed
   const rail::contact::TrackGeometry* geometry_ = nullptr;
   rail::contact::WheelProfile wheel_profile_;
   rail::contact::ProfileCurve rail_profile_;
@@ -175,6 +215,9 @@ class CosimTrack {
   std::unique_ptr<Implicit> implicit_;
   long newmark_steps_ = 0;
   long frames_ = 0;
+  int seen_rebuilds_ = 0;      // window rebuilds already handled by onWindowMove
+  int cache_drops_ = 0;
+  double window_move_s_ = 0.0;
 };
 
 }  // namespace track

@@ -4,7 +4,10 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <exception>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -13,6 +16,7 @@
 #include <rail_contact/beam_shape.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <yaml-cpp/yaml.h>
 
 #include "rail_track_node/elements.hpp"
 
@@ -27,6 +31,38 @@ using rail::core::SceneError;
 namespace {
 constexpr int kNodeDofs = 6;
 using Vector12d = rc::Vector12d;
+
+// First to last wheel (m): the spread along x of the vehicle data file's load_points (wheel centres, world
+// positions of the vehicle at rest on straight track, x along the track).
+double vehicleWheelSpan(const Scene& scene) {
+  const std::string& file = scene.vehicle.data.path;
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file);
+  } catch (const std::exception& e) {
+    throw SceneError(scene.file + ": vehicle.data: " + file + ": " + e.what());
+  }
+  const YAML::Node points = root["load_points"];
+  if (!points || !points.IsSequence() || points.size() == 0)
+    throw SceneError(file + ": load_points: a non-empty list of wheel centres is needed for the track window's "
+                            "vehicle length");
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const YAML::Node pos = points[i]["position"];
+    double x = 0.0;
+    try {
+      if (!pos || !pos.IsSequence() || pos.size() != 3) throw std::runtime_error("not a list of 3 numbers");
+      x = pos[0].as<double>();
+    } catch (const std::exception& e) {
+      std::ostringstream os;
+      os << file << ":" << (points[i].Mark().line + 1) << ": load_points[" << i << "].position: " << e.what();
+      throw SceneError(os.str());
+    }
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+  return hi - lo;
+}
 }  // namespace
 
 // Semi-implicit coupling state (flexible, kSemiImplicit). Everything is sized at construction.
@@ -105,7 +141,23 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
 
   // Geometry (both cases), FE track (flexible only).
   double section_depth = rc::uic60::kCentroidDepth;  // rail section centre below the head top, as the vehicle
-  if (scene.runs_fe_integration()) {
+  if (scene.runs_fe_integration() && scene.solver.track_window.enabled) {
+    // Moving window: settings of the scene, vehicle length from the options or the vehicle data, first
+    // window around the vehicle's start position (leading wheelset at vehicle.start_arc_length).
+    TrackWindowSettings ws = options.window;
+    ws.behind = scene.solver.track_window.behind;
+    ws.ahead = scene.solver.track_window.ahead;
+    ws.shift = scene.solver.track_window.shift;
+    ws.length = scene.solver.track_window.length;
+    ws.dt = scene.solver.track_step;
+    ws.include_gravity = options.include_gravity;
+    ws.track = options.track;
+    if (!(ws.vehicle_length > 0.0)) ws.vehicle_length = vehicleWheelSpan(scene);
+    const double s_front = scene.vehicle.start_arc_length;
+    window_ = std::make_unique<TrackWindow>(scene, ws, s_front - ws.vehicle_length, s_front);
+    geometry_ = &window_->geometry();
+    section_depth = options.track.rail_height - window_->data().layout.rail_centroid_height;
+  } else if (scene.runs_fe_integration()) {
     fe_ = std::make_unique<SceneTrack>(buildSceneTrack(scene, options.track));
     geometry_ = &fe_->geometry;
     // The contact's section centre on the FE beam axis (the rail centroid node).
@@ -135,33 +187,22 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
   result_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactResult());
   seen_.assign(static_cast<std::size_t>(n_wheels), 0);
 
-  if (!fe_) return;
+  if (!fe_ && !window_) return;
 
-  // Newmark at the track step, from the static equilibrium under the track's own weight.
-  const TrackModel& model = fe_->model;
-  const TrackMesh& mesh = model.mesh;
-  integrator_ = std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity);
-  Eigen::VectorXd d0 = options.include_gravity ? staticGravityDeflection(model.system)
-                                               : Eigen::VectorXd::Zero(model.system.size());
-  state_ = integrator_->initialState(d0);
+  // Newmark at the track step, from the static equilibrium under the track's own weight (the window: w = 0
+  // on its self-weight state d_g, the same start).
+  if (fe_) {
+    const TrackModel& model = fe_->model;
+    integrator_ =
+        std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity);
+    Eigen::VectorXd d0 = options.include_gravity ? staticGravityDeflection(model.system)
+                                                 : Eigen::VectorXd::Zero(model.system.size());
+    state_ = integrator_->initialState(d0);
+  }
+  const TrackMesh& mesh = feMesh();
   // Two contacts per wheel, each spread over the 12 DOFs of one rail element.
   loads_ = std::make_unique<NodalLoads>(24 * n_wheels + 1);
-
-  // The rails as the contact search sees them: the FE rail beams, nodes equally spaced in s.
-  std::array<std::vector<rc::RailBeamElement>, 2> elements;
-  for (int r = 0; r < 2; ++r) {
-    for (int b : mesh.rail_beams[r]) {
-      rc::RailBeamElement e;
-      e.length = mesh.beams[static_cast<std::size_t>(b)].length;
-      e.R_local_to_world = mesh.beams[static_cast<std::size_t>(b)].R_local_to_world;
-      elements[r].push_back(e);
-    }
-    rail_dofs_[r].resize(6 * mesh.rail_nodes[r].size());
-    for (std::size_t k = 0; k < mesh.rail_nodes[r].size(); ++k)
-      for (int j = 0; j < 6; ++j) rail_dofs_[r][6 * k + j] = mesh.dofIndex(mesh.rail_nodes[r][k], j);
-  }
-  deformation_ = std::make_unique<rc::BeamRailDeformation>(
-      mesh.s_start, mesh.sleeper_spacing / mesh.rail_elements_between_sleepers, std::move(elements));
+  buildRails();
   fillDeformation();
 
   coupling_ = options.coupling;
@@ -178,7 +219,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
                                  " are not numbered consecutively along s (semi-implicit coupling needs it)");
   implicit_ = std::make_unique<Implicit>();
   Implicit& im = *implicit_;
-  im.n = model.system.size();
+  im.n = static_cast<int>(st().d.size());
   im.tolerance = options.influence_tolerance;
   im.unit.setZero(im.n);
   im.column.setZero(im.n);
@@ -219,7 +260,62 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
 
 CosimTrack::~CosimTrack() = default;
 
-const NewmarkState* CosimTrack::state() const { return fe_ ? &state_ : nullptr; }
+// The rails as the contact search sees them: the FE rail beams of feMesh(), nodes equally spaced in s. At a
+// window move the object is kept and its layout rebuilt in place.
+void CosimTrack::buildRails() {
+  const TrackMesh& mesh = feMesh();
+  std::array<std::vector<rc::RailBeamElement>, 2> elements;
+  for (int r = 0; r < 2; ++r) {
+    for (int b : mesh.rail_beams[r]) {
+      rc::RailBeamElement e;
+      e.length = mesh.beams[static_cast<std::size_t>(b)].length;
+      e.R_local_to_world = mesh.beams[static_cast<std::size_t>(b)].R_local_to_world;
+      elements[r].push_back(e);
+    }
+    rail_dofs_[r].resize(6 * mesh.rail_nodes[r].size());
+    for (std::size_t k = 0; k < mesh.rail_nodes[r].size(); ++k)
+      for (int j = 0; j < 6; ++j) rail_dofs_[r][6 * k + j] = mesh.dofIndex(mesh.rail_nodes[r][k], j);
+  }
+  rc::BeamRailDeformation rails(mesh.s_start, mesh.sleeper_spacing / mesh.rail_elements_between_sleepers,
+                                std::move(elements));
+  if (deformation_)
+    *deformation_ = std::move(rails);
+  else
+    deformation_ = std::make_unique<rc::BeamRailDeformation>(std::move(rails));
+}
+
+// After a window move (new mesh and DOF numbering): the rail layout, and the influence columns. A column
+// a_g = K_eff^{-1} e_g is keyed by the window-local rail node; a move that reused the matrices and the
+// factor (translated copy, straight line) keeps K_eff and the numbering, so every cached column is still
+// exact for its local node; a move that refactorised drops them all (they are solved again when a wheel
+// needs them). Allocates.
+void CosimTrack::onWindowMove() {
+  buildRails();
+  fillDeformation();
+  const int rebuilds = window_->stats().rebuilds;
+  if (implicit_ && rebuilds != seen_rebuilds_) {
+    Implicit& im = *implicit_;
+    std::fill(im.slot_rail.begin(), im.slot_rail.end(), -1);
+    std::fill(im.slot_node.begin(), im.slot_node.end(), -1);
+    std::fill(im.slot_used.begin(), im.slot_used.end(), -1);
+    const TrackMesh& mesh = feMesh();
+    for (int r = 0; r < 2; ++r) im.node_slot[r].assign(mesh.rail_nodes[r].size(), -1);
+    const int n = static_cast<int>(st().d.size());
+    if (n != im.n) {  // a window against a line end may hold other DOFs: resize the scratch
+      im.n = n;
+      im.unit.setZero(n);
+      im.column.setZero(n);
+      if (im.window > n) im.window = n;
+    }
+    ++cache_drops_;
+  }
+  seen_rebuilds_ = rebuilds;
+}
+
+int CosimTrack::windowMoves() const { return window_ ? window_->stats().shifts : 0; }
+int CosimTrack::windowRebuilds() const { return window_ ? window_->stats().rebuilds : 0; }
+
+const NewmarkState* CosimTrack::state() const { return (fe_ || window_) ? &st() : nullptr; }
 long CosimTrack::influenceSolves() const { return implicit_ ? implicit_->solves : 0; }
 long CosimTrack::influenceClipped() const { return implicit_ ? implicit_->clipped : 0; }
 int CosimTrack::influenceWindow() const { return implicit_ ? implicit_->window : 0; }
@@ -227,6 +323,9 @@ long CosimTrack::newtonIterations() const { return implicit_ ? implicit_->newton
 long CosimTrack::newtonUnconverged() const { return implicit_ ? implicit_->unconverged : 0; }
 
 void CosimTrack::fillDeformation() noexcept {
+  const NewmarkState& state = st();
+  // Window: the rails carry d = d_g + w (self-weight static state + integrated part).
+  const Eigen::VectorXd* d_g = window_ ? &window_->staticState() : nullptr;
   for (int r = 0; r < 2; ++r) {
     const rc::RailSide side = r == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight;
     double* q = deformation_->nodalDisplacements(side);
@@ -234,20 +333,23 @@ void CosimTrack::fillDeformation() noexcept {
     const std::vector<int>& dofs = rail_dofs_[r];
     for (std::size_t i = 0; i < dofs.size(); ++i) {
       const int g = dofs[i];
-      q[i] = g >= 0 ? state_.d(g) : 0.0;
-      qd[i] = g >= 0 ? state_.v(g) : 0.0;
+      q[i] = g >= 0 ? state.d(g) + (d_g ? (*d_g)(g) : 0.0) : 0.0;
+      qd[i] = g >= 0 ? state.v(g) : 0.0;
     }
   }
 }
 
 // Rails predicted at t_k = t_{k-1} + h for the contact geometry: d_p = d + h v, v_p = v. (Holding the
-// acceleration too gives the same forces; Newmark's accelerations jump after a load step.)
+// acceleration too gives the same forces; Newmark's accelerations jump after a load step.) With a window
+// this is the integrated part w only (d_g is constant within a step).
 void CosimTrack::predictRail(int g, double& d_p, double& v_p) const noexcept {
-  v_p = state_.v(g);
-  d_p = state_.d(g) + integrator_->dt() * v_p;
+  const NewmarkState& state = st();
+  v_p = state.v(g);
+  d_p = state.d(g) + (window_ ? window_->dt() : integrator_->dt()) * v_p;
 }
 
 void CosimTrack::fillPredictedDeformation() noexcept {
+  const Eigen::VectorXd* d_g = window_ ? &window_->staticState() : nullptr;
   for (int r = 0; r < 2; ++r) {
     const rc::RailSide side = r == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight;
     double* q = deformation_->nodalDisplacements(side);
@@ -257,6 +359,7 @@ void CosimTrack::fillPredictedDeformation() noexcept {
       const int g = dofs[i];
       if (g >= 0) {
         predictRail(g, q[i], qd[i]);
+        if (d_g) q[i] += (*d_g)(g);
       } else {
         q[i] = qd[i] = 0.0;
       }
@@ -285,21 +388,22 @@ static rc::WheelState contactWheelState(const cc::WheelState& in) {
 // (flexible) and the wheel-centre wrenches.
 void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
   const int n = wheelCount();
-  if (fe_) loads_->clear();
+  const bool fe = fe_ || window_;
+  if (fe) loads_->clear();
   for (int i = 0; i < n; ++i) {
     const cc::WheelState& in = states.wheels[static_cast<std::size_t>(i)];
     const std::size_t id = in.id;
     const rc::RailSide side = (in.id % 2 == 0) ? rc::RailSide::kLeft : rc::RailSide::kRight;
     const rc::WheelState ws = contactWheelState(in);
     rc::WheelContactResult& res = result_[id];
-    if (fe_) {
+    if (fe) {
       contact_model_->evaluate(ws, side, *geometry_, *deformation_, work_[id], res);
       const int rail = side == rc::RailSide::kLeft ? kLeftRail : kRightRail;
       for (int c = 0; c < 2; ++c) {
         const rc::ContactPointResult& cp = res.contact[c];
         if (!cp.active) continue;
         // Eq. 15 for this contact about its own section centre, then eq. 16 onto the element's nodes.
-        addRailPointLoad(fe_->model.mesh, rail, cp.s_r, cp.rail_wrench.force_in_world,
+        addRailPointLoad(feMesh(), rail, cp.s_r, cp.rail_wrench.force_in_world,
                          cp.rail_wrench.moment_in_world, *loads_);
       }
     } else {
@@ -320,12 +424,32 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
     if (id >= static_cast<std::uint32_t>(n) || seen_[id]) return CosimStepStatus::kBadWheelId;
     seen_[id] = 1;
   }
+  if (window_) {
+    // The window follows the wheels; a move allocates (and is timed); every wheel must then be on it.
+    double s_min = std::numeric_limits<double>::infinity(), s_max = -s_min;
+    for (int i = 0; i < n; ++i) {
+      const double s = states.wheels[static_cast<std::size_t>(i)].arc_length;
+      if (!std::isfinite(s)) return CosimStepStatus::kWheelOutsideWindow;
+      s_min = std::min(s_min, s);
+      s_max = std::max(s_max, s);
+    }
+    try {
+      const auto t0 = std::chrono::steady_clock::now();
+      if (window_->follow(s_min, s_max)) {
+        onWindowMove();
+        window_move_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      }
+    } catch (const std::exception&) {
+      return CosimStepStatus::kWindowMoveFailed;
+    }
+    if (!window_->covers(s_min, s_max)) return CosimStepStatus::kWheelOutsideWindow;
+  }
   out.count = static_cast<std::uint32_t>(n);
   out.step = states.step;
   out.time = states.time;
   out.scene_hash = states.scene_hash;
 
-  const bool integrate = fe_ && states.step > 0;
+  const bool integrate = (fe_ || window_) && states.step > 0;
   // The rails the contact sees: t_{k-1} (explicit, and step 0) or predicted at t_k.
   if (integrate && coupling_ != CosimCoupling::kExplicit) fillPredictedDeformation();
   evaluateContacts(states, out);
@@ -333,14 +457,15 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
   if (integrate) {
     switch (coupling_) {
       case CosimCoupling::kExplicit:
-        integrator_->step(state_, *loads_);
+        integ().step(st(), *loads_);
         break;
       case CosimCoupling::kSemiImplicit:
-        integrator_->solveStep(state_, *loads_);
+        integ().solveStep(st(), *loads_);
         implicitCorrection(states, out);
-        integrator_->completeStep(state_);
+        integ().completeStep(st());
         break;
     }
+    if (window_) window_->finishStep();  // the window's own rail arrays and step count
     ++newmark_steps_;
     fillDeformation();
   }
@@ -353,7 +478,7 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
 void CosimTrack::solveColumn(int dof, int& lo, int& len) noexcept {
   Implicit& im = *implicit_;
   im.unit(dof) = 1.0;
-  integrator_->solveEffective(im.unit, im.column);
+  integ().solveEffective(im.unit, im.column);
   im.unit(dof) = 0.0;
   ++im.solves;
   const double cut = im.tolerance * im.column.cwiseAbs().maxCoeff();
@@ -387,7 +512,7 @@ int CosimTrack::ensureNodeColumns(int rail, int node) noexcept {
   im.slot_node[static_cast<std::size_t>(slot)] = node;
   im.slot_used[static_cast<std::size_t>(slot)] = frames_;
   cached = slot;
-  const TrackMesh& mesh = fe_->model.mesh;
+  const TrackMesh& mesh = feMesh();
   const int mesh_node = mesh.rail_nodes[rail][static_cast<std::size_t>(node)];
   for (int j = 0; j < kNodeDofs; ++j) {
     const std::size_t col = static_cast<std::size_t>(slot) * kNodeDofs + static_cast<std::size_t>(j);
@@ -457,10 +582,11 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
 // Jacobian by differences). d, the contact results and the wheel wrenches take the final forces.
 void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
   Implicit& im = *implicit_;
-  const TrackMesh& mesh = fe_->model.mesh;
-  const double h = integrator_->dt();
+  const TrackMesh& mesh = feMesh();
+  const NewmarkState& state = st();
+  const double h = integ().dt();
   const rc::NormalDampingParams& damping = contact_model_->options().damping;
-  Eigen::VectorXd& d_new = integrator_->stepDisplacement();
+  Eigen::VectorXd& d_new = integ().stepDisplacement();
   im.links.clear();
   const int n = wheelCount();
   for (int i = 0; i < n; ++i) {
@@ -527,7 +653,7 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
         predictRail(g, d_p, v_p);
         L.u_p += L.W.row(j).transpose() * d_p;
         L.u0 += L.W.row(j).transpose() * d_new(g);
-        L.base_dot += L.W.row(j).transpose() * ((2.0 / h) * state_.d(g) + state_.v(g) + v_p);
+        L.base_dot += L.W.row(j).transpose() * ((2.0 / h) * state.d(g) + state.v(g) + v_p);
       }
       L.f_p = -cp.force_on_wheel_in_world;
       L.f = L.f_p;
@@ -708,7 +834,12 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
   }
 }
 
+int CosimTrack::sectionCount() const {
+  return window_ ? window_->sectionCount() : static_cast<int>(sections_.size());
+}
+
 int CosimTrack::addSection(double s) {
+  if (window_) return window_->addSection(s);
   Section sec;
   sec.s = s;
   if (!fe_) {
@@ -757,10 +888,17 @@ int CosimTrack::addSection(double s) {
 }
 
 void CosimTrack::sectionDeflection(int i, RailSectionDeflection& out) const {
+  if (window_) {
+    window_->sectionDeflection(i, out);
+    return;
+  }
   sectionDeflection(i, state_.d, out);
 }
 
 void CosimTrack::sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const {
+  if (window_)
+    throw std::runtime_error("CosimTrack::sectionDeflection(i, d, out): not available with a track window (its "
+                             "DOFs change at every move); use sectionDeflection(i, out)");
   const Section& sec = sections_[static_cast<std::size_t>(i)];
   out.s = sec.s;
   for (int r = 0; r < 2; ++r) {

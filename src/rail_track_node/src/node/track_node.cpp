@@ -35,6 +35,7 @@
 #include <rail_core/ros/contact_point_message.hpp>
 #include <rail_core/ros/cosim_transport.hpp>
 #include "rail_track_node/cosim_track.hpp"
+#include "rail_track_node/track_window.hpp"
 
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
@@ -442,16 +443,25 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     ROS_INFO("%s: recording the track's outputs to %s", me.c_str(), bag_path.c_str());
   }
   // rviz markers of the deflected rails and sleepers (effects.rviz_markers, flexible track only: the rigid
-  // FE track has no mesh), at ~marker_rate.
+  // FE track has no mesh), at ~marker_rate. On a moving window the markers follow the window's mesh (rebuilt
+  // after each move) and show its total displacement d_g + w.
   ros::Publisher marker_pub;
   std::unique_ptr<TrackMarkers> markers;
+  const rt::TrackWindow* window = track->trackWindow();
+  int marker_window_moves = -1;
+  Eigen::VectorXd d_total;  // window: d_g + w, sized at each rebuild
+  const std::string marker_frame = pnh.param<std::string>("frame_id", "world");
+  const double marker_scale = pnh.param("marker_scale", 200.0);
+  const double marker_colour_range = pnh.param("marker_colour_range", 1.0e-3);
   double marker_period = 0.0, next_marker = 0.0;
   if (scene.effects.rviz_markers && track->flexible()) {
     marker_pub = nh.advertise<visualization_msgs::MarkerArray>("/markers", 2, true);
-    markers.reset(new TrackMarkers(track->sceneTrack()->model, pnh.param<std::string>("frame_id", "world"),
-                                   pnh.param("marker_scale", 200.0), pnh.param("marker_colour_range", 1.0e-3)));
+    if (window == nullptr) {
+      markers.reset(new TrackMarkers(track->sceneTrack()->model, marker_frame, marker_scale, marker_colour_range));
+    }
     marker_period = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
   }
+  const bool draw_markers = scene.effects.rviz_markers && track->flexible();
   rail_msgs::ContactPoints points_msg;
   points_msg.header.frame_id = "world";
   points_msg.points.resize(2 * static_cast<std::size_t>(track->wheelCount()));
@@ -491,9 +501,19 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         bag.write("/rail_deflection", stamp, m);
       }
     }
-    if (markers && stamp.toSec() + 1e-12 >= next_marker) {
+    if (draw_markers && stamp.toSec() + 1e-12 >= next_marker) {
       next_marker += marker_period;
-      marker_pub.publish(markers->update(track->state()->d, stamp));
+      if (window == nullptr) {
+        marker_pub.publish(markers->update(track->state()->d, stamp));
+      } else {
+        if (track->windowMoves() != marker_window_moves) {  // a new mesh: rebuild (allocates; rare)
+          marker_window_moves = track->windowMoves();
+          markers.reset(new TrackMarkers(window->model(), marker_frame, marker_scale, marker_colour_range));
+          d_total.resize(window->staticState().size());
+        }
+        d_total = window->staticState() + window->state().d;
+        marker_pub.publish(markers->update(d_total, stamp));
+      }
     }
   };
 
@@ -540,7 +560,11 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     if (st != rt::CosimStepStatus::kOk) {
       ROS_FATAL("%s: step %llu: the vehicle's frame was refused (%s)", me.c_str(),
                 static_cast<unsigned long long>(coupling.states().step),
-                st == rt::CosimStepStatus::kWrongWheelCount ? "wrong wheel count" : "bad wheel id");
+                st == rt::CosimStepStatus::kWrongWheelCount      ? "wrong wheel count"
+                : st == rt::CosimStepStatus::kBadWheelId        ? "bad wheel id"
+                : st == rt::CosimStepStatus::kWheelOutsideWindow ? "a wheel is outside the track window "
+                                                                   "(solver.track_window: margins too small?)"
+                                                                 : "the track window could not move");
       exit_code = kExitPeerRefused;
       break;
     }
@@ -568,6 +592,11 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   cost.add(CostProfile::kPublish, -cost.seconds(CostProfile::kBagWrite));  // bag writes are inside publishing
   cost.set_count("track_steps", static_cast<double>(coupling.next_step()));
   cost.set_count("newmark_steps", static_cast<double>(track->newmarkSteps()));
+  if (window != nullptr) {
+    cost.set_count("window_moves", track->windowMoves());
+    cost.set_count("window_rebuilds", track->windowRebuilds());
+    cost.set_count("window_move_ms_total", 1e3 * track->windowMoveSeconds());
+  }
   ROS_INFO_STREAM(cost.to_text(me, wall, t_end));
   if (bag.isOpen()) {
     bag.close();

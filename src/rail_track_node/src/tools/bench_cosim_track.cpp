@@ -5,7 +5,12 @@
 // time, the mean after the first integrated step and that first step's time (steps where wheels reach new
 // rail nodes solve their influence columns: all of them in the first step), and for the semi-implicit
 // coupling the influence solves and Newton iterations per step.
-//   bench_cosim_track [steps]   (default 500)
+// Then the moving track window (solver.track_window enabled, the scene's margins): the same steps against
+// the full-length semi-implicit run, and two longer windowed runs (window_steps each) that cross window
+// moves, one on the straight (moves reuse the factor) and one on the R = 500 m curve (every move
+// refactorises): the median step without moves, the move steps (move + the influence columns solved
+// again) and the moves' own time.
+//   bench_cosim_track [steps] [window_steps]   (defaults 500 and 20000; window_steps 0 skips the window runs)
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -16,6 +21,7 @@
 #include <vector>
 
 #include <rail_contact/profile.hpp>
+#include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_track_node/cosim_track.hpp"
@@ -33,35 +39,92 @@ static std::string configDir() {
 #endif
 }
 
-static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::CosimCoupling coupling, int steps) {
+// The coach's 8 wheels at step k: wheelsets at s_front - offsets along the design track (track frame, cant
+// included), rolling at V, 50 micrometres into the rails.
+static void fillFrame(const rail::core::Scene& scene, const rc::TrackGeometry& geo, double s_front0, int k,
+                      cc::WheelStateFrame& frame) {
+  const double V = scene.vehicle.speed, r0 = scene.vehicle.nominal_radius, h = scene.solver.track_step;
+  const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::flangeBackY(rc::makeS1002());
+  const double offsets[4] = {0.0, 2.7, 19.0, 21.7};  // paper coach (Table 3) wheelsets behind the leading one, m
+  frame.count = 8;
+  frame.step = static_cast<std::uint64_t>(k);
+  frame.time = k * h;
+  rc::TrackPoint tp;
+  for (int i = 0; i < 8; ++i) {
+    cc::WheelState& w = frame.wheels[static_cast<std::size_t>(i)];
+    w.id = static_cast<std::uint32_t>(i);
+    const double s = s_front0 - offsets[i / 2] + V * k * h;
+    geo.centre(s, tp);
+    w.arc_length = s;
+    w.p_wheel_in_world = tp.p_center_in_world +
+                         tp.R_track_to_world * Eigen::Vector3d(0.0, i % 2 == 0 ? taping_y : -taping_y, r0 - 5e-5);
+    w.q_wheelset_to_world = Eigen::Quaterniond(tp.R_track_to_world);
+    w.v_wheel_in_world = V * tp.R_track_to_world.col(0);
+    w.omega_wheelset_in_world = tp.R_track_to_world.col(1) * (V / r0) + tp.R_track_to_world.col(2) * (V * tp.curvature);
+  }
+}
+
+// Windowed semi-implicit run of `steps` steps from s_front0: per-step times split into move steps and the
+// others.
+static void runWindow(rail::core::Scene scene, double s_front0, int steps, const char* label) {
+  scene.effects.track_model = rail::core::TrackModel::kFlexible;
+  scene.solver.track_window.enabled = true;
+  scene.vehicle.start_arc_length = s_front0;
+  const Clock::time_point t0 = Clock::now();
+  rt::CosimTrack track(scene);
+  const double build = std::chrono::duration<double>(Clock::now() - t0).count();
+  cc::WheelStateFrame frame(8);
+  cc::WrenchFrame out(8);
+  std::vector<double> plain, moving;
+  plain.reserve(static_cast<std::size_t>(steps));
+  long solves_after_first = 0;
+  int bad = 0;
+  for (int k = 0; k <= steps; ++k) {
+    fillFrame(scene, track.geometry(), s_front0, k, frame);
+    const int moves = track.windowMoves();
+    const long solves = track.influenceSolves();
+    const Clock::time_point a = Clock::now();
+    if (track.step(frame, out) != rt::CosimStepStatus::kOk) ++bad;
+    const double dt = std::chrono::duration<double>(Clock::now() - a).count();
+    if (k > 1) solves_after_first += track.influenceSolves() - solves;
+    if (k == 0) continue;
+    (track.windowMoves() != moves ? moving : plain).push_back(dt);
+  }
+  double total = 0.0;
+  for (double t : plain) total += t;
+  for (double t : moving) total += t;
+  std::sort(plain.begin(), plain.end());
+  std::sort(moving.begin(), moving.end());
+  const rt::TrackWindow& w = *track.trackWindow();
+  std::printf("%-22s %s: window %.1f m (%d free DOFs), build %.2f s, %d steps (%.2f m): step median %.3f ms, "
+              "p99 %.3f ms, mean over all steps %.3f ms; %d moves (%d refactorised), move steps median %.1f ms "
+              "(max %.1f ms), moves alone %.1f ms each; %.3f influence solves per step after the first, %.2f Newton "
+              "iterations per step; %d refused\n",
+              "window semi-implicit", label, w.sEnd() - w.sBegin(), static_cast<int>(w.state().d.size()), build, steps,
+              scene.vehicle.speed * steps * scene.solver.track_step, 1e3 * plain[plain.size() / 2],
+              1e3 * plain[plain.size() * 99 / 100], 1e3 * total / steps, track.windowMoves(), track.windowRebuilds(),
+              moving.empty() ? 0.0 : 1e3 * moving[moving.size() / 2], moving.empty() ? 0.0 : 1e3 * moving.back(),
+              track.windowMoves() > 0 ? 1e3 * track.windowMoveSeconds() / track.windowMoves() : 0.0,
+              static_cast<double>(solves_after_first) / std::max(1, steps - 1),
+              static_cast<double>(track.newtonIterations()) / steps, bad);
+}
+
+static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::CosimCoupling coupling, int steps,
+                bool window = false) {
   scene.effects.track_model = model;
+  scene.solver.track_window.enabled = window;
   const Clock::time_point t0 = Clock::now();
   rt::CosimTrackOptions options;
   options.coupling = coupling;
   rt::CosimTrack track(scene, options);
   const double build = std::chrono::duration<double>(Clock::now() - t0).count();
-  const double V = scene.vehicle.speed, r0 = scene.vehicle.nominal_radius, h = scene.solver.track_step;
-  const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::flangeBackY(rc::makeS1002());
-  const double offsets[4] = {0.0, 2.7, 16.4, 19.1};  // paper coach wheelsets behind the leading one, m
   cc::WheelStateFrame frame(8);
   cc::WrenchFrame out(8);
   std::vector<double> times;
   times.reserve(static_cast<std::size_t>(steps));
   double fz = 0.0;
   for (int k = 0; k <= steps; ++k) {
-    frame.count = 8;
-    frame.step = static_cast<std::uint64_t>(k);
-    frame.time = k * h;
-    for (int i = 0; i < 8; ++i) {
-      cc::WheelState& w = frame.wheels[static_cast<std::size_t>(i)];
-      w.id = static_cast<std::uint32_t>(i);
-      const double s = scene.vehicle.start_arc_length - offsets[i / 2] + V * k * h;
-      w.arc_length = s;
-      w.p_wheel_in_world = Eigen::Vector3d(s, i % 2 == 0 ? taping_y : -taping_y, r0 - 5e-5);
-      w.q_wheelset_to_world = Eigen::Quaterniond::Identity();
-      w.v_wheel_in_world = Eigen::Vector3d(V, 0.0, 0.0);
-      w.omega_wheelset_in_world = Eigen::Vector3d(0.0, V / r0, 0.0);
-    }
+    fillFrame(scene, track.geometry(), scene.vehicle.start_arc_length, k, frame);
     const Clock::time_point a = Clock::now();
     track.step(frame, out);
     const double dt = std::chrono::duration<double>(Clock::now() - a).count();
@@ -74,8 +137,10 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
   mean /= static_cast<double>(times.size() - 1);
   const double first = times.front();
   std::sort(times.begin(), times.end());
-  const int dofs = track.sceneTrack() ? track.sceneTrack()->model.system.size() : 0;
+  const int dofs = track.state() ? static_cast<int>(track.state()->d.size()) : 0;
   const char* name = model == rail::core::TrackModel::kRigidFe        ? "rigid_fe"
+                     : window ? (coupling == rt::CosimCoupling::kSemiImplicit ? "window semi-implicit"
+                                                                              : "window explicit")
                      : coupling == rt::CosimCoupling::kSemiImplicit ? "flexible semi-implicit"
                                                                      : "flexible explicit";
   std::printf("%-22s free DOFs %6d  build %.2f s  step median %.3f ms  mean %.3f ms  p90 %.3f ms  p99 %.3f ms  "
@@ -90,9 +155,17 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
 
 int main(int argc, char** argv) {
   const int steps = argc > 1 ? std::max(10, std::atoi(argv[1])) : 500;
+  const int window_steps = argc > 2 ? std::max(0, std::atoi(argv[2])) : 20000;
   const rail::core::Scene scene = rail::core::load_scene_file(configDir() + "/scenes/paper_demo.yaml");
   run(scene, rail::core::TrackModel::kRigidFe, rt::CosimCoupling::kExplicit, steps);
   run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kSemiImplicit, steps);
   run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kExplicit, steps);
+  run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kSemiImplicit, steps, true);
+  if (window_steps > 0) {
+    std::printf("track window: %.1f m behind, %.1f m ahead, shift %.1f m (scene defaults unless set)\n",
+                scene.solver.track_window.behind, scene.solver.track_window.ahead, scene.solver.track_window.shift);
+    runWindow(scene, scene.vehicle.start_arc_length, window_steps, "straight from 25 m");
+    runWindow(scene, 260.0, window_steps, "R 500 m curve from 260 m");
+  }
   return 0;
 }
