@@ -309,19 +309,28 @@ def check_rails_outward_in_curve(runs, t_discard):
     for s, d in flex.deflection.items():
         if _section_kind(scene, s) not in ("circular", "transition"):
             continue
-        m = after(d["t"], t_discard)
+        # The vehicle's effect: from just before the first wheelset reaches the section to just after the
+        # last one leaves it, relative to the rails before it came (on a canted curve the track's own
+        # weight already shifts both rails toward the inside).
+        passing = [p for p in passing_times(flex.kinematics, s) if p is not None]
+        if not passing:
+            continue
+        t = d["t"]
+        m = after(t, t_discard) & (t >= min(passing) - 0.1) & (t <= max(passing) + 0.1)
         if not m.any():
             continue
+        before = int(np.argmax(t >= max(t_discard, min(passing) - 0.1)))
         n += 1
-        yl, yr = _peak_signed(d["left"][m, 1]), _peak_signed(d["right"][m, 1])
+        yl = _peak_signed(d["left"][m, 1] - d["left"][before, 1])
+        yr = _peak_signed(d["right"][m, 1] - d["right"][before, 1])
         ok = yl * outward > 0 and yr * outward > 0
         ok_all &= ok
         outer_more = abs(yr if sides[0] == "right" else yl) > abs(yl if sides[0] == "right" else yr)
-        parts.append("at %.0f m peak lateral displacement left %+.3f mm, right %+.3f mm (outside = %s y); the "
+        parts.append("at %.0f m peak lateral displacement under the vehicle left %+.3f mm, right %+.3f mm (outside = %s y); the "
                      "outer rail moves %s" % (s, yl * 1e3, yr * 1e3, "-" if outward < 0 else "+",
                                               "more" if outer_more else "less"))
     if n == 0:
-        return Check(title, paper, "no deflection section in a curved segment", NOT_AVAILABLE)
+        return Check(title, paper, "no deflection section in a curved segment that the vehicle passes", NOT_AVAILABLE)
     return Check(title, paper, "; ".join(parts), AGREES if ok_all else DISAGREES)
 
 
