@@ -9,6 +9,7 @@
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <rosbag/bag.h>
+#include <rosbag/view.h>
 #include <rosgraph_msgs/Clock.h>
 #include <visualization_msgs/MarkerArray.h>
 
@@ -31,6 +32,7 @@
 #include <rail_msgs/Handshake.h>
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/RailDeflection.h>
+#include <rail_msgs/WheelStates.h>
 
 #include <rail_core/ros/contact_point_message.hpp>
 #include <rail_core/ros/cosim_transport.hpp>
@@ -383,12 +385,120 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   return exit_code;
 }
 
+
+// Replay: the wheel states recorded in a bag (/wheel_states, e.g. by the vehicle node of any earlier run)
+// drive the track side alone. The recorded states (at the run's output.rate) are interpolated to each
+// track step t_k = k h (positions, velocities, angular velocities and arc lengths linearly; orientations
+// by slerp) and handed to the track as the vehicle's frames, stamped with this scene's hash; the wrenches
+// go nowhere. The bag is read directly rather than played: the track may run far slower than real time
+// and a played topic would drop frames.
+class ReplayTransport final : public rail::core::coupling::FrameTransport {
+  using Result = rail::core::coupling::Result;
+  using Status = rail::core::coupling::Status;
+
+ public:
+  // Reads every /wheel_states message of `bag_path`. Throws std::runtime_error naming the bag and what is
+  // missing or inconsistent.
+  ReplayTransport(const std::string& bag_path, const Scene& scene, int wheel_count)
+      : h_(scene.solver.track_step), hash_(scene.hash) {
+    rosbag::Bag bag;
+    try {
+      bag.open(bag_path, rosbag::bagmode::Read);
+    } catch (const std::exception& e) {
+      throw std::runtime_error(bag_path + ": cannot read the replay bag: " + e.what());
+    }
+    rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{"/wheel_states"}));
+    for (const rosbag::MessageInstance& m : view) {
+      const rail_msgs::WheelStates::ConstPtr msg = m.instantiate<rail_msgs::WheelStates>();
+      if (!msg) continue;
+      if (static_cast<int>(msg->wheels.size()) != wheel_count) {
+        throw std::runtime_error(bag_path + ": /wheel_states at t = " + std::to_string(msg->header.stamp.toSec()) +
+                                 " s has " + std::to_string(msg->wheels.size()) + " wheels, the scene's vehicle " +
+                                 std::to_string(wheel_count));
+      }
+      const double t = msg->header.stamp.toSec() <= 1e-6 ? 0.0 : msg->header.stamp.toSec();
+      if (!times_.empty() && t <= times_.back()) continue;  // repeated output instant
+      times_.push_back(t);
+      rail::core::coupling::WheelStateFrame f(wheel_count);
+      f.count = static_cast<std::uint32_t>(wheel_count);
+      for (int i = 0; i < wheel_count; ++i) {
+        const rail_msgs::WheelState& w = msg->wheels[static_cast<std::size_t>(i)];
+        auto& o = f.wheels[static_cast<std::size_t>(i)];
+        o.id = w.wheel_id;
+        o.arc_length = w.arc_length;
+        o.p_wheel_in_world = Eigen::Vector3d(w.position.x, w.position.y, w.position.z);
+        o.q_wheelset_to_world = Eigen::Quaterniond(w.orientation.w, w.orientation.x, w.orientation.y, w.orientation.z);
+        o.v_wheel_in_world = Eigen::Vector3d(w.linear_velocity.x, w.linear_velocity.y, w.linear_velocity.z);
+        o.omega_wheelset_in_world = Eigen::Vector3d(w.angular_velocity.x, w.angular_velocity.y, w.angular_velocity.z);
+      }
+      frames_.push_back(std::move(f));
+    }
+    if (frames_.empty()) throw std::runtime_error(bag_path + ": no /wheel_states in the bag (needed to replay a run)");
+    if (frames_.size() < 2) throw std::runtime_error(bag_path + ": /wheel_states has one message; a replay needs two");
+    // The scene's end time (if it has one) shortens the replay.
+    t_stop_ = scene.solver.end.kind == EndKind::kTime ? std::min(times_.back(), scene.solver.end.value) : times_.back();
+    if (times_.front() > 0.5 * h_) {
+      throw std::runtime_error(bag_path + ": /wheel_states starts at t = " + std::to_string(times_.front()) +
+                               " s; a replay starts at t = 0");
+    }
+  }
+  double end_time() const { return t_stop_; }
+  rail::core::coupling::Role role() const override { return rail::core::coupling::Role::kTrack; }
+  Result send_states(const rail::core::coupling::WheelStateFrame&, rail::core::coupling::Deadline) override {
+    return {Status::kError, "replay: the track end does not send states"};
+  }
+  Result receive_wrenches(rail::core::coupling::WrenchFrame&, rail::core::coupling::Deadline) override {
+    return {Status::kError, "replay: the track end does not receive wrenches"};
+  }
+  // States of the next step k, interpolated at k h; kPeerClosed after the bag's last instant.
+  Result receive_states(rail::core::coupling::WheelStateFrame& out, rail::core::coupling::Deadline) override {
+    const double t = static_cast<double>(step_) * h_;
+    if (t > t_stop_ + 1e-9 * h_) return {Status::kPeerClosed, "end of the replayed run"};
+    while (seg_ + 2 < times_.size() && times_[seg_ + 1] < t) ++seg_;
+    const double t0 = times_[seg_], t1 = times_[seg_ + 1];
+    const double a = std::min(1.0, std::max(0.0, (t - t0) / (t1 - t0)));
+    const auto& f0 = frames_[seg_];
+    const auto& f1 = frames_[seg_ + 1];
+    out.count = f0.count;
+    for (std::uint32_t i = 0; i < f0.count; ++i) {
+      const auto& w0 = f0.wheels[i];
+      const auto& w1 = f1.wheels[i];
+      auto& o = out.wheels[i];
+      o.id = w0.id;
+      o.arc_length = (1 - a) * w0.arc_length + a * w1.arc_length;
+      o.p_wheel_in_world = (1 - a) * w0.p_wheel_in_world + a * w1.p_wheel_in_world;
+      o.q_wheelset_to_world = w0.q_wheelset_to_world.slerp(a, w1.q_wheelset_to_world);
+      o.v_wheel_in_world = (1 - a) * w0.v_wheel_in_world + a * w1.v_wheel_in_world;
+      o.omega_wheelset_in_world = (1 - a) * w0.omega_wheelset_in_world + a * w1.omega_wheelset_in_world;
+    }
+    out.step = step_;
+    out.time = t;
+    out.scene_hash = hash_;
+    ++step_;
+    return {};
+  }
+  Result send_wrenches(const rail::core::coupling::WrenchFrame&, rail::core::coupling::Deadline) override {
+    return {};
+  }
+  void close() override {}
+
+ private:
+  double h_;
+  double t_stop_ = 0.0;
+  std::uint64_t hash_;
+  std::vector<double> times_;
+  std::vector<rail::core::coupling::WheelStateFrame> frames_;
+  std::size_t seg_ = 0;
+  std::uint64_t step_ = 0;
+};
+
 // The track side of the co-simulation after the handshake: opens the scene's transport, answers every
 // track step with the CosimTrack until the vehicle closes, and publishes /contact_points (world) and
 // /rail_deflection (track frame, output.deflection_sections) at output.rate. The vehicle node records the
 // run's bag (output.bag); what only the track has (contact_points, rail_deflection, when output.topics
 // names them) goes to a companion bag beside it, <stem>.track.bag. peer: the vehicle node's name.
-int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer) {
+int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer,
+             const std::string& replay_bag = "") {
   namespace cc = rail::core::coupling;
   const std::string me = ros::this_node::getName();
   CostProfile cost;
@@ -412,8 +522,19 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
   }
   std::unique_ptr<cc::FrameTransport> transport;
+  const bool replay = !replay_bag.empty();
+  if (replay) {
+    try {
+      auto r = std::make_unique<ReplayTransport>(replay_bag, scene, track->wheelCount());
+      ROS_INFO("%s: replaying the wheel states of %s (t = 0 .. %.4f s)", me.c_str(), replay_bag.c_str(), r->end_time());
+      transport = std::move(r);
+    } catch (const std::exception& e) {
+      ROS_FATAL("%s: %s", me.c_str(), e.what());
+      return kExitBadInput;
+    }
+  }
   try {
-    transport = railsim_node::MakeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &g_stop);
+    if (!replay) transport = railsim_node::MakeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &g_stop);
   } catch (const cc::CouplingError& e) {
     ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), to_string(scene.solver.transport),
               peer.c_str(), e.what());
@@ -537,8 +658,8 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       // The vehicle closes after the step that reaches solver.end; closing (or dying) earlier, with a time
       // end, is a peer that went away.
       const double t_last = coupling.next_step() == 0 ? -1.0 : static_cast<double>(coupling.next_step() - 1) * h;
-      if (coupling.next_step() == 0 ||
-          (scene.solver.end.kind == EndKind::kTime && t_last < scene.solver.end.value - 0.5 * h)) {
+      if (!replay && (coupling.next_step() == 0 ||
+                      (scene.solver.end.kind == EndKind::kTime && t_last < scene.solver.end.value - 0.5 * h))) {
         ROS_FATAL("%s: the vehicle node %s went away after step %lld (t = %.6f s), before solver.end: %s",
                   me.c_str(), peer.c_str(), static_cast<long long>(coupling.next_step()) - 1, t_last,
                   r.message.c_str());
@@ -631,6 +752,14 @@ int main(int argc, char** argv) {
   }
   if (pnh.param("validate_only", false)) return kExitOk;
   try {
+    const std::string replay_bag = pnh.param<std::string>("replay_bag", "");
+    if (!replay_bag.empty()) {
+      if (!scene.has_vehicle) {
+        ROS_FATAL("%s: ~replay_bag: the scene has no vehicle to replay", ros::this_node::getName().c_str());
+        return kExitBadInput;
+      }
+      return runCosim(nh, pnh, scene, "(replay)", replay_bag);
+    }
     if (scene.has_vehicle) {
       std::string peer;
       const int rc = runHandshake(nh, scene, peer);
