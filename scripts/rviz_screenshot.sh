@@ -25,13 +25,14 @@ Xvfb "$display" -screen 0 1280x800x24 >/dev/null 2>&1 &
 xvfb=$!
 export DISPLAY="$display"
 tmp="$(mktemp -d)"
-roslaunch --disable-title -p "$port" "$ROOT/launch/cosim.launch" scene:="$scene" track_model:="$model" rviz:=true \
-  output_dir:="$tmp" record:=false >"$tmp/launch.log" 2>&1 &
+# In a session of its own, so that the cleanup reaches roslaunch's master and nodes as one group.
+setsid roslaunch --disable-title -p "$port" "$ROOT/launch/cosim.launch" scene:="$scene" track_model:="$model" \
+  rviz:=true output_dir:="$tmp" record:=false >"$tmp/launch.log" 2>&1 &
 launch=$!
 cleanup() {
-  kill -INT "$launch" 2>/dev/null || true
-  for _ in $(seq 1 50); do kill -0 "$launch" 2>/dev/null || break; sleep 0.2; done
-  kill -9 "$launch" 2>/dev/null || true
+  kill -INT -- "-$launch" 2>/dev/null || true
+  for _ in $(seq 1 50); do kill -0 -- "-$launch" 2>/dev/null || break; sleep 0.2; done
+  kill -9 -- "-$launch" 2>/dev/null || true
   kill "$xvfb" 2>/dev/null || true
   rm -rf "$tmp"
 }
