@@ -216,5 +216,12 @@ class TrackWindow {
 /// Distance (m) from the first to the last load of a moving-load set (largest minus smallest offset).
 double movingLoadsLength(const rail::core::MovingLoads& loads);
 
+/// The rails of `mesh` as the contact search sees them: one BeamRailDeformation element per FE rail beam
+/// and, per rail, the free DOF of (rail node k, dof j) at 6 k + j. An existing deformation object is kept
+/// and its layout rebuilt in place (set-up and window moves; allocates). Shared by TrackWindow and
+/// CosimTrack.
+void buildRailLayout(const TrackMesh& mesh, std::array<std::vector<int>, 2>& rail_dofs,
+                     std::unique_ptr<rail::contact::BeamRailDeformation>& deformation);
+
 }  // namespace track
 }  // namespace rail

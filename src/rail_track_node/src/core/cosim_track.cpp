@@ -262,27 +262,7 @@ CosimTrack::~CosimTrack() = default;
 
 // The rails as the contact search sees them: the FE rail beams of feMesh(), nodes equally spaced in s. At a
 // window move the object is kept and its layout rebuilt in place.
-void CosimTrack::buildRails() {
-  const TrackMesh& mesh = feMesh();
-  std::array<std::vector<rc::RailBeamElement>, 2> elements;
-  for (int r = 0; r < 2; ++r) {
-    for (int b : mesh.rail_beams[r]) {
-      rc::RailBeamElement e;
-      e.length = mesh.beams[static_cast<std::size_t>(b)].length;
-      e.R_local_to_world = mesh.beams[static_cast<std::size_t>(b)].R_local_to_world;
-      elements[r].push_back(e);
-    }
-    rail_dofs_[r].resize(6 * mesh.rail_nodes[r].size());
-    for (std::size_t k = 0; k < mesh.rail_nodes[r].size(); ++k)
-      for (int j = 0; j < 6; ++j) rail_dofs_[r][6 * k + j] = mesh.dofIndex(mesh.rail_nodes[r][k], j);
-  }
-  rc::BeamRailDeformation rails(mesh.s_start, mesh.sleeper_spacing / mesh.rail_elements_between_sleepers,
-                                std::move(elements));
-  if (deformation_)
-    *deformation_ = std::move(rails);
-  else
-    deformation_ = std::make_unique<rc::BeamRailDeformation>(std::move(rails));
-}
+void CosimTrack::buildRails() { buildRailLayout(feMesh(), rail_dofs_, deformation_); }
 
 // After a window move (new mesh and DOF numbering): the rail layout, and the influence columns. A column
 // a_g = K_eff^{-1} e_g is keyed by the window-local rail node; a move that reused the matrices and the

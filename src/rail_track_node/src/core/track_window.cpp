@@ -494,8 +494,11 @@ double TrackWindow::dynamicEnergy() const {
   return e;
 }
 
-void TrackWindow::setRails() {
-  const TrackMesh& mesh = window_->model.mesh;
+// The rails of `mesh` as the contact search sees them: one BeamRailDeformation element per FE rail beam
+// (nodes equally spaced in s) and, per rail, the free DOF of (rail node k, dof j) at 6 k + j. An existing
+// deformation object is kept and its layout rebuilt in place (set-up and window moves; allocates).
+void buildRailLayout(const TrackMesh& mesh, std::array<std::vector<int>, 2>& rail_dofs,
+                     std::unique_ptr<rc::BeamRailDeformation>& deformation) {
   std::array<std::vector<rc::RailBeamElement>, 2> elements;
   for (int r = 0; r < 2; ++r) {
     for (int b : mesh.rail_beams[r]) {
@@ -504,17 +507,19 @@ void TrackWindow::setRails() {
       e.R_local_to_world = mesh.beams[static_cast<std::size_t>(b)].R_local_to_world;
       elements[r].push_back(e);
     }
-    rail_dofs_[r].resize(6 * mesh.rail_nodes[r].size());
+    rail_dofs[r].resize(6 * mesh.rail_nodes[r].size());
     for (std::size_t k = 0; k < mesh.rail_nodes[r].size(); ++k)
-      for (int j = 0; j < 6; ++j) rail_dofs_[r][6 * k + j] = mesh.dofIndex(mesh.rail_nodes[r][k], j);
+      for (int j = 0; j < 6; ++j) rail_dofs[r][6 * k + j] = mesh.dofIndex(mesh.rail_nodes[r][k], j);
   }
   rc::BeamRailDeformation rails(mesh.s_start, mesh.sleeper_spacing / mesh.rail_elements_between_sleepers,
                                 std::move(elements));
-  if (deformation_)
-    *deformation_ = std::move(rails);
+  if (deformation)
+    *deformation = std::move(rails);
   else
-    deformation_ = std::make_unique<rc::BeamRailDeformation>(std::move(rails));
+    deformation = std::make_unique<rc::BeamRailDeformation>(std::move(rails));
 }
+
+void TrackWindow::setRails() { buildRailLayout(window_->model.mesh, rail_dofs_, deformation_); }
 
 void TrackWindow::fillRails() noexcept {
   const Eigen::VectorXd& d_g = window_->d_static;
