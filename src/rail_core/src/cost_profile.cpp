@@ -55,7 +55,9 @@ std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, do
     << "  absorbing_ends: " << on_off(e.absorbing_ends) << "\n"
     << "  rail_deflection_output: " << on_off(e.rail_deflection_output) << "\n"
     << "  contact_point_output: " << on_off(e.contact_point_output) << "\n"
-    << "  rviz_markers: " << on_off(e.rviz_markers) << "\n";
+    << "  rviz_markers: " << on_off(e.rviz_markers) << "\n"
+    << "  floor_acceleration_output: " << on_off(e.floor_acceleration_output) << "\n"
+    << "  pad_force_output: " << on_off(e.pad_force_output) << "\n";
   return o.str();
 }
 

@@ -211,6 +211,8 @@ std::string to_yaml(const Scene& s) {
   kv(e, "rail_deflection_output", f.rail_deflection_output);
   kv(e, "contact_point_output", f.contact_point_output);
   kv(e, "rviz_markers", f.rviz_markers);
+  kv(e, "floor_acceleration_output", f.floor_acceleration_output);
+  kv(e, "pad_force_output", f.pad_force_output);
   e << YAML::EndMap;
 
   const Solver& v = s.solver;
@@ -242,6 +244,7 @@ std::string to_yaml(const Scene& s) {
   e << YAML::Key << "deflection_sections" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (double d : o.deflection_sections) e << format_double(d);
   e << YAML::EndSeq;
+  num(e, "pad_force_margin", o.pad_force_margin);
   e << YAML::EndMap;
 
   e << YAML::EndMap;
@@ -314,6 +317,8 @@ std::string describe(const Scene& s, Role role) {
   flag("rail_deflection_output", f.rail_deflection_output && s.runs_fe_integration());
   flag("contact_point_output", f.contact_point_output && s.has_vehicle);
   flag("rviz_markers", f.rviz_markers);
+  flag("floor_acceleration_output", f.floor_acceleration_output && s.has_vehicle);
+  flag("pad_force_output", f.pad_force_output && s.effects.track_model == TrackModel::kFlexible);
   o << "effects on: " << detail::join(on) << "\n";
   o << "effects off: " << (off.empty() ? "none" : detail::join(off)) << "\n";
   const Solver& v = s.solver;

@@ -21,7 +21,7 @@ using detail::MapReader;
 
 const std::vector<std::string> kKnownTopics = {
     "wheel_states", "contact_wrenches", "contact_points", "rail_deflection", "wheelset_kinematics",
-    "markers",      "tf",               "clock"};
+    "markers",      "tf",               "clock",          "floor_accelerations", "pad_forces"};
 
 // Built-in profiles (everything else names a profile file).
 static const std::vector<std::string> kBuiltinRailProfiles = {"uic60"};
@@ -334,6 +334,8 @@ void read_effects(MapReader& root, Scene& s) {
   r.boolean("rail_deflection_output", e.rail_deflection_output);
   r.boolean("contact_point_output", e.contact_point_output);
   r.boolean("rviz_markers", e.rviz_markers);
+  r.boolean("floor_acceleration_output", e.floor_acceleration_output);
+  r.boolean("pad_force_output", e.pad_force_output);
   r.finish();
 }
 
@@ -416,6 +418,8 @@ void read_output(MapReader& root, Scene& s) {
                               format_double(s.track.end_arc_length()) + "] m" + got(sec));
     }
   }
+  r.number("pad_force_margin", o.pad_force_margin);
+  in_range(r, "pad_force_margin", o.pad_force_margin, 0.0, 100.0, "m");
   r.finish();
 }
 
@@ -467,13 +471,20 @@ void check_consistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     if (t == "rail_deflection" && !s.effects.rail_deflection_output) needs = "effects.rail_deflection_output: true";
     if (t == "contact_points" && !s.effects.contact_point_output) needs = "effects.contact_point_output: true";
     if (t == "markers" && !s.effects.rviz_markers) needs = "effects.rviz_markers: true";
+    if (t == "floor_accelerations" && !s.effects.floor_acceleration_output)
+      needs = "effects.floor_acceleration_output: true";
+    if (t == "pad_forces" && !s.effects.pad_force_output) needs = "effects.pad_force_output: true";
     if (needs) fail_at(file, key, "'" + t + "' is recorded only with " + needs, 0);
     if (t == "rail_deflection" && s.effects.track_model == TrackModel::kRigid) {
       fail_at(file, key,
               "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
               "move: zeros)", 0);
     }
-    if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches") && !s.has_vehicle) {
+    if (t == "pad_forces" && s.effects.track_model != TrackModel::kFlexible) {
+      fail_at(file, key, "'pad_forces' needs the integrated FE track: effects.track_model flexible", 0);
+    }
+    if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches" ||
+         t == "floor_accelerations") && !s.has_vehicle) {
       fail_at(file, key, "'" + t + "' needs a vehicle in the scene", 0);
     }
   }

@@ -153,8 +153,8 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        "solver, track, vehicle) (line 21)"},
       {"misspelt effect", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  flange_contat: true"),
        "scene.yaml: effects.flange_contat: unknown key (known here: absorbing_ends, contact_point_output, "
-       "creep_law, flange_contact, irregularities, rail_deflection_output, rviz_markers, spin_creepage, "
-       "track_damping, track_model) (line 16)"},
+       "creep_law, flange_contact, floor_acceleration_output, irregularities, pad_force_output, "
+       "rail_deflection_output, rviz_markers, spin_creepage, track_damping, track_model) (line 16)"},
       {"missing field", replaced(kBase, "  speed: 30.0\n", ""),
        "scene.yaml: vehicle.speed: missing (required) (line 10)"},
       {"wrong type", replaced(kBase, "speed: 30.0", "speed: fast"),
@@ -191,7 +191,18 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        "rigid_fe (rails that do not move: zeros)"},
       {"unknown topic", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_state]"),
        "scene.yaml: output.topics[0]: unknown topic 'wheel_state' (known: wheel_states, contact_wrenches, "
-       "contact_points, rail_deflection, wheelset_kinematics, markers, tf, clock) (line 20)"},
+       "contact_points, rail_deflection, wheelset_kinematics, markers, tf, clock, floor_accelerations, pad_forces) "
+       "(line 20)"},
+      {"floor accelerations recorded with the effect off",
+       replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, floor_accelerations]"),
+       "scene.yaml: output.topics[1]: 'floor_accelerations' is recorded only with "
+       "effects.floor_acceleration_output: true"},
+      {"pad forces without the integrated FE track",
+       replaced(replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, pad_forces]"),
+                "track_model: rigid_fe", "track_model: rigid_fe\n  pad_force_output: true"),
+       "scene.yaml: output.topics[1]: 'pad_forces' needs the integrated FE track: effects.track_model flexible"},
+      {"negative pad force margin", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states]\n  pad_force_margin: -1"),
+       "scene.yaml: output.pad_force_margin: must be between 0.0 and 100.0 m, got -1.0 (line 21)"},
       {"vehicle off the track", replaced(kBase, "start_arc_length: 25.0", "start_arc_length: 150.0"),
        "scene.yaml: vehicle.start_arc_length: must lie on the track [0.0, 150.0) m, got 150.0 (line 11)"},
       {"irregularities on without a source", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  irregularities: true"),

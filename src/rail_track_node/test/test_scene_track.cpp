@@ -3,12 +3,15 @@
 // deflects the rail as the static solution does.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <vector>
 #include <string>
 
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_track_node/scene_track.hpp"
+#include "rail_track_node/pad_forces.hpp"
 #include "rail_track_node/track_simulator.hpp"
 
 namespace rt = rail::track;
@@ -198,4 +201,58 @@ TEST(TrackSimulator, LoadsAreStaticallyEquivalent) {
   EXPECT_NEAR(sum.x(), 0.0, 1e-6);
   EXPECT_NEAR(sum.y(), 20000.0 - 10000.0, 1e-6);
   EXPECT_NEAR(sum.z(), -150000.0, 1e-6);
+}
+
+// Pad forces (PadForceProbe) in the static equilibrium under gravity and a 100 kN load on each rail: the
+// rails rest on the pads alone (the end dashpots carry nothing at rest), so the pads' vertical forces on
+// the sleepers add up to the load plus the rails' weight (the z part of f_g at the rail nodes), to the
+// static solve's round-off (1e-6 of the total); each rail's largest pad force is at the sleeper nearest the
+// load (at s = 9.0 m, a sleeper: 9.0 = 15 x 0.6) and no pad pulls on its sleeper there.
+TEST(PadForceProbe, PadsCarryTheLoadAndTheRailWeightAtRest) {
+  const Scene sc = scene(kStraight24, kOneLoad, "  track_damping: true");
+  const rt::SceneTrack t = rt::buildSceneTrack(sc);
+  rt::SimulatorSettings set;
+  set.dt = 1e-3;
+  set.t_end = 0.0;
+  set.loads = sc.moving_loads;
+  set.rail_height = t.rail_height;
+  rt::TrackSimulator sim(t.model, set);
+  const rt::TrackMesh& m = t.model.mesh;
+  double rail_weight = 0.0;
+  for (int r = 0; r < 2; ++r) {
+    for (int node : m.rail_nodes[static_cast<std::size_t>(r)]) {
+      const int i = m.dofIndex(node, 2);
+      if (i >= 0) rail_weight -= t.model.system.f_gravity(i);
+    }
+  }
+  EXPECT_GT(rail_weight, 0.0);
+  rt::PadForceProbe probe(m);
+  ASSERT_EQ(probe.sleeperCount(), m.n_sleepers);
+  std::vector<rt::PadForceSample> out(static_cast<std::size_t>(m.n_sleepers));
+  const int n = probe.evaluate(m, t.geometry, sim.state().d, sim.state().v, nullptr, -1.0, 1e9, out.data(),
+                               m.n_sleepers);
+  ASSERT_EQ(n, m.n_sleepers);
+  double sum_z = 0.0;
+  std::array<int, 2> k_max{-1, -1};
+  std::array<double, 2> f_max{0.0, 0.0};
+  for (int k = 0; k < n; ++k) {
+    for (int r = 0; r < 2; ++r) {
+      const double fz = out[static_cast<std::size_t>(k)].force_in_track[static_cast<std::size_t>(r)].z();
+      sum_z += fz;
+      if (-fz > f_max[static_cast<std::size_t>(r)]) f_max[static_cast<std::size_t>(r)] = -fz, k_max[static_cast<std::size_t>(r)] = k;
+    }
+  }
+  const double expected = -(2.0 * 100000.0 + rail_weight);
+  EXPECT_NEAR(sum_z, expected, 1e-6 * std::abs(expected));
+  for (int r = 0; r < 2; ++r) {
+    EXPECT_NEAR(out[static_cast<std::size_t>(k_max[static_cast<std::size_t>(r)])].s, 9.0, 1e-9) << "rail " << r;
+    // Under the load the rail is pressed down: its displacement at that sleeper is negative.
+    EXPECT_LT(out[static_cast<std::size_t>(k_max[static_cast<std::size_t>(r)])].rail_displacement_in_track[static_cast<std::size_t>(r)].z(), 0.0);
+  }
+  // A sub-range returns the sleepers inside it only, in order of s.
+  const int n_sub = probe.evaluate(m, t.geometry, sim.state().d, sim.state().v, nullptr, 8.95, 10.25, out.data(),
+                                   m.n_sleepers);
+  ASSERT_EQ(n_sub, 3);  // 9.0, 9.6, 10.2
+  EXPECT_NEAR(out[0].s, 9.0, 1e-9);
+  EXPECT_NEAR(out[2].s, 10.2, 1e-9);
 }

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rail_vehicle_node/multibody_dynamics.hpp"
+#include "rail_vehicle_node/rigid_math.hpp"
 #include "rail_vehicle_node/vehicle_simulator.hpp"
 
 #ifndef RAILSIM_CONFIG_DIR
@@ -295,6 +296,90 @@ TEST(VehicleSimulator, TightCurveWithFlangeContactConvergesWithTheTolerance) {
   EXPECT_GT(run.flange_force, 0.0);
   EXPECT_NEAR(run.flange_force, fine.flange_force, 0.02 * fine.flange_force);
   EXPECT_LT(static_cast<double>(run.counters.rhs_evals), 1.3 * static_cast<double>(run.counters.steps));
+}
+
+// Velocity in the world of a body point s' (body frame) from the state: r_dot + A (omega' x s').
+Vector3 PointVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y, int body,
+                      const Vector3& s_in_body) {
+  const Matrix3 A = RotationFromEulerParameters(y.segment<4>(VehicleModel::EulerOffset(body)));
+  return y.segment<3>(model.VelocityOffset(body)) +
+         A * y.segment<3>(model.AngularVelocityOffset(body)).cross(s_in_body);
+}
+
+TEST(VehicleSimulator, FloorAccelerometersReadTheDerivativeOfTheFloorVelocityMinusGravity) {
+  // The coach starts in the tight curve on the chord placement, so the carbody sways and rolls on its
+  // suspension. Each floor point's reading f (effects.floor_acceleration_output) must be A^T (a_P - g)
+  // with a_P the derivative of the point's velocity: checked against a central difference of the velocity
+  // from the state at 1 ms spacing. The difference's truncation error (h^2/6 times the third derivative of
+  // the velocity, carbody motions below ~20 Hz: < 1e-4 m/s^2 per m/s^2) and the integrator's velocity error
+  // over 2h (atol 1e-8 m/s / 2e-3 s) are far below the tolerance of 1e-3 m/s^2 + 0.5 % of |a|.
+  core::Scene scene = core::load_scene_file(kScenes + "tight_curve.yaml");
+  scene.vehicle.start_arc_length = 145.0;
+  scene.effects.floor_acceleration_output = true;
+  scene.solver.end.kind = core::EndKind::kTime;
+  scene.solver.end.value = 0.3;
+  VehicleSimulator sim(scene);
+  const auto& points = sim.model().measurement_points();
+  ASSERT_EQ(points.size(), 3u);
+  ASSERT_EQ(points[1].name, "floor_centre");
+  const double h = 1e-3;
+  std::vector<std::vector<Vector3>> v(points.size()), f_in_world(points.size());
+  RunStatus status = RunStatus::kRunning;
+  for (int i = 1; status == RunStatus::kRunning; ++i) {
+    status = sim.AdvanceTo(std::min(0.3, h * i));
+    ASSERT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
+    for (std::size_t m = 0; m < points.size(); ++m) {
+      const int b = points[m].body;
+      v[m].push_back(PointVelocity(sim.model(), sim.state(), b, points[m].s_in_body));
+      const Matrix3 A = RotationFromEulerParameters(sim.state().segment<4>(VehicleModel::EulerOffset(b)));
+      f_in_world[m].push_back(A * sim.measurements()[m].specific_force_in_body);
+    }
+  }
+  double largest_lateral = 0.0;
+  for (std::size_t m = 0; m < points.size(); ++m) {
+    for (std::size_t k = 50; k + 1 < v[m].size(); ++k) {  // after the first 50 ms of settling onto the curve
+      const Vector3 a_fd = (v[m][k + 1] - v[m][k - 1]) / (2.0 * h);
+      const Vector3 a_read = f_in_world[m][k] + sim.model().gravity();
+      ASSERT_NEAR((a_read - a_fd).norm(), 0.0, 1e-3 + 5e-3 * a_fd.norm())
+          << points[m].name << " at t = " << h * static_cast<double>(k + 1) << " s: read " << a_read.transpose()
+          << ", difference " << a_fd.transpose();
+      largest_lateral = std::max(largest_lateral, std::abs(a_fd.y()));
+    }
+  }
+  // The check means something only if the carbody moves: sway of the order of 0.1-1 m/s^2 in the curve.
+  EXPECT_GT(largest_lateral, 0.05);
+}
+
+TEST(VehicleSimulator, FloorAccelerationsAreNotComputedWhenTheEffectIsOff) {
+  VehicleSimulator sim(StraightScene(30.5556, 0.05));
+  ASSERT_EQ(sim.measurements().size(), 3u);
+  ASSERT_EQ(sim.AdvanceTo(0.05), RunStatus::kFinished) << sim.message();
+  for (const MeasurementOutput& m : sim.measurements()) EXPECT_EQ(m.specific_force_in_body.norm(), 0.0);
+}
+
+TEST(VehicleSimulator, FloorAccelerationsNeedMeasurementPointsInTheDataFile) {
+  core::Scene scene = StraightScene(30.5556, 0.05);
+  scene.effects.floor_acceleration_output = true;
+  auto build = [](VehicleModel& model) {
+    // One wheelset alone, no measurement point.
+    RigidBody ws;
+    ws.name = "ws1";
+    ws.mass = 1800.0;
+    ws.inertia_in_body = Vector3(900.0, 10.0, 900.0).asDiagonal();
+    ws.r_reference = Vector3(0.0, 0.0, 0.445);
+    const int b = model.AddBody(ws);
+    model.AddLoadPointAtWorld("ws1_left", b, Vector3(0.0, 0.8665, 0.445));
+    model.AddLoadPointAtWorld("ws1_right", b, Vector3(0.0, -0.8665, 0.445));
+  };
+  scene.vehicle.wheelsets = 1;
+  try {
+    VehicleSimulator sim(scene, build);
+    FAIL() << "built without measurement points";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("effects.floor_acceleration_output is on but the vehicle data file"),
+              std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("measurement_points"), std::string::npos) << e.what();
+  }
 }
 
 // About 10 s of wall time (1 s simulated with flange contact, see doc/simulator.md).

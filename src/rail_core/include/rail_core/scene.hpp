@@ -120,6 +120,8 @@ struct Effects {
   bool rail_deflection_output = true;    // publish rail deflections at output.deflection_sections
   bool contact_point_output = true;      // publish contact points
   bool rviz_markers = false;             // publish visualization markers
+  bool floor_acceleration_output = false;  // carbody floor accelerations at the vehicle's measurement points
+  bool pad_force_output = false;         // rail-pad forces and rail displacements under the train (flexible)
 };
 
 struct End {
@@ -155,6 +157,7 @@ struct Output {
   double rate = 1000.0;                  // publishing rate of the outputs [Hz]
   std::vector<std::string> topics;       // which topics go to the bag (see kKnownTopics)
   std::vector<double> deflection_sections;  // arc lengths where rail deflections are published [m]
+  double pad_force_margin = 3.0;         // pad forces from this far behind the last wheelset to ahead of the first [m]
 };
 
 // The resolved scene.

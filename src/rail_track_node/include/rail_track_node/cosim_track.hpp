@@ -40,6 +40,7 @@
 #include <rail_core/scene.hpp>
 
 #include "rail_track_node/newmark.hpp"
+#include "rail_track_node/pad_forces.hpp"
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
 #include "rail_track_node/track_window.hpp"
@@ -162,6 +163,13 @@ class CosimTrack {
   /// state, track-frame components (x along, y left, z up). Zero with rigid_fe. With a track window:
   /// TrackWindow::sectionDeflection (self-weight static value + w). No allocation.
   void sectionDeflection(int i, RailSectionDeflection& out) const;
+  /// Pad forces and rail displacements at the sleepers with s in [s_from, s_to] (m) from the current
+  /// state (flexible; with a track window the sleepers inside it, total displacement d_g + w), at most
+  /// capacity of them into out; returns how many (0 with rigid_fe). The pads are indexed on the first call
+  /// and again after a window move (allocates; rare); otherwise no allocation.
+  int padForces(double s_from, double s_to, PadForceSample* out, int capacity) const;
+  /// Sleepers of the integrated mesh (full track or window; 0 with rigid_fe): enough capacity for padForces.
+  int sleeperCount() const;
   /// Same for any displacement vector d over the FE free DOFs (flexible full-length; e.g. a static
   /// solution). Throws std::runtime_error with a track window (its DOFs change at every move).
   void sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const;
@@ -197,6 +205,8 @@ class CosimTrack {
   std::unique_ptr<rail::contact::TrackGeometry> rigid_geometry_;  // rigid_fe: the geometry alone
   std::unique_ptr<SceneTrack> fe_;                                 // flexible full-length: geometry + FE model
   std::unique_ptr<TrackWindow> window_;                            // flexible windowed
+  mutable std::unique_ptr<PadForceProbe> pad_probe_;               // padForces(): pads of the current mesh
+  mutable int pad_probe_moves_ = -1;                               // window moves when it was built
   const rail::contact::TrackGeometry* geometry_ = nullptr;
   rail::contact::WheelProfile wheel_profile_;
   rail::contact::ProfileCurve rail_profile_;

@@ -295,6 +295,23 @@ void CosimTrack::onWindowMove() {
 int CosimTrack::windowMoves() const { return window_ ? window_->stats().shifts : 0; }
 int CosimTrack::windowRebuilds() const { return window_ ? window_->stats().rebuilds : 0; }
 
+int CosimTrack::padForces(double s_from, double s_to, PadForceSample* out, int capacity) const {
+  if (!flexible()) return 0;
+  const TrackMesh& mesh = window_ ? window_->mesh() : fe_->model.mesh;
+  if (!pad_probe_ || pad_probe_moves_ != windowMoves()) {
+    pad_probe_.reset(new PadForceProbe(mesh));
+    pad_probe_moves_ = windowMoves();
+  }
+  const NewmarkState& s = st();
+  return pad_probe_->evaluate(mesh, *geometry_, s.d, s.v, window_ ? &window_->staticState() : nullptr, s_from, s_to,
+                              out, capacity);
+}
+
+int CosimTrack::sleeperCount() const {
+  if (!flexible()) return 0;
+  return window_ ? window_->mesh().n_sleepers : fe_->model.mesh.n_sleepers;
+}
+
 const NewmarkState* CosimTrack::state() const { return (fe_ || window_) ? &st() : nullptr; }
 long CosimTrack::influenceSolves() const { return implicit_ ? implicit_->solves : 0; }
 long CosimTrack::influenceClipped() const { return implicit_ ? implicit_->clipped : 0; }

@@ -32,6 +32,7 @@
 #include <rail_msgs/Handshake.h>
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/RailDeflection.h>
+#include <rail_msgs/RailPadForces.h>
 #include <rail_msgs/WheelStates.h>
 
 #include <rail_core/ros/contact_point_message.hpp>
@@ -555,7 +556,21 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   std::string bag_path;
   const bool rec_points = scene.effects.contact_point_output && contains(scene.output.topics, "contact_points");
   const bool rec_deflection = deflections && contains(scene.output.topics, "rail_deflection");
-  if (!scene.output.bag.empty() && (rec_points || rec_deflection)) {
+  // Pad forces under the train (effects.pad_force_output, flexible track): the sleepers from
+  // output.pad_force_margin behind the rearmost wheel to as far ahead of the foremost one.
+  const bool pads = scene.effects.pad_force_output && track->flexible();
+  const bool rec_pads = pads && contains(scene.output.topics, "pad_forces");
+  ros::Publisher pads_pub;
+  if (pads) pads_pub = nh.advertise<rail_msgs::RailPadForces>("/pad_forces", 100);
+  std::vector<rt::PadForceSample> pad_samples(pads ? static_cast<std::size_t>(track->sleeperCount()) : 0u);
+  rail_msgs::RailPadForces pads_msg;
+  pads_msg.header.frame_id = "track";
+  for (auto* v : {&pads_msg.left_pad_force, &pads_msg.right_pad_force, &pads_msg.left_rail_displacement,
+                  &pads_msg.right_rail_displacement}) {
+    v->reserve(pad_samples.size());
+  }
+  pads_msg.arc_length.reserve(pad_samples.size());
+  if (!scene.output.bag.empty() && (rec_points || rec_deflection || rec_pads)) {
     bag_path = bagPath(pnh, scene.output.bag);
     const std::size_t dot = bag_path.rfind(".bag");
     bag_path = (dot != std::string::npos && dot + 4 == bag_path.size() ? bag_path.substr(0, dot) : bag_path) +
@@ -590,7 +605,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   for (rail_msgs::RailDeflection& m : deflection_msgs) m.header.frame_id = "track";
   rt::RailSectionDeflection deflection;
 
-  auto publish = [&](const ros::Time& stamp) {
+  auto publish = [&](const ros::Time& stamp, const cc::WheelStateFrame& states) {
     CostProfile::Scope timing(cost, CostProfile::kPublish);
     if (scene.effects.contact_point_output) {
       points_msg.header.stamp = stamp;
@@ -620,6 +635,35 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       if (rec_deflection && bag.isOpen()) {
         CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
         bag.write("/rail_deflection", stamp, m);
+      }
+    }
+    if (pads) {
+      double s_min = 1e300, s_max = -1e300;
+      for (std::uint32_t i = 0; i < states.count; ++i) {
+        s_min = std::min(s_min, states.wheels[i].arc_length);
+        s_max = std::max(s_max, states.wheels[i].arc_length);
+      }
+      const int n = track->padForces(s_min - scene.output.pad_force_margin, s_max + scene.output.pad_force_margin,
+                                     pad_samples.data(), static_cast<int>(pad_samples.size()));
+      pads_msg.header.stamp = stamp;
+      const auto size = static_cast<std::size_t>(n);  // within the reserved capacity: no allocation
+      pads_msg.arc_length.resize(size);
+      pads_msg.left_pad_force.resize(size);
+      pads_msg.right_pad_force.resize(size);
+      pads_msg.left_rail_displacement.resize(size);
+      pads_msg.right_rail_displacement.resize(size);
+      for (std::size_t k = 0; k < size; ++k) {
+        const rt::PadForceSample& p = pad_samples[k];
+        pads_msg.arc_length[k] = p.s;
+        fill(pads_msg.left_pad_force[k], p.force_in_track[rt::kLeftRail]);
+        fill(pads_msg.right_pad_force[k], p.force_in_track[rt::kRightRail]);
+        fill(pads_msg.left_rail_displacement[k], p.rail_displacement_in_track[rt::kLeftRail]);
+        fill(pads_msg.right_rail_displacement[k], p.rail_displacement_in_track[rt::kRightRail]);
+      }
+      pads_pub.publish(pads_msg);
+      if (rec_pads && bag.isOpen()) {
+        CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
+        bag.write("/pad_forces", stamp, pads_msg);
       }
     }
     if (draw_markers && stamp.toSec() + 1e-12 >= next_marker) {
@@ -698,7 +742,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
     const double t = static_cast<double>(coupling.states().step) * h;
     if (t + 1e-9 * h >= static_cast<double>(n_out) * period) {
-      publish(ros::Time(std::max(t, 1e-9)));
+      publish(ros::Time(std::max(t, 1e-9)), coupling.states());
       ++n_out;
     }
     if (g_stop || !ros::ok()) {

@@ -8,6 +8,7 @@
 //   bodies:      - {name, mass, centre_of_mass: [x,y,z], inertia: [Jxx, Jyy, Jzz],
 //                   products_of_inertia: [Jxy, Jxz, Jyz] (optional)}
 //   load_points: - {name, body, position}                   e.g. wheel centres
+//   measurement_points: - {name, body, position}            reported motion only (floor accelerometers)
 //   joints:      - {name, type: revolute|spherical|fixed, body_i, body_j (or "ground"), position,
 //                   axis (revolute)}
 //   forces:      - {name, type: bushing, body_i, body_j, position, stiffness, damping,

@@ -35,6 +35,14 @@ struct LoadPoint {
   Vector3 s_in_body = Vector3::Zero();  // from the centre of mass, body frame [m]
 };
 
+// A named body point whose motion is reported (e.g. an accelerometer on the carbody floor); no force.
+struct MeasurementPoint {
+  std::string name;
+  int body = 0;
+  Vector3 s_in_body = Vector3::Zero();    // from the centre of mass, body frame [m]
+  Vector3 p_reference = Vector3::Zero();  // the point in the data frame, as the file gives it [m]
+};
+
 // How the augmented system is solved: the dense augmented matrix with partial-pivoting LU, or the
 // equivalent range-space form (Schur complement Phi_v M^-1 Phi_v^T with LDLT; M^-1 is block diagonal).
 enum class KktSolver { kAugmentedLu, kRangeSpace };
@@ -49,6 +57,7 @@ class VehicleModel {
   int AddBody(const RigidBody& body);  // returns the body index
   int AddLoadPoint(const std::string& name, int body, const Vector3& s_in_body);
   void AddJoint(std::unique_ptr<Joint> joint);
+  int AddMeasurementPointAtWorld(const std::string& name, int body, const Vector3& p_in_world);
   void AddForceElement(std::unique_ptr<ForceElement> element);
 
   // Convenience builders from world-frame data at the reference configuration.
@@ -83,6 +92,7 @@ class VehicleModel {
   int state_size() const { return 13 * n_bodies(); }
   const std::vector<RigidBody>& bodies() const { return bodies_; }
   const std::vector<LoadPoint>& load_points() const { return load_points_; }
+  const std::vector<MeasurementPoint>& measurement_points() const { return measurement_points_; }
   const std::vector<std::unique_ptr<Joint>>& joints() const { return joints_; }
   const std::vector<std::unique_ptr<ForceElement>>& force_elements() const { return forces_; }
   const std::vector<int>& joint_rows() const { return joint_rows_; }  // first constraint row per joint
@@ -117,6 +127,7 @@ class VehicleModel {
 
   std::vector<RigidBody> bodies_;
   std::vector<LoadPoint> load_points_;
+  std::vector<MeasurementPoint> measurement_points_;
   std::vector<std::unique_ptr<Joint>> joints_;
   std::vector<std::unique_ptr<ForceElement>> forces_;
   std::vector<int> joint_rows_;

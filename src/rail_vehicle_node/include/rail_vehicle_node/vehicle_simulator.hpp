@@ -88,6 +88,12 @@ struct WheelsetTrackOutput {
   double spin = 0.0;            // rate about the axle [rad/s]
 };
 
+// What an accelerometer fixed at a measurement point reads (rail_msgs/FloorAccelerations): the specific
+// force a - g in the point's body frame (x forward, y left, z up) [m/s^2].
+struct MeasurementOutput {
+  Vector3 specific_force_in_body = Vector3::Zero();
+};
+
 // Pose of one body for tf.
 struct BodyPose {
   std::string name;             // the data file's body name
@@ -144,6 +150,9 @@ class VehicleSimulator {
   const std::vector<contact::WheelContactResult>& contacts() const { return contact_data_->result; }
   const std::vector<WheelsetTrackOutput>& wheelsets() const { return wheelset_out_; }
   const std::vector<BodyPose>& bodies() const { return body_out_; }
+  // One per model().measurement_points(), filled only when the scene's effects.floor_acceleration_output
+  // is on (otherwise left at zero: no cost).
+  const std::vector<MeasurementOutput>& measurements() const { return measurement_out_; }
 
   // Replaces the state (e.g. a test's initial lateral offset); re-initialises the integrator.
   void ResetState(const Eigen::VectorXd& y);
@@ -201,6 +210,8 @@ class VehicleSimulator {
   std::vector<WheelOutput> wheel_out_;
   std::vector<WheelsetTrackOutput> wheelset_out_;
   std::vector<BodyPose> body_out_;
+  std::vector<MeasurementOutput> measurement_out_;
+  bool measure_ = false;                 // effects.floor_acceleration_output
 };
 
 // "bdf" / "adams" choice for solver.vehicle_method auto: Adams (fixed-point, no Jacobian) when the step

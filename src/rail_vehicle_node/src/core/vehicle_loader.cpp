@@ -166,7 +166,8 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
     throw VehicleFileError(os.str());
   }
   if (!root.IsMap()) reader.Fail(root, "(top level)", "expected a map", Describe(root));
-  reader.CheckKeys(root, "", {"name", "description", "parameters", "gravity", "bodies", "load_points", "joints", "forces"});
+  reader.CheckKeys(root, "", {"name", "description", "parameters", "gravity", "bodies", "load_points", "joints", "forces",
+                                  "measurement_points"});
 
   if (root["gravity"].IsDefined()) {
     const Vector3 g = reader.Vec3(root, "", "gravity");
@@ -212,6 +213,18 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
     const int body = BodyOf(reader, model, node, where, "body", false);
     const Vector3 p = reader.Vec3(node, where, "position");
     Build(reader, node, where, [&] { model.AddLoadPointAtWorld(name, body, p); });
+  }
+
+  // Measurement points (reported motion only, e.g. floor accelerometers).
+  const YAML::Node measured = reader.List(root, "measurement_points", false);
+  for (std::size_t k = 0; k < measured.size(); ++k) {
+    const YAML::Node node = measured[k];
+    const std::string where = "measurement_points[" + std::to_string(k) + "]";
+    reader.CheckKeys(node, where, {"name", "body", "position"});
+    const std::string name = reader.String(node, where, "name");
+    const int body = BodyOf(reader, model, node, where, "body", false);
+    const Vector3 p = reader.Vec3(node, where, "position");
+    Build(reader, node, where, [&] { model.AddMeasurementPointAtWorld(name, body, p); });
   }
 
   // Joints.

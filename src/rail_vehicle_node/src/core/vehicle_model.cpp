@@ -88,6 +88,16 @@ Vector3 VehicleModel::WorldToBodyAtReference(int body, const Vector3& p_in_world
   return ReferenceRotation(body).transpose() * (p_in_world - bodies_[static_cast<std::size_t>(body)].r_reference);
 }
 
+int VehicleModel::AddMeasurementPointAtWorld(const std::string& name, int body, const Vector3& p_in_world) {
+  RequireBuilding("AddMeasurementPointAtWorld");
+  RequireBody(body, false, "measurement point " + name);
+  for (const auto& p : measurement_points_) {
+    if (p.name == name) throw std::runtime_error("measurement point '" + name + "' defined twice");
+  }
+  measurement_points_.push_back(MeasurementPoint{name, body, WorldToBodyAtReference(body, p_in_world), p_in_world});
+  return static_cast<int>(measurement_points_.size()) - 1;
+}
+
 int VehicleModel::AddLoadPointAtWorld(const std::string& name, int body, const Vector3& p_in_world) {
   RequireBody(body, false, "load point " + name);
   return AddLoadPoint(name, body, WorldToBodyAtReference(body, p_in_world));

@@ -427,6 +427,12 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
                            .r_reference.x());
   }
   body_out_.assign(static_cast<std::size_t>(model_.n_bodies()), BodyPose());
+  measurement_out_.assign(model_.measurement_points().size(), MeasurementOutput());
+  measure_ = scene.effects.floor_acceleration_output;
+  if (measure_ && measurement_out_.empty()) {
+    throw std::runtime_error(scene.file + ": effects.floor_acceleration_output is on but the vehicle data file " +
+                             scene.vehicle.data.path + " has no measurement_points");
+  }
   for (int b = 0; b < model_.n_bodies(); ++b) {
     body_out_[static_cast<std::size_t>(b)].name = model_.bodies()[static_cast<std::size_t>(b)].name;
   }
@@ -513,6 +519,19 @@ void VehicleSimulator::UpdateOutputs() {
     const BodyKinematics& k = data_->bodies[b];
     body_out_[b].p_in_world = k.r;
     body_out_[b].orientation = EulerParametersFromRotation(k.A);
+  }
+  if (!measure_) return;
+  // Accelerations from the derivatives evaluated above: v_dot_b = [r_ddot (world); omega_dot' (body)].
+  // A point s' of the body: a_P = r_ddot + A (omega_dot' x s' + omega' x (omega' x s')); the accelerometer
+  // reads A^T (a_P - g).
+  for (std::size_t m = 0; m < measurement_out_.size(); ++m) {
+    const MeasurementPoint& p = model_.measurement_points()[m];
+    const BodyKinematics& k = data_->bodies[static_cast<std::size_t>(p.body)];
+    const Vector3 r_ddot = ydot_scratch_.segment<3>(model_.VelocityOffset(p.body));
+    const Vector3 omega_dot_body = ydot_scratch_.segment<3>(model_.AngularVelocityOffset(p.body));
+    const Vector3& w = k.omega_body;
+    const Vector3 a_rel_body = omega_dot_body.cross(p.s_in_body) + w.cross(w.cross(p.s_in_body));
+    measurement_out_[m].specific_force_in_body = k.A.transpose() * (r_ddot - model_.gravity()) + a_rel_body;
   }
 }
 

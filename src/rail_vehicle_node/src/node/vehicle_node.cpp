@@ -23,6 +23,7 @@
 #include <rail_msgs/Handshake.h>
 #include <rail_msgs/WheelStates.h>
 #include <rail_msgs/WheelsetKinematics.h>
+#include <rail_msgs/FloorAccelerations.h>
 #include <rail_vehicle_node/cosim_vehicle.hpp>
 #include <rail_vehicle_node/vehicle_simulator.hpp>
 
@@ -96,6 +97,7 @@ struct Outputs {
   rail_msgs::ContactPoints contact_points;
   rail_msgs::ContactWrenches contact_wrenches;
   rail_msgs::WheelsetKinematics kinematics;
+  rail_msgs::FloorAccelerations floor;  // effects.floor_acceleration_output
   tf2_msgs::TFMessage tf;
   rosgraph_msgs::Clock clock;
   rail::contact::TrackPoint track_point_;  // scratch of Update
@@ -108,6 +110,15 @@ struct Outputs {
     contact_wrenches.wrenches.resize(n);
     contact_wrenches.scene_hash = scene.hash;
     kinematics.wheelsets.resize(sim.wheelsets().size());
+    const auto& points = sim.model().measurement_points();
+    floor.header.frame_id = "carbody";
+    floor.names.resize(points.size());
+    floor.position.resize(points.size());
+    floor.specific_force.resize(points.size());
+    for (std::size_t m = 0; m < points.size(); ++m) {
+      floor.names[m] = points[m].name;
+      Fill(floor.position[m], points[m].p_reference);
+    }
     tf.transforms.resize(sim.bodies().size());
     for (auto& h : {&wheel_states.header, &contact_points.header, &contact_wrenches.header, &kinematics.header}) {
       h->frame_id = "world";
@@ -139,6 +150,7 @@ struct Outputs {
   void Update(const rv::VehicleSimulator& sim, const ros::Time& stamp, std::uint64_t step) {
     wheel_states.header.stamp = contact_points.header.stamp = contact_wrenches.header.stamp = stamp;
     kinematics.header.stamp = stamp;
+    floor.header.stamp = stamp;
     clock.clock = stamp;
     wheel_states.step = contact_wrenches.step = step;
     for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
@@ -180,6 +192,9 @@ struct Outputs {
         const rv::Vector3 f_in_track = track_point_.R_track_to_world.transpose() * wheel.force_in_world;
         Fill(wheel.side == 0 ? m.left_force_in_track : m.right_force_in_track, f_in_track);
       }
+    }
+    for (std::size_t m = 0; m < sim.measurements().size(); ++m) {
+      Fill(floor.specific_force[m], sim.measurements()[m].specific_force_in_body);
     }
     for (std::size_t b = 0; b < sim.bodies().size(); ++b) {
       geometry_msgs::TransformStamped& t = tf.transforms[b];
@@ -381,6 +396,12 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   ros::Publisher pub_wrenches = nh.advertise<rail_msgs::ContactWrenches>("contact_wrenches", 100);
   ros::Publisher pub_kinematics = nh.advertise<rail_msgs::WheelsetKinematics>("wheelset_kinematics", 100);
   tf2_ros::TransformBroadcaster tf_broadcaster;
+  // Carbody floor accelerations (effects.floor_acceleration_output), at the data file's measurement points.
+  const bool own_floor = scene.effects.floor_acceleration_output;
+  ros::Publisher pub_floor;
+  if (own_floor) {
+    pub_floor = nh.advertise<rail_msgs::FloorAccelerations>("floor_accelerations", 100);
+  }
   // rviz markers (effects.rviz_markers): built only when on, published at ~marker_rate (default 25 Hz).
   ros::Publisher pub_markers;
   std::unique_ptr<VehicleMarkers> markers;
@@ -413,6 +434,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   const bool rec_points = bag.isOpen() && Records(scene, "contact_points") && own_points;
   const bool rec_wrenches = bag.isOpen() && Records(scene, "contact_wrenches");
   const bool rec_kinematics = bag.isOpen() && Records(scene, "wheelset_kinematics");
+  const bool rec_floor = bag.isOpen() && Records(scene, "floor_accelerations") && own_floor;
   const bool rec_tf = bag.isOpen() && Records(scene, "tf");
   const bool rec_clock = bag.isOpen() && Records(scene, "clock");
 
@@ -430,6 +452,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     if (own_points) pub_points.publish(out.contact_points);
     pub_wrenches.publish(out.contact_wrenches);
     pub_kinematics.publish(out.kinematics);
+    if (own_floor) pub_floor.publish(out.floor);
     tf_broadcaster.sendTransform(out.tf.transforms);
     if (markers && sim->time() + 1e-12 >= next_marker) {
       next_marker += marker_period;
@@ -441,6 +464,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     if (rec_points) bag.write("/contact_points", stamp, out.contact_points);
     if (rec_wrenches) bag.write("/contact_wrenches", stamp, out.contact_wrenches);
     if (rec_kinematics) bag.write("/wheelset_kinematics", stamp, out.kinematics);
+    if (rec_floor) bag.write("/floor_accelerations", stamp, out.floor);
     if (rec_tf) bag.write("/tf", stamp, out.tf);
     if (rec_clock) bag.write("/clock", stamp, out.clock);
   };
