@@ -120,6 +120,9 @@ def write_report(runs, skipped, run_dir, out_dir, t_discard, figure_list, checks
                                                                       counts[analysis.DISAGREES],
                                                                       counts[analysis.NOT_AVAILABLE]))
     L.append("")
+    # Running safety, track loading, wear and comfort of each run (safety_report; doc/safety.md).
+    from . import safety_report
+    L.extend(safety_report.section(runs, out_dir))
     L.append("## Figures")
     for caption, name in figure_list:
         L.append("")

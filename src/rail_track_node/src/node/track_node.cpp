@@ -269,7 +269,17 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   ROS_INFO("%s: flexible track built: %d free DOFs, %d sleepers; running to t = %.4g s with dt = %.3g s (%ld steps)",
            me.c_str(), model.system.size(), model.mesh.n_sleepers, settings.t_end, settings.dt,
            std::lround(settings.t_end / settings.dt));
-  rt::TrackSimulator sim(model, settings);
+  // Factorising K_eff and the static solve fail on non-physical track data (e.g. a matrix that is not
+  // positive definite): a refused input, named with the scene and its track data file.
+  std::unique_ptr<rt::TrackSimulator> sim_ptr;
+  try {
+    sim_ptr.reset(new rt::TrackSimulator(model, settings));
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: %s: track.data %s: the track cannot be solved: %s", me.c_str(), scene.file.c_str(),
+              scene.track.data.path.c_str(), e.what());
+    return kExitBadInput;
+  }
+  rt::TrackSimulator& sim = *sim_ptr;
   sim.setProgressCallback(
       [&me](const rt::SimulationProgress& p) {
         ROS_INFO("%s: t = %.4f s of %.4f s (%.1f %%), %.3g x real time, %.0f s left", me.c_str(), p.t, p.t_end,
