@@ -394,8 +394,20 @@ def _resolve_q0(run, settings, kin, mask):
     path = veh.get("data")
     wheelsets = veh.get("wheelsets", kin["arc_length"].shape[1])
     if path:
-        if not os.path.isabs(path) and run.scene_path:
-            path = os.path.join(os.path.dirname(run.scene_path), path)
+        if not os.path.isabs(path):
+            # Relative to the scene file the run was made from: the resolved scene's directory, else the
+            # original scene named by the runner's <run>.run.yaml beside the bag.
+            candidates = [os.path.dirname(run.scene_path)] if run.scene_path else []
+            run_yaml = os.path.join(os.path.dirname(run.bag or ""), run.name + ".run.yaml")
+            if os.path.isfile(run_yaml):
+                try:
+                    original = (loading.load_yaml(run_yaml) or {}).get("scene")
+                except AnalysisInputError:
+                    original = None
+                if original:
+                    candidates.append(os.path.dirname(str(original)))
+            found = [os.path.join(d, path) for d in candidates if os.path.isfile(os.path.join(d, path))]
+            path = found[0] if found else os.path.join(candidates[0] if candidates else "", path)
         if os.path.isfile(path):
             try:
                 return static_wheel_load_from_vehicle(path, int(wheelsets)), \
