@@ -19,6 +19,9 @@ ProfileFileError::ProfileFileError(const std::string& file, int line, const std:
 namespace {
 
 constexpr double kMonotonicTolerance = 0.05e-3;  // accepted step back of the lateral coordinate, m
+// Largest accepted |y| and |z| of a profile point, m (after unit conversion): a wheel or rail profile
+// spans about 0.15 m, so a point beyond 1 m is a corrupted or mistyped value.
+constexpr double kMaxCoordinate = 1.0;
 
 std::string trim(const std::string& s) {
   size_t a = 0, b = s.size();
@@ -112,6 +115,20 @@ void checkPoints(const std::string& file, int last_line, const std::vector<RawPo
   }
 }
 
+// Refuses a point with |y| or |z| beyond kMaxCoordinate; scale converts file units to m. Names the
+// point's line and the value as written in the file (unit_name: the file's length unit).
+void checkBounds(const std::string& file, const std::vector<RawPoint>& pts, double scale, const std::string& y_name,
+                 const std::string& z_name, const std::string& unit_name) {
+  for (const RawPoint& p : pts) {
+    const bool bad_y = !(std::abs(p.y * scale) <= kMaxCoordinate);
+    if (bad_y || !(std::abs(p.z * scale) <= kMaxCoordinate))
+      throw ProfileFileError(file, p.line,
+                             (bad_y ? y_name + " = " + fmt(p.y) : z_name + " = " + fmt(p.z)) + " " + unit_name +
+                                 " out of range (|" + y_name + "|, |" + z_name + "| must be at most " +
+                                 fmt(kMaxCoordinate) + " m)");
+  }
+}
+
 ProfilePoints applyOptions(ProfilePoints pts, const ProfileFileOptions& o) {
   for (Eigen::Vector2d& p : pts) {
     if (o.mirror_y) p.x() = -p.x();
@@ -164,6 +181,7 @@ ProfilePoints readPlainProfile(const std::string& path, const ProfileFileOptions
     units = max_abs > 1.0 ? 1 : 2;
   }
   const double scale = units == 1 ? 1e-3 : 1.0;
+  checkBounds(path, pts, scale, "y", "z", units == 1 ? "mm" : "m");
   checkPoints(path, iline, pts, "y", kMonotonicTolerance / scale);
   ProfilePoints out;
   out.reserve(pts.size());
@@ -208,6 +226,7 @@ ProfilePoints readMiniProfProfile(const std::string& path, const ProfileFileOpti
     const std::vector<double> v = parseNumbers(path, iline, tok);
     pts.push_back({v[col_x], v[col_y], iline});
   }
+  checkBounds(path, pts, 1e-3, "X", "Y", "mm");
   checkPoints(path, iline, pts, "X", kMonotonicTolerance * 1e3);
   ProfilePoints out;
   out.reserve(pts.size());
@@ -310,6 +329,8 @@ ProfilePoints readSimpackProfile(const std::string& path, const ProfileFileOptio
   }
   if (block != None) throw ProfileFileError(path, iline, "file ends inside a block");
   if (!seen_spline || !seen_points) throw ProfileFileError(path, iline, "no spline/point block");
+  const std::string len_unit = len_f == 1e3 ? "mm" : (len_f == 1.0 ? "m" : "(units.len.f = " + fmt(len_f) + ")");
+  checkBounds(path, pts, 1.0 / len_f, "y", "z", len_unit);
   checkPoints(path, iline, pts, "y", kMonotonicTolerance * len_f);
 
   // Spline-block modifications, in SIMPACK's order (file units).
@@ -354,14 +375,25 @@ ProfilePoints orderByIncreasingY(ProfilePoints pts) {
 }
 }  // namespace
 
+// A curve that cannot be built from a file's points is reported against the file as a whole (line 0).
 ProfileCurve loadRailProfile(const std::string& path, const ProfileFileOptions& options,
                              const ProfileCurveOptions& curve_options) {
-  return ProfileCurve(orderByIncreasingY(readProfilePoints(path, options)), SolidSide::Right, curve_options);
+  const ProfilePoints points = orderByIncreasingY(readProfilePoints(path, options));
+  try {
+    return ProfileCurve(points, SolidSide::Right, curve_options);
+  } catch (const std::exception& e) {
+    throw ProfileFileError(path, 0, std::string("rail profile: ") + e.what());
+  }
 }
 
 WheelProfile loadWheelProfile(const std::string& path, const ProfileFileOptions& options, double split_angle,
                               const ProfileCurveOptions& curve_options) {
-  return makeWheelProfile(orderByIncreasingY(readProfilePoints(path, options)), split_angle, curve_options);
+  const ProfilePoints points = orderByIncreasingY(readProfilePoints(path, options));
+  try {
+    return makeWheelProfile(points, split_angle, curve_options);
+  } catch (const std::exception& e) {
+    throw ProfileFileError(path, 0, std::string("wheel profile: ") + e.what());
+  }
 }
 
 // ----------------------------------------------------------------------------------------------------

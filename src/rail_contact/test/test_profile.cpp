@@ -531,6 +531,30 @@ TEST(ProfileFiles, MalformedSimpackFiles) {
   expectFileError([&] { rc::readSimpackProfile(d + "missing.prr"); }, d + "missing.prr", 0, "cannot open file");
 }
 
+// A profile spans about 0.15 m: a coordinate beyond 1 m (after unit conversion) is refused with the line
+// of its point, in every format; 999 mm is still accepted.
+TEST(ProfileFiles, CoordinatesBeyondOneMetreRefused) {
+  const std::string plain_mm = writeTemp("far_mm.txt", "0 0\n1 0.1\n1e300 0.3\n3 0.6\n");
+  expectFileError([&] { rc::readPlainProfile(plain_mm); }, plain_mm, 3,
+                  "y = 1e+300 mm out of range (|y|, |z| must be at most 1 m)");
+  const std::string plain_m = writeTemp("far_m.txt", "# units: m\n0 0\n0.001 0.0001\n0.002 -1.5\n0.003 0.0006\n");
+  expectFileError([&] { rc::readPlainProfile(plain_m); }, plain_m, 4,
+                  "z = -1.5 m out of range (|y|, |z| must be at most 1 m)");
+  const std::string near = writeTemp("near_mm.txt", "0 0\n1 0.1\n2 0.3\n999 0.6\n");
+  EXPECT_NEAR(rc::readPlainProfile(near)[3].x(), 0.999, 1e-15);
+  const std::string ban = writeTemp("far.ban", "ColumnDef=X,Y\n\n4 2\n3 -1e300\n2 4\n1 5\n");
+  expectFileError([&] { rc::readMiniProfProfile(ban); }, ban, 4,
+                  "Y = -1e+300 mm out of range (|X|, |Y| must be at most 1 m)");
+  const std::string head = "header.begin\n type = 0\nheader.end\nspline.begin\n";
+  const std::string prr_mm = writeTemp(
+      "far_mm.prr", head + " units.len.f = 1000\n point.begin\n0 0\n1 1\n2 1e300\n3 3\n point.end\nspline.end\n");
+  expectFileError([&] { rc::readSimpackProfile(prr_mm); }, prr_mm, 9,
+                  "z = 1e+300 mm out of range (|y|, |z| must be at most 1 m)");
+  const std::string prr_m = writeTemp("far_m.prr", head + " point.begin\n0 0\n0.1 0.1\n1.5 0.2\n1.6 0.3\n point.end\nspline.end\n");
+  expectFileError([&] { rc::readSimpackProfile(prr_m); }, prr_m, 8,
+                  "y = 1.5 m out of range (|y|, |z| must be at most 1 m)");
+}
+
 TEST(ProfileFiles, ExampleConfigProfilesLoad) {
   // The example user files shipped in config/profiles build valid surfaces with the nominal
   // dimensions (0.1 mm, as for the built-in profiles).

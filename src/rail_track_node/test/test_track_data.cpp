@@ -109,6 +109,27 @@ TEST(TrackData, NonPositiveThrows) {
             "track.yaml: layout.ballast_nodes: entries must be distinct sleeper node indices 0..5, got 7");
 }
 
+// Values above a physical bound (and inf) are refused naming the key and the bound, never clamped.
+TEST(TrackData, AbsurdOrInfiniteThrows) {
+  const std::string text = readFile(paperTrackPath());
+  EXPECT_EQ(errorOf(replaced(text, "  rho: 7860.0", "  rho: .inf")),
+            "track.yaml: rail.rho: must be at most 100000 kg/m^3, got inf");
+  EXPECT_EQ(errorOf(replaced(text, "sleeper_length: 2.60", "sleeper_length: 1e300")),
+            "track.yaml: layout.sleeper_length: must be at most 10 m, got 1e+300");
+  EXPECT_EQ(errorOf(replaced(text, "  k_vertical: 1.30e8", "  k_vertical: 2e12")),
+            "track.yaml: pad.k_vertical: must be at most 1e+12 N/m, got 2e+12");
+  EXPECT_EQ(errorOf(replaced(text, "rayleigh_alpha: 0.94", "rayleigh_alpha: .inf")),
+            "track.yaml: rail.rayleigh_alpha: must be at most 10000 1/s, got inf");
+  EXPECT_EQ(errorOf(replaced(text, "design_frequency: 500.0", "design_frequency: .inf")),
+            "track.yaml: absorbing_ends.design_frequency: must be at most 100000 Hz, got inf");
+  // A sleeper too short for the rail seats: the message names both keys.
+  EXPECT_EQ(errorOf(replaced(text, "sleeper_length: 2.60", "sleeper_length: 1e-300")),
+            "track.yaml: layout.rail_lateral_offset: must be smaller than half of layout.sleeper_length "
+            "(1e-300 / 2), got 0.87");
+  // At the bound: accepted.
+  EXPECT_EQ(errorOf(replaced(text, "  k_vertical: 1.30e8", "  k_vertical: 1e12")), "no exception");
+}
+
 TEST(TrackData, MissingFileThrows) {
   EXPECT_THROW(rt::loadTrackData("/nonexistent/track.yaml"), std::runtime_error);
 }

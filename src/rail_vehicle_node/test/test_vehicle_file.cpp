@@ -221,6 +221,39 @@ TEST(VehicleLoader, RejectsBadBumpStopTableAndNegativeStiffness) {
   EXPECT_EQ(LoadError(negative), negative + ": forces[0].stiffness[1]: must be >= 0, got -2 (line 5)");
 }
 
+// Finite but absurd values are refused naming the key path and line: positions beyond 1 km, forces beyond
+// 1e8 N, stiffness beyond 1e12 N/m, masses beyond 1e6 kg, inertias beyond 1e8 kg m^2.
+TEST(VehicleLoader, RejectsAbsurdMagnitudes) {
+  const std::string far = WriteTemp("far_com.yaml", R"(bodies:
+  - {name: ws, mass: 1800, centre_of_mass: [0, 0, -1e300], inertia: [900, 10, 900]}
+)");
+  EXPECT_EQ(LoadError(far), far + ": bodies[0].centre_of_mass[2]: magnitude must be <= 1000 m, got -1e300 (line 2)");
+  const std::string heavy = WriteTemp("heavy.yaml", R"(bodies:
+  - {name: ws, mass: 2e6, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 900]}
+)");
+  EXPECT_EQ(LoadError(heavy), heavy + ": bodies[0].mass: mass must be <= 1e+06 kg, got 2e6 (line 2)");
+  const std::string inertia = WriteTemp("inertia.yaml", R"(bodies:
+  - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445], inertia: [900, 1e300, 900]}
+)");
+  EXPECT_EQ(LoadError(inertia), inertia + ": bodies[0].inertia[1]: magnitude must be <= 1e+08 kg m^2, got 1e300 (line 2)");
+  const std::string preload = WriteTemp("preload.yaml", std::string(kTwoBodies) + R"(forces:
+  - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], preload: [-1e300, 0, 0]}
+)");
+  EXPECT_EQ(LoadError(preload), preload + ": forces[0].preload[0]: magnitude must be <= 1e+08 N, got -1e300 (line 5)");
+  const std::string stiff = WriteTemp("stiff.yaml", std::string(kTwoBodies) + R"(forces:
+  - {name: link, type: point_to_point, body_i: ws, body_j: box, position_i: [0, 0, 0.445], position_j: [0, 1, 0.445],
+     stiffness: 1e300}
+)");
+  EXPECT_EQ(LoadError(stiff), stiff + ": forces[0].stiffness: magnitude must be <= 1e+12 N/m, got 1e300 (line 6)");
+}
+
+TEST(VehicleLoader, RejectsAJointOrForceThatIsNotAMap) {
+  const std::string joint = WriteTemp("joint_scalar.yaml", std::string(kTwoBodies) + "joints:\n  - bearing\n");
+  EXPECT_EQ(LoadError(joint), joint + ": joints[0]: expected a map, got bearing (line 5)");
+  const std::string force = WriteTemp("force_list.yaml", std::string(kTwoBodies) + "forces:\n  - [1, 2]\n");
+  EXPECT_EQ(LoadError(force), force + ": forces[0]: expected a map, got [1, 2] (line 5)");
+}
+
 TEST(VehicleLoader, ReportsSyntaxErrorsAndMissingFiles) {
   const std::string bad = WriteTemp("syntax.yaml", "bodies:\n  - {name: ws, mass: [1800\n");
   EXPECT_EQ(LoadError(bad).rfind(bad + ":", 0), 0u);

@@ -24,7 +24,8 @@ TrackData sceneTrackData(const Scene& scene, const rc::GeometrySpec& geometry, c
     throw SceneError(scene.file + ": track.data: " + e.what());
   }
   if (!(options.rail_height > data.layout.rail_centroid_height))
-    throw SceneError(scene.file + ": track.data: layout.rail_centroid_height must lie below the rail height (" +
+    throw SceneError(scene.file + ": track.data: " + scene.track.data.path +
+                     ": layout.rail_centroid_height: must lie below the rail height (" +
                      std::to_string(options.rail_height) + " m), got " +
                      std::to_string(data.layout.rail_centroid_height));
   TrackLayout& L = data.layout;
@@ -35,7 +36,8 @@ TrackData sceneTrackData(const Scene& scene, const rc::GeometrySpec& geometry, c
       geometry.rail_half_spacing + (L.pad_thickness + options.rail_height) * std::sin(L.rail_inclination);
   if (!(L.rail_lateral_offset < 0.5 * L.sleeper_length))
     throw SceneError(scene.file + ": track.gauge: the rail seats (" + std::to_string(L.rail_lateral_offset) +
-                     " m from the centre) lie beyond the sleeper ends (track.data: layout.sleeper_length " +
+                     " m from the centre) lie beyond the sleeper ends (track.data: " + scene.track.data.path +
+                     ": layout.sleeper_length " +
                      std::to_string(L.sleeper_length) + " m)");
   if (!scene.effects.track_damping) {
     for (BeamSection* b : {&data.rail, &data.sleeper}) {

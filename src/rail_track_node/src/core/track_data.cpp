@@ -56,19 +56,25 @@ class MapReader {
     }
   }
 
-  double positive(const std::string& key) {
+  // A number in (0, max]; max is the physical upper bound of the quantity, given with its unit. Values
+  // above it (and inf) are refused, never clamped.
+  double positive(const std::string& key, double max, const char* unit) {
     const double x = number(key);
     if (!(x > 0.0)) fail(keyPath(key), "must be positive", fmt(x));
+    if (!(x <= max)) fail(keyPath(key), "must be at most " + fmt(max) + " " + unit, fmt(x));
     return x;
   }
 
-  double nonNegative(const std::string& key) {
+  // A number in [0, max], as positive().
+  double nonNegative(const std::string& key, double max, const char* unit) {
     const double x = number(key);
     if (!(x >= 0.0)) fail(keyPath(key), "must not be negative", fmt(x));
+    if (!(x <= max)) fail(keyPath(key), "must be at most " + fmt(max) + " " + unit, fmt(x));
     return x;
   }
 
-  int positiveInt(const std::string& key) {
+  // An integer in [1, max].
+  int positiveInt(const std::string& key, int max) {
     const YAML::Node v = get(key);
     int x = 0;
     try {
@@ -78,6 +84,7 @@ class MapReader {
       fail(keyPath(key), "expected an integer", describe(v));
     }
     if (x <= 0) fail(keyPath(key), "must be positive", std::to_string(x));
+    if (x > max) fail(keyPath(key), "must be at most " + std::to_string(max), std::to_string(x));
     return x;
   }
 
@@ -125,27 +132,47 @@ class MapReader {
   std::set<std::string> used_;
 };
 
+// Upper bounds of the track data, refused above (inf included). They are far beyond any real track
+// component, so they only catch mistyped or corrupted values before they reach the FE model.
+constexpr double kMaxModulus = 1e13;          // Pa, E and G (diamond: E = 1.2e12 Pa)
+constexpr double kMaxArea = 1.0;              // m^2, beam cross-section (a 1 m x 1 m section)
+constexpr double kMaxSecondMoment = 1.0;      // m^4, J, I_y, I_z (1 m x 1 m section: I = 0.083 m^4)
+constexpr double kMaxDensity = 1e5;           // kg/m^3 (densest element, osmium: 2.26e4)
+constexpr double kMaxRayleighAlpha = 1e4;     // 1/s, mass-proportional damping coefficient
+constexpr double kMaxRayleighBeta = 10.0;     // s, stiffness-proportional damping coefficient
+constexpr double kMaxStiffness = 1e12;        // N/m (translational) and N m/rad (k_roll)
+constexpr double kMaxDamping = 1e12;          // N s/m
+constexpr double kMaxLumpedMass = 1e5;        // kg, ballast mass per sleeper node
+constexpr double kMaxTrackLength = 10.0;      // m, sleeper spacing / length, rail lateral offset
+constexpr double kMaxSectionHeight = 2.0;     // m, pad thickness, rail centroid height, sleeper height
+constexpr int kMaxElementsBetweenSleepers = 1000;
+constexpr double kMaxDesignFrequency = 1e5;   // Hz, absorbing-end tuning frequency
+
 BeamSection readBeam(MapReader r) {
   BeamSection s;
-  s.E = r.positive("E");
-  s.G = r.positive("G");
-  s.A = r.positive("A");
-  s.J = r.positive("J");
-  s.I_y = r.positive("I_y");
-  s.I_z = r.positive("I_z");
-  s.rho = r.positive("rho");
-  s.rayleigh_alpha = r.nonNegative("rayleigh_alpha");
-  s.rayleigh_beta = r.nonNegative("rayleigh_beta");
+  s.E = r.positive("E", kMaxModulus, "Pa");
+  s.G = r.positive("G", kMaxModulus, "Pa");
+  s.A = r.positive("A", kMaxArea, "m^2");
+  s.J = r.positive("J", kMaxSecondMoment, "m^4");
+  s.I_y = r.positive("I_y", kMaxSecondMoment, "m^4");
+  s.I_z = r.positive("I_z", kMaxSecondMoment, "m^4");
+  s.rho = r.positive("rho", kMaxDensity, "kg/m^3");
+  s.rayleigh_alpha = r.nonNegative("rayleigh_alpha", kMaxRayleighAlpha, "1/s");
+  s.rayleigh_beta = r.nonNegative("rayleigh_beta", kMaxRayleighBeta, "s");
   r.rejectUnknownKeys();
   return s;
 }
 
 SpringDamperData readSpring(MapReader r, bool has_roll, bool has_mass) {
   SpringDamperData d;
-  d.k = Eigen::Vector3d(r.positive("k_longitudinal"), r.positive("k_transversal"), r.positive("k_vertical"));
-  d.c = Eigen::Vector3d(r.positive("c_longitudinal"), r.positive("c_transversal"), r.positive("c_vertical"));
-  if (has_roll) d.k_roll = r.positive("k_roll");
-  if (has_mass) d.mass = r.positive("mass");
+  d.k = Eigen::Vector3d(r.positive("k_longitudinal", kMaxStiffness, "N/m"),
+                        r.positive("k_transversal", kMaxStiffness, "N/m"),
+                        r.positive("k_vertical", kMaxStiffness, "N/m"));
+  d.c = Eigen::Vector3d(r.positive("c_longitudinal", kMaxDamping, "N s/m"),
+                        r.positive("c_transversal", kMaxDamping, "N s/m"),
+                        r.positive("c_vertical", kMaxDamping, "N s/m"));
+  if (has_roll) d.k_roll = r.positive("k_roll", kMaxStiffness, "N m/rad");
+  if (has_mass) d.mass = r.positive("mass", kMaxLumpedMass, "kg");
   r.rejectUnknownKeys();
   return d;
 }
@@ -169,21 +196,21 @@ TrackData parseTrackData(const std::string& yaml_text, const std::string& source
 
   MapReader g = r.child("layout");
   TrackLayout& L = data.layout;
-  L.rail_lateral_offset = g.positive("rail_lateral_offset");
-  L.pad_thickness = g.positive("pad_thickness");
-  L.rail_centroid_height = g.positive("rail_centroid_height");
-  L.rail_inclination = g.nonNegative("rail_inclination");
-  L.sleeper_spacing = g.positive("sleeper_spacing");
-  L.rail_elements_between_sleepers = g.positiveInt("rail_elements_between_sleepers");
-  L.sleeper_length = g.positive("sleeper_length");
-  L.sleeper_height = g.positive("sleeper_height");
-  L.sleeper_inner_node_offset = g.positive("sleeper_inner_node_offset");
+  L.rail_lateral_offset = g.positive("rail_lateral_offset", kMaxTrackLength, "m");
+  L.pad_thickness = g.positive("pad_thickness", kMaxSectionHeight, "m");
+  L.rail_centroid_height = g.positive("rail_centroid_height", kMaxSectionHeight, "m");
+  L.rail_inclination = g.nonNegative("rail_inclination", 0.5, "rad");
+  L.sleeper_spacing = g.positive("sleeper_spacing", kMaxTrackLength, "m");
+  L.rail_elements_between_sleepers = g.positiveInt("rail_elements_between_sleepers", kMaxElementsBetweenSleepers);
+  L.sleeper_length = g.positive("sleeper_length", kMaxTrackLength, "m");
+  L.sleeper_height = g.positive("sleeper_height", kMaxSectionHeight, "m");
+  L.sleeper_inner_node_offset = g.positive("sleeper_inner_node_offset", kMaxTrackLength, "m");
   L.ballast_nodes = g.intList("ballast_nodes");
   if (L.rail_inclination >= 0.5)
     g.fail(g.keyPath("rail_inclination"), "must be a small angle in rad (below 0.5)", fmt(L.rail_inclination));
   if (!(L.rail_lateral_offset < 0.5 * L.sleeper_length))
     g.fail(g.keyPath("rail_lateral_offset"),
-           "must be smaller than half the sleeper length (" + fmt(0.5 * L.sleeper_length) + ")",
+           "must be smaller than half of layout.sleeper_length (" + fmt(L.sleeper_length) + " / 2)",
            fmt(L.rail_lateral_offset));
   if (!(L.sleeper_inner_node_offset < L.rail_lateral_offset))
     g.fail(g.keyPath("sleeper_inner_node_offset"),
@@ -199,7 +226,7 @@ TrackData parseTrackData(const std::string& yaml_text, const std::string& source
 
   MapReader a = r.child("absorbing_ends");
   data.absorbing_ends.enabled = a.boolean("enabled");
-  data.absorbing_ends.design_frequency = a.positive("design_frequency");
+  data.absorbing_ends.design_frequency = a.positive("design_frequency", kMaxDesignFrequency, "Hz");
   a.rejectUnknownKeys();
 
   r.rejectUnknownKeys();

@@ -23,6 +23,23 @@ std::string Describe(const YAML::Node& node) {
 
 std::string Join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
 
+// Magnitude bounds of the vehicle data, refused above (never clamped). Far beyond any rail vehicle, they
+// only catch mistyped or corrupted values that would make the integration fail.
+constexpr double kMaxPosition = 1e3;        // m, |coordinate| of a position, offset, length or deflection
+constexpr double kMaxForce = 1e8;           // N, |preload| or bump-stop force (a loaded axle: 2e5 N)
+constexpr double kMaxStiffness = 1e12;      // N/m or N m/rad
+constexpr double kMaxDamping = 1e12;        // N s/m or N m s/rad
+constexpr double kMaxMass = 1e6;            // kg (a loaded coach: 6e4 kg)
+constexpr double kMaxInertia = 1e8;         // kg m^2, |principal moment| or |product| (a carbody: 3e6)
+constexpr double kMaxGravity = 1e3;         // m/s^2, |component| of the gravity vector
+constexpr double kMaxAxisComponent = 1e6;   // dimensionless, |component| of a direction before normalising
+
+std::string Format(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
 class Reader {
  public:
   explicit Reader(std::string file) : file_(std::move(file)) {}
@@ -67,37 +84,54 @@ class Reader {
     return value;
   }
 
+  // A finite number with |value| <= max_abs (unit names the unit of max_abs in the message).
+  double Bounded(const YAML::Node& node, const std::string& path, double max_abs, const char* unit) const {
+    const double value = Number(node, path);
+    if (!(std::abs(value) <= max_abs)) {
+      const std::string unit_text = *unit ? std::string(" ") + unit : std::string();
+      Fail(node, path, "magnitude must be <= " + Format(max_abs) + unit_text, Describe(node));
+    }
+    return value;
+  }
+
+  double OptionalBounded(const YAML::Node& map, const std::string& path, const char* key, double fallback,
+                         double max_abs, const char* unit) const {
+    const YAML::Node node = map[key];
+    if (!node.IsDefined() || node.IsNull()) return fallback;
+    return Bounded(node, Join(path, key), max_abs, unit);
+  }
+
   double Number(const YAML::Node& map, const std::string& path, const char* key) const {
     return Number(Require(map, path, key), Join(path, key));
   }
 
-  double OptionalNumber(const YAML::Node& map, const std::string& path, const char* key, double fallback) const {
-    const YAML::Node node = map[key];
-    if (!node.IsDefined() || node.IsNull()) return fallback;
-    return Number(node, Join(path, key));
-  }
-
-  Vector3 Vec3(const YAML::Node& node, const std::string& path) const {
+  // A list of 3 numbers, each with |component| <= max_abs (unit: the unit of max_abs).
+  Vector3 Vec3(const YAML::Node& node, const std::string& path, double max_abs, const char* unit) const {
     if (!node.IsSequence() || node.size() != 3) Fail(node, path, "expected a list of 3 numbers", Describe(node));
     Vector3 v;
-    for (std::size_t k = 0; k < 3; ++k) v[static_cast<int>(k)] = Number(node[k], path + "[" + std::to_string(k) + "]");
+    for (std::size_t k = 0; k < 3; ++k) {
+      v[static_cast<int>(k)] = Bounded(node[k], path + "[" + std::to_string(k) + "]", max_abs, unit);
+    }
     return v;
   }
 
-  Vector3 Vec3(const YAML::Node& map, const std::string& path, const char* key) const {
-    return Vec3(Require(map, path, key), Join(path, key));
+  Vector3 Vec3(const YAML::Node& map, const std::string& path, const char* key, double max_abs,
+               const char* unit) const {
+    return Vec3(Require(map, path, key), Join(path, key), max_abs, unit);
   }
 
-  Vector3 OptionalVec3(const YAML::Node& map, const std::string& path, const char* key) const {
+  Vector3 OptionalVec3(const YAML::Node& map, const std::string& path, const char* key, double max_abs,
+                       const char* unit) const {
     const YAML::Node node = map[key];
     if (!node.IsDefined() || node.IsNull()) return Vector3::Zero();
-    return Vec3(node, Join(path, key));
+    return Vec3(node, Join(path, key), max_abs, unit);
   }
 
-  Vector3 NonNegativeVec3(const YAML::Node& map, const std::string& path, const char* key, bool required) const {
+  Vector3 NonNegativeVec3(const YAML::Node& map, const std::string& path, const char* key, bool required,
+                          double max, const char* unit) const {
     const YAML::Node node = map[key];
     if (!required && (!node.IsDefined() || node.IsNull())) return Vector3::Zero();
-    const Vector3 v = Vec3(map, path, key);
+    const Vector3 v = Vec3(map, path, key, max, unit);
     for (int k = 0; k < 3; ++k) {
       if (v[k] < 0.0) Fail(node[static_cast<std::size_t>(k)], Join(path, key) + "[" + std::to_string(k) + "]",
                            "must be >= 0", Describe(node[static_cast<std::size_t>(k)]));
@@ -170,7 +204,7 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
                                   "measurement_points"});
 
   if (root["gravity"].IsDefined()) {
-    const Vector3 g = reader.Vec3(root, "", "gravity");
+    const Vector3 g = reader.Vec3(root, "", "gravity", kMaxGravity, "m/s^2");
     Build(reader, root["gravity"], "gravity", [&] { model.SetGravity(g); });
   }
 
@@ -188,15 +222,18 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
     if (body.name == "ground") reader.Fail(node["name"], Join(where, "name"), "reserved name", body.name);
     body.mass = reader.Number(node, where, "mass");
     if (!(body.mass > 0.0)) reader.Fail(node["mass"], Join(where, "mass"), "mass must be > 0 kg", Describe(node["mass"]));
-    body.r_reference = reader.Vec3(node, where, "centre_of_mass");
-    const Vector3 principal = reader.Vec3(node, where, "inertia");
+    if (!(body.mass <= kMaxMass)) {
+      reader.Fail(node["mass"], Join(where, "mass"), "mass must be <= " + Format(kMaxMass) + " kg", Describe(node["mass"]));
+    }
+    body.r_reference = reader.Vec3(node, where, "centre_of_mass", kMaxPosition, "m");
+    const Vector3 principal = reader.Vec3(node, where, "inertia", kMaxInertia, "kg m^2");
     for (int i = 0; i < 3; ++i) {
       if (!(principal[i] > 0.0)) {
         reader.Fail(node["inertia"][static_cast<std::size_t>(i)], Join(where, "inertia") + "[" + std::to_string(i) + "]",
                     "moment of inertia must be > 0 kg m^2", Describe(node["inertia"][static_cast<std::size_t>(i)]));
       }
     }
-    const Vector3 products = reader.OptionalVec3(node, where, "products_of_inertia");
+    const Vector3 products = reader.OptionalVec3(node, where, "products_of_inertia", kMaxInertia, "kg m^2");
     body.inertia_in_body << principal[0], products[0], products[1],
                             products[0], principal[1], products[2],
                             products[1], products[2], principal[2];
@@ -211,7 +248,7 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
     reader.CheckKeys(node, where, {"name", "body", "position"});
     const std::string name = reader.String(node, where, "name");
     const int body = BodyOf(reader, model, node, where, "body", false);
-    const Vector3 p = reader.Vec3(node, where, "position");
+    const Vector3 p = reader.Vec3(node, where, "position", kMaxPosition, "m");
     Build(reader, node, where, [&] { model.AddLoadPointAtWorld(name, body, p); });
   }
 
@@ -223,7 +260,7 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
     reader.CheckKeys(node, where, {"name", "body", "position"});
     const std::string name = reader.String(node, where, "name");
     const int body = BodyOf(reader, model, node, where, "body", false);
-    const Vector3 p = reader.Vec3(node, where, "position");
+    const Vector3 p = reader.Vec3(node, where, "position", kMaxPosition, "m");
     Build(reader, node, where, [&] { model.AddMeasurementPointAtWorld(name, body, p); });
   }
 
@@ -233,6 +270,7 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
   for (std::size_t k = 0; k < joints.size(); ++k) {
     const YAML::Node node = joints[k];
     const std::string where = "joints[" + std::to_string(k) + "]";
+    if (!node.IsMap()) reader.Fail(node, where, "expected a map", Describe(node));
     const std::string type = reader.String(node, where, "type");
     if (type == "revolute") {
       reader.CheckKeys(node, where, {"name", "type", "body_i", "body_j", "position", "axis"});
@@ -247,9 +285,9 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
     const int body_j = BodyOf(reader, model, node, where, "body_j", true);
     if (body_i == body_j) reader.Fail(node["body_j"], Join(where, "body_j"), "a joint needs two different bodies",
                                       Describe(node["body_j"]));
-    const Vector3 p = reader.Vec3(node, where, "position");
+    const Vector3 p = reader.Vec3(node, where, "position", kMaxPosition, "m");
     if (type == "revolute") {
-      const Vector3 axis = reader.Vec3(node, where, "axis");
+      const Vector3 axis = reader.Vec3(node, where, "axis", kMaxAxisComponent, "");
       if (axis.norm() < 1e-12) reader.Fail(node["axis"], Join(where, "axis"), "axis must not be zero", Describe(node["axis"]));
       Build(reader, node, where, [&] { model.AddRevoluteJointAt(name, body_i, body_j, p, axis.normalized()); });
     } else if (type == "spherical") {
@@ -265,6 +303,7 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
   for (std::size_t k = 0; k < forces.size(); ++k) {
     const YAML::Node node = forces[k];
     const std::string where = "forces[" + std::to_string(k) + "]";
+    if (!node.IsMap()) reader.Fail(node, where, "expected a map", Describe(node));
     const std::string type = reader.String(node, where, "type");
     if (type == "bushing") {
       reader.CheckKeys(node, where, {"name", "type", "body_i", "body_j", "position", "stiffness", "damping", "preload",
@@ -286,21 +325,22 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
                                       Describe(node["body_j"]));
     if (type == "bushing") {
       Bushing::Parameters par;
-      par.stiffness = reader.NonNegativeVec3(node, where, "stiffness", false);
-      par.damping = reader.NonNegativeVec3(node, where, "damping", false);
-      par.preload = reader.OptionalVec3(node, where, "preload");
-      par.free_offset = reader.OptionalVec3(node, where, "free_offset");
-      par.rotational_stiffness = reader.NonNegativeVec3(node, where, "rotational_stiffness", false);
-      par.rotational_damping = reader.NonNegativeVec3(node, where, "rotational_damping", false);
-      const Vector3 p = reader.Vec3(node, where, "position");
+      par.stiffness = reader.NonNegativeVec3(node, where, "stiffness", false, kMaxStiffness, "N/m");
+      par.damping = reader.NonNegativeVec3(node, where, "damping", false, kMaxDamping, "N s/m");
+      par.preload = reader.OptionalVec3(node, where, "preload", kMaxForce, "N");
+      par.free_offset = reader.OptionalVec3(node, where, "free_offset", kMaxPosition, "m");
+      par.rotational_stiffness =
+          reader.NonNegativeVec3(node, where, "rotational_stiffness", false, kMaxStiffness, "N m/rad");
+      par.rotational_damping = reader.NonNegativeVec3(node, where, "rotational_damping", false, kMaxDamping, "N m s/rad");
+      const Vector3 p = reader.Vec3(node, where, "position", kMaxPosition, "m");
       Build(reader, node, where, [&] { model.AddBushingAt(name, body_i, body_j, p, Matrix3::Identity(), par); });
     } else if (type == "point_to_point") {
-      const Vector3 p_i = reader.Vec3(node, where, "position_i");
-      const Vector3 p_j = reader.Vec3(node, where, "position_j");
-      const double stiffness = reader.OptionalNumber(node, where, "stiffness", 0.0);
-      const double damping = reader.OptionalNumber(node, where, "damping", 0.0);
-      const double free_length = reader.OptionalNumber(node, where, "free_length", -1.0);
-      const double preload = reader.OptionalNumber(node, where, "preload", 0.0);
+      const Vector3 p_i = reader.Vec3(node, where, "position_i", kMaxPosition, "m");
+      const Vector3 p_j = reader.Vec3(node, where, "position_j", kMaxPosition, "m");
+      const double stiffness = reader.OptionalBounded(node, where, "stiffness", 0.0, kMaxStiffness, "N/m");
+      const double damping = reader.OptionalBounded(node, where, "damping", 0.0, kMaxDamping, "N s/m");
+      const double free_length = reader.OptionalBounded(node, where, "free_length", -1.0, kMaxPosition, "m");
+      const double preload = reader.OptionalBounded(node, where, "preload", 0.0, kMaxForce, "N");
       if (stiffness < 0.0) reader.Fail(node["stiffness"], Join(where, "stiffness"), "must be >= 0", Describe(node["stiffness"]));
       if (damping < 0.0) reader.Fail(node["damping"], Join(where, "damping"), "must be >= 0", Describe(node["damping"]));
       if (node["free_length"].IsDefined() && free_length < 0.0) {
@@ -312,8 +352,8 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
       Build(reader, node, where,
             [&] { model.AddPointToPointAt(name, body_i, body_j, p_i, p_j, stiffness, damping, free_length, preload); });
     } else {
-      const Vector3 p = reader.Vec3(node, where, "position");
-      const Vector3 axis = reader.Vec3(node, where, "axis");
+      const Vector3 p = reader.Vec3(node, where, "position", kMaxPosition, "m");
+      const Vector3 axis = reader.Vec3(node, where, "axis", kMaxAxisComponent, "");
       if (axis.norm() < 1e-12) reader.Fail(node["axis"], Join(where, "axis"), "axis must not be zero", Describe(node["axis"]));
       const YAML::Node table = reader.Require(node, where, "table");
       if (!table.IsSequence() || table.size() < 2) {
@@ -324,8 +364,8 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
         const std::string row_path = Join(where, "table") + "[" + std::to_string(r) + "]";
         const YAML::Node row = table[r];
         if (!row.IsSequence() || row.size() != 2) reader.Fail(row, row_path, "expected [deflection, force]", Describe(row));
-        const double d = reader.Number(row[0], row_path + "[0]");
-        const double f = reader.Number(row[1], row_path + "[1]");
+        const double d = reader.Bounded(row[0], row_path + "[0]", kMaxPosition, "m");
+        const double f = reader.Bounded(row[1], row_path + "[1]", kMaxForce, "N");
         if (r == 0 && (d < 0.0 || f != 0.0)) {
           reader.Fail(row, row_path, "first row must be [clearance >= 0, 0]", Describe(row));
         }
