@@ -313,19 +313,28 @@ def markdown_section(safety_runs, evals, out_dir, figure_list=None):
 def section(runs, out_dir, settings=None, names=loading.RUN_NAMES):
     """For report.py: the Markdown lines of the section for the loaded runs ({name: loading.Run}, using
     their bag paths), with the figures written to out_dir. Inputs refused raise AnalysisInputError."""
-    safety_runs = {}
+    safety_runs, skipped = {}, []
     for n in names:
         r = runs.get(n)
         if r is None:
             continue
         scene = os.path.join(os.path.dirname(r.bag), n + ".scene.yaml")
-        safety_runs[n] = safety.load(r.bag, scene if os.path.isfile(scene) else None, r.track_bag, n)
-    if not safety_runs:
-        return []
-    evals = evaluate_runs(safety_runs, settings)
-    os.makedirs(out_dir, exist_ok=True)
-    figs = figures(evals, out_dir)
-    return markdown_section(safety_runs, evals, out_dir, figs)
+        try:
+            safety_runs[n] = safety.load(r.bag, scene if os.path.isfile(scene) else None, r.track_bag, n)
+        except safety.AnalysisInputError as e:
+            # The rest of the report stands; this run's safety quantities are listed as not evaluated.
+            skipped.append("- %s: not evaluated: %s" % (n, e))
+    lines = []
+    if safety_runs:
+        evals = evaluate_runs(safety_runs, settings)
+        os.makedirs(out_dir, exist_ok=True)
+        figs = figures(evals, out_dir)
+        lines = markdown_section(safety_runs, evals, out_dir, figs)
+    if skipped:
+        if not lines:
+            lines = ["## Running safety, track loading, wear and comfort", ""]
+        lines += skipped + [""]
+    return lines
 
 
 def _settings_from_args(a):
