@@ -26,10 +26,15 @@ import safety_synthetic_bags as syn  # noqa: E402
 from rail_analysis import comfort, safety, safety_report  # noqa: E402
 
 # Published weighting parameters, written out again here so that the expected gains do not come from the
-# code under test: ISO 2631-1:1997 Table A.1 (Wd) and ISO 2631-4:2001 Table A.1 / EN 12299 (Wb; K = 1.024
-# with the step unity at high frequency, ISO 8041-1 Table 3). f in Hz.
+# code under test: ISO 2631-1:1997 Table A.1 (Wd) and ISO 2631-4:2001 Table A.1 / EN 12299 (Wb), as ISO
+# 8041:2005 Table 3 lists them (K = 1.024 with the step unity at high frequency; reproduced in the Larson Davis
+# HVM200 Reference Manual, Table 3.1). f in Hz.
 PUBLISHED = {"Wd": (0.4, 100.0, 2.0, 2.0, 0.63, None, None, None, None, 1.0),
-             "Wb": (0.4, 100.0, 16.0, 16.0, 0.63, 2.5, 0.8, 4.0, 0.8, 1.024)}
+             "Wb": (0.4, 100.0, 16.0, 16.0, 0.55, 2.5, 0.9, 4.0, 0.95, 1.024)}
+# Weighting factors at the reference angular frequency 100 rad/s (15.915 Hz), four digits, as makers of
+# vibration meters publish them (ZETLAB, frequency weighting functions: Wb 0.8126 (ISO 2631-4), Wd 0.1261
+# (ISO 2631-1)).
+REFERENCE_100_RAD_S = {"Wb": 0.8126, "Wd": 0.1261}
 # ISO 2631-1:1997 Table 3: Wd weighting factors (x 1000 in the table) at 1, 2 and 4 Hz.
 ISO2631_WD_TABLE = {1.0: 1.011, 2.0: 0.890, 4.0: 0.512}
 
@@ -208,6 +213,10 @@ class SafetySynthetic(unittest.TestCase):
         # ISO 2631-1 Table 3 gives three digits: tolerance half a unit of the last digit.
         for f, g in ISO2631_WD_TABLE.items():
             self.assertAlmostEqual(abs(complex(comfort.analog_response("Wd", f))), g, delta=0.0005)
+        # The published values at 100 rad/s (four digits: half a unit of the last digit).
+        for name, g in REFERENCE_100_RAD_S.items():
+            self.assertAlmostEqual(abs(complex(comfort.analog_response(name, 100.0 / (2.0 * math.pi)))), g,
+                                   delta=0.00005, msg=name)
 
     def test_weighted_rms_of_sinusoids(self):
         # a = A sin(2 pi f t): the weighted r.m.s. is A/sqrt(2) |H(f)|. The 5 s windows hold whole periods;

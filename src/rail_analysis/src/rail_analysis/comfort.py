@@ -10,8 +10,11 @@ Annex A (the form EN 12299 and ISO 2631-4 use), s = j 2 pi f:
 with w_i = 2 pi f_i, times a gain K. Q1 = Q2 = 1/sqrt(2).
 Parameters (frequencies in Hz):
   Wd: f1 0.4, f2 100, f3 2, f4 2, Q4 0.63, K 1 -- ISO 2631-1:1997 Table A.1 / EN 12299:2009 (horizontal).
-  Wb: f1 0.4, f2 100, f3 16, f4 16, Q4 0.63, f5 2.5, Q5 0.8, f6 4, Q6 0.8 -- ISO 2631-4:2001 Table A.1,
-      EN 12299:2009 (vertical). With the step Hs written as above (unity at high frequency) the gain is
+  Wb: f1 0.4, f2 100, f3 16, f4 16, Q4 0.55, f5 2.5, Q5 0.9, f6 4, Q6 0.95 -- ISO 2631-4:2001 Table A.1,
+      EN 12299:2009 (vertical); values as ISO 8041:2005 Table 3 lists them (reproduced in the Larson Davis
+      HVM200 Reference Manual, Table 3.1 "Parameters and transfer functions of the frequency weightings
+      (source: ISO 8041)"). Check: |Wb| = 0.8126 and |Wd| = 0.1261 at 100 rad/s (15.915 Hz), the reference
+      values that vibration-meter makers publish (ZETLAB, frequency weighting functions table). With the step Hs written as above (unity at high frequency) the gain is
       K = 1.024, as ISO 8041-1 Table 3 gives it; EN 12299 writes K = 0.4 with the step normalised to unity at
       low frequency: 0.4 (4 / 2.5)^2 = 1.024, the same filter.
 The digital filters are second-order sections from the bilinear transform, each pre-warped at its own
@@ -38,8 +41,8 @@ WEIGHTINGS = {
            "Q6": None, "K": 1.0},
     # ISO 2631-4:2001 Table A.1 / EN 12299:2009: vertical weighting Wb; K = 1.024 with Hs unity at high
     # frequency (ISO 8041-1 Table 3), i.e. EN 12299's K = 0.4 with Hs unity at low frequency.
-    "Wb": {"f1": 0.4, "f2": 100.0, "f3": 16.0, "f4": 16.0, "Q4": 0.63, "f5": 2.5, "Q5": 0.8, "f6": 4.0,
-           "Q6": 0.8, "K": 1.024},
+    "Wb": {"f1": 0.4, "f2": 100.0, "f3": 16.0, "f4": 16.0, "Q4": 0.55, "f5": 2.5, "Q5": 0.9, "f6": 4.0,
+           "Q6": 0.95, "K": 1.024},
 }
 Q_BAND = 1.0 / math.sqrt(2.0)  # Q1 = Q2, band-limiting Butterworth sections
 
