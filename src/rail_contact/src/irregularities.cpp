@@ -2,6 +2,7 @@
 #include "rail_contact/irregularities.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -276,7 +277,14 @@ Irregularities Irregularities::fromPsd(const PsdRealisationSpec& spec) {
 // ---------------------------------------------------------------------------------------------------
 // Evaluation.
 
+namespace {
+std::atomic<long long> g_stations_evaluated{0};  // Irregularities::stationsEvaluated()
+}  // namespace
+
+long long Irregularities::stationsEvaluated() { return g_stations_evaluated.load(std::memory_order_relaxed); }
+
 void Irregularities::evaluate(double s, IrregularityState& out) const {
+  g_stations_evaluated.fetch_add(1, std::memory_order_relaxed);
   out = IrregularityState();
   if (kind_ == Kind::kTable) {
     const std::vector<double>& sk = s_knots_;
@@ -325,6 +333,7 @@ void Irregularities::sampleUniform(double s0, double h, std::vector<Irregularity
     for (std::size_t i = 0; i < n; ++i) evaluate(s0 + static_cast<double>(i) * h, out[i]);
     return;
   }
+  g_stations_evaluated.fetch_add(static_cast<long long>(n), std::memory_order_relaxed);
   for (std::size_t i = 0; i < n; ++i) out[i] = IrregularityState();
   constexpr std::size_t kAnchor = 256;  // exact cos/sin every kAnchor stations bounds the recurrence drift
   const double x0 = s0 - s_reference_;

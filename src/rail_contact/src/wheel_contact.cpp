@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -44,7 +45,10 @@ WheelContactModel::WheelContactModel(const WheelProfile& wheel, double nominal_r
 template <class Deformation>
 void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const TrackGeometry& track,
                                  const Deformation& deformation, WheelContactWork& work,
-                                 WheelContactResult& out) const noexcept {
+                                 WheelContactResult& out, ContactCost* cost) const noexcept {
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point t_begin = cost != nullptr ? Clock::now() : Clock::time_point();
+  double detection_s = 0.0;  // this evaluation's search time
   WheelPose pose;
   pose.p_centre_in_world = ws.p_centre_in_world;
   pose.R_wheelset_to_world = ws.R_wheelset_to_world;
@@ -66,7 +70,18 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     }
     c.searched = true;
     ContactGeometry g;
-    detector_.detect(static_cast<WheelSurface>(k), pose, track, deformation, work.detection[k], g);
+    if (cost != nullptr) {
+      const Clock::time_point t0 = Clock::now();
+      detector_.detect(static_cast<WheelSurface>(k), pose, track, deformation, work.detection[k], g);
+      const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
+      detection_s += dt;
+      if (k == kFlange) {
+        cost->flange_detection_seconds += dt;
+        ++cost->flange_searches;
+      }
+    } else {
+      detector_.detect(static_cast<WheelSurface>(k), pose, track, deformation, work.detection[k], g);
+    }
     c.status = input_ok ? g.status : DetectionStatus::kInvalidInput;
     c.penetration = std::isfinite(g.penetration) ? g.penetration : -1.0;
     if (!g.valid || !input_ok) {
@@ -152,6 +167,10 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
       const PolachResult pr = polach_forces(pin, polach_);
       c.F_long = pr.Fx;
       c.F_lat = pr.Fy;
+      if (cost != nullptr) {
+        ++cost->creep_evaluations;
+        if (polach_.spin) ++cost->spin_evaluations;  // polach_forces evaluated its spin terms (nu_C, F_yS)
+      }
     }
     c.force_on_wheel_in_world = contact_force_in_world(c.R_contact_to_world, c.F_long, c.F_lat, c.N);
     c.rail_wrench = rail_section_wrench(-c.force_on_wheel_in_world, Eigen::Vector3d::Zero(),
@@ -175,17 +194,23 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     out.wheel_centre = WheelsetWrench();
     out.rail_section = RailWrench();
   }
+  if (cost != nullptr) {
+    const double total = std::chrono::duration<double>(Clock::now() - t_begin).count();
+    cost->detection_seconds += detection_s;
+    cost->forces_seconds += total - detection_s;
+    ++cost->evaluations;
+  }
 }
 
 template void WheelContactModel::evaluate<RigidRailDeformation>(const WheelState&, RailSide, const TrackGeometry&,
                                                                 const RigidRailDeformation&, WheelContactWork&,
-                                                                WheelContactResult&) const noexcept;
+                                                                WheelContactResult&, ContactCost*) const noexcept;
 template void WheelContactModel::evaluate<BeamRailDeformation>(const WheelState&, RailSide, const TrackGeometry&,
                                                                const BeamRailDeformation&, WheelContactWork&,
-                                                               WheelContactResult&) const noexcept;
+                                                               WheelContactResult&, ContactCost*) const noexcept;
 template void WheelContactModel::evaluate<RailDeformation>(const WheelState&, RailSide, const TrackGeometry&,
                                                            const RailDeformation&, WheelContactWork&,
-                                                           WheelContactResult&) const noexcept;
+                                                           WheelContactResult&, ContactCost*) const noexcept;
 
 }  // namespace contact
 }  // namespace rail

@@ -18,12 +18,70 @@ const char* CostProfile::name(Component c) {
   return "?";
 }
 
+const char* CostClock::name(Part p) {
+  switch (p) {
+    case kVehicleRhs: return "vehicle_rhs";
+    case kVehicleJacobian: return "vehicle_jacobian";
+    case kTrackRhs: return "track_rhs";
+    case kTrackSolve: return "track_solve";
+    case kWindowMoves: return "window_moves";
+    case kFloorAccelerations: return "floor_accelerations";
+    case kPadForces: return "pad_forces";
+    case kMarkers: return "markers";
+    case kRailDeflection: return "rail_deflection";
+    case kContactPointOutput: return "contact_point_output";
+    case kPartCount: break;
+  }
+  return "?";
+}
+
+const char* CostClock::name(Count c) {
+  switch (c) {
+    case kDampingProducts: return "damping_products";
+    case kEndDashpotForces: return "end_dashpot_forces";
+    case kIrregularityEvaluations: return "irregularity_evaluations";
+    case kCountCount: break;
+  }
+  return "?";
+}
+
+int CostProfile::finer_lines(const CostClock& k, std::array<FinerLine, kMaxFinerLines>& lines) const {
+  const bool track_side = calls_[kTrackStep] > 0;
+  const Component contact_parent = track_side ? kTrackStep : kVehicleIntegration;
+  int n = 0;
+  auto part = [&](CostClock::Part p, Component parent) {
+    lines[static_cast<std::size_t>(n++)] = FinerLine{CostClock::name(p), k.seconds[p], k.calls[p], parent};
+  };
+  part(CostClock::kVehicleRhs, kVehicleIntegration);
+  part(CostClock::kVehicleJacobian, kVehicleIntegration);
+  lines[static_cast<std::size_t>(n++)] =
+      FinerLine{"contact_detection", k.contact.detection_seconds, k.contact.evaluations, contact_parent};
+  lines[static_cast<std::size_t>(n++)] =
+      FinerLine{"contact_forces", k.contact.forces_seconds, k.contact.evaluations, contact_parent};
+  part(CostClock::kTrackRhs, kTrackStep);
+  part(CostClock::kTrackSolve, kTrackStep);
+  part(CostClock::kWindowMoves, kTrackStep);
+  part(CostClock::kFloorAccelerations, kVehicleIntegration);
+  part(CostClock::kRailDeflection, kPublish);
+  part(CostClock::kPadForces, kPublish);
+  part(CostClock::kContactPointOutput, kPublish);
+  part(CostClock::kMarkers, kPublish);
+  return n;
+}
+
 namespace {
 const char* on_off(bool b) { return b ? "on" : "off"; }
+
+// Within a coarse component: its finer parts that are not nested in other parts. The contact parts are
+// inside vehicle_rhs + vehicle_jacobian on the vehicle side, so they are not subtracted there again.
+bool direct_child(const CostProfile::FinerLine& l, bool track_side) {
+  const bool contact = std::string(l.name).rfind("contact_", 0) == 0 && std::string(l.name) != "contact_point_output";
+  return !(contact && !track_side);
+}
 }  // namespace
 
 std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, double loop_wall,
-                                 double simulated) const {
+                                 double simulated, const CostClock* clock) const {
   std::ostringstream o;
   o.precision(6);
   o << "# Where the wall time of " << node << " went (s; share of the run loop's wall time)\n";
@@ -42,8 +100,42 @@ std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, do
   for (int c = 0; c < kComponentCount; ++c)
     if (c != kSetUp) accounted += seconds_[c];
   o << "  other: {seconds: " << (loop_wall - accounted) << "}\n";
+  if (clock != nullptr) {
+    // Each finer part: seconds, share of the run loop, calls, the component it is part of; then per
+    // component the rest ("other") so that the shares add up within it.
+    std::array<FinerLine, kMaxFinerLines> lines;
+    const int n = finer_lines(*clock, lines);
+    const bool track_side = calls_[kTrackStep] > 0;
+    o << "finer:   # nested in the components above (vehicle side: contact_* inside vehicle_rhs + vehicle_jacobian)\n";
+    for (int i = 0; i < n; ++i) {
+      const FinerLine& l = lines[static_cast<std::size_t>(i)];
+      o << "  " << l.name << ": {seconds: " << l.seconds << ", share: " << (loop_wall > 0 ? l.seconds / loop_wall : 0.0)
+        << ", calls: " << l.calls << ", within: " << name(l.parent) << "}\n";
+    }
+    for (int c = 0; c < kComponentCount; ++c) {
+      double parts = 0.0;
+      bool any = false;
+      for (int i = 0; i < n; ++i) {
+        const FinerLine& l = lines[static_cast<std::size_t>(i)];
+        if (l.parent != c || !direct_child(l, track_side)) continue;
+        parts += l.seconds;
+        any = any || l.calls > 0;
+      }
+      if (!any) continue;
+      o << "  " << name(static_cast<Component>(c)) << "_other: {seconds: " << (seconds_[c] - parts)
+        << ", share: " << (loop_wall > 0 ? (seconds_[c] - parts) / loop_wall : 0.0) << "}\n";
+    }
+  }
   o << "counts:\n";
   for (const auto& kv : counts_) o << "  " << kv.first << ": " << kv.second << "\n";
+  if (clock != nullptr) {
+    o << "  flange_searches: " << clock->contact.flange_searches << "\n"
+      << "  creep_evaluations: " << clock->contact.creep_evaluations << "\n"
+      << "  creep_evaluations_with_spin: " << clock->contact.spin_evaluations << "\n";
+    for (int c = 0; c < CostClock::kCountCount; ++c)
+      o << "  " << CostClock::name(static_cast<CostClock::Count>(c)) << ": " << clock->counts[static_cast<std::size_t>(c)]
+        << "\n";
+  }
   const Effects& e = scene.effects;
   o << "effects:\n"
     << "  track_model: " << to_string(e.track_model) << "\n"
@@ -61,7 +153,8 @@ std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, do
   return o.str();
 }
 
-std::string CostProfile::to_text(const std::string& node, double loop_wall, double simulated) const {
+std::string CostProfile::to_text(const std::string& node, double loop_wall, double simulated,
+                                 const CostClock* clock) const {
   std::ostringstream o;
   char line[160];
   std::snprintf(line, sizeof line, "%s: cost profile, %.2f s wall for %.4f s simulated (%.2f s per simulated s)\n",
@@ -72,6 +165,22 @@ std::string CostProfile::to_text(const std::string& node, double loop_wall, doub
     const Component k = static_cast<Component>(c);
     std::snprintf(line, sizeof line, "  %-20s %9.3f s %6.1f %%  %ld calls\n", name(k), seconds_[c],
                   k != kSetUp && loop_wall > 0 ? 100.0 * seconds_[c] / loop_wall : 0.0, calls_[c]);
+    o << line;
+    if (clock == nullptr) continue;
+    std::array<FinerLine, kMaxFinerLines> lines;
+    const int n = finer_lines(*clock, lines);
+    for (int i = 0; i < n; ++i) {
+      const FinerLine& l = lines[static_cast<std::size_t>(i)];
+      if (l.parent != k || l.calls == 0) continue;
+      std::snprintf(line, sizeof line, "    %-18s %9.3f s %6.1f %%  %ld calls\n", l.name, l.seconds,
+                    loop_wall > 0 ? 100.0 * l.seconds / loop_wall : 0.0, l.calls);
+      o << line;
+    }
+  }
+  if (clock != nullptr) {
+    std::snprintf(line, sizeof line, "  flange searches %lld, creep evaluations %ld (with spin %ld), damping products %lld\n",
+                  static_cast<long long>(clock->contact.flange_searches), clock->contact.creep_evaluations,
+                  clock->contact.spin_evaluations, clock->counts[CostClock::kDampingProducts]);
     o << line;
   }
   for (const auto& kv : counts_) {

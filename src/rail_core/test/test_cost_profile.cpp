@@ -64,3 +64,63 @@ TEST(CostProfile, TimedTransportTimesBothDirectionsAndForwardsFrames) {
   EXPECT_EQ(pt.calls(CostProfile::kTransportWait), 1);
   EXPECT_EQ(tv.role(), Role::kVehicle);
 }
+
+// The node-level optional outputs (effects.rviz_markers, contact_point_output) go through TimedOutput:
+// off, the output is not produced and its part shows exactly zero time and calls; on, it is produced
+// under its part's clock.
+TEST(CostClock, TimedOutputOffProducesNothingAndCostsNothing) {
+  for (CostClock::Part part : {CostClock::kMarkers, CostClock::kContactPointOutput}) {
+    CostClock clock;
+    int produced = 0;
+    EXPECT_FALSE(TimedOutput(&clock, part, false, [&] { ++produced; }));
+    EXPECT_EQ(produced, 0);
+    EXPECT_EQ(clock.calls[part], 0);
+    EXPECT_EQ(clock.seconds[part], 0.0);
+    EXPECT_TRUE(TimedOutput(&clock, part, true, [&] {
+      ++produced;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }));
+    EXPECT_EQ(produced, 1);
+    EXPECT_EQ(clock.calls[part], 1);
+    // sleep_for waits at least the time asked; the upper bound only guards against a wrong unit.
+    EXPECT_GE(clock.seconds[part], 0.002);
+    EXPECT_LT(clock.seconds[part], 2.0);
+    // No clock: still produced, nothing recorded anywhere.
+    EXPECT_TRUE(TimedOutput(nullptr, part, true, [&] { ++produced; }));
+    EXPECT_EQ(produced, 2);
+  }
+}
+
+// The finer split nests in the coarse components and the per-component "other" makes the shares add up:
+// track side, track_step 4 s = contact 1 + 0.5, rhs 0.5, solve 1.5, rest 0.5.
+TEST(CostClock, FinerSplitAddsUpWithinItsComponent) {
+  CostProfile p;
+  p.add(CostProfile::kTrackStep, 4.0);
+  p.add(CostProfile::kPublish, 1.0);
+  CostClock k;
+  k.contact.detection_seconds = 1.0;
+  k.contact.forces_seconds = 0.5;
+  k.contact.evaluations = 8;
+  k.add(CostClock::kTrackRhs, 0.5);
+  k.add(CostClock::kTrackSolve, 1.5);
+  k.add(CostClock::kRailDeflection, 0.25);
+  Scene scene;
+  scene.file = "s.yaml";
+  const std::string y = p.to_yaml("/t", scene, 10.0, 1.0, &k);
+  EXPECT_NE(y.find("contact_detection: {seconds: 1, share: 0.1, calls: 8, within: track_step}"), std::string::npos) << y;
+  EXPECT_NE(y.find("track_solve: {seconds: 1.5, share: 0.15, calls: 1, within: track_step}"), std::string::npos) << y;
+  EXPECT_NE(y.find("track_step_other: {seconds: 0.5, share: 0.05}"), std::string::npos) << y;  // 4 - 1 - 0.5 - 0.5 - 1.5
+  EXPECT_NE(y.find("publish_other: {seconds: 0.75, share: 0.075}"), std::string::npos) << y;   // 1 - 0.25
+  EXPECT_NE(y.find("flange_searches: 0"), std::string::npos) << y;
+  // Vehicle side: the contact parts are inside the right-hand sides and not subtracted again.
+  CostProfile v;
+  v.add(CostProfile::kVehicleIntegration, 3.0);
+  CostClock kv;
+  kv.add(CostClock::kVehicleRhs, 2.0);
+  kv.contact.detection_seconds = 1.0;
+  kv.contact.evaluations = 8;
+  const std::string yv = v.to_yaml("/v", scene, 4.0, 1.0, &kv);
+  EXPECT_NE(yv.find("contact_detection: {seconds: 1, share: 0.25, calls: 8, within: vehicle_integration}"),
+            std::string::npos) << yv;
+  EXPECT_NE(yv.find("vehicle_integration_other: {seconds: 1, share: 0.25}"), std::string::npos) << yv;  // 3 - 2
+}

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <rail_contact/profile.hpp>
+#include <rail_core/cost_profile.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
 
@@ -552,4 +553,132 @@ TEST(CosimTrack, FlexibleRollingWheelsetKeepsContactAndLoad) {
   }
   EXPECT_LT(worst, 1e-3 * Q);
   std::printf("[ figures  ] h = 2e-5 s vs 1e-5 s: largest wheel-load difference %.1f N\n", worst);
+}
+
+// ---- Cost of the effects (rail_core/cost_profile.hpp): an effect that is off costs nothing. ----------
+// The paper coach's 8 wheels at the height where the rigid rails would carry 72.9 kN, rolling at 10 m/s
+// (spin = speed / nominal radius), for 25 track steps with a cost clock attached. Counts and sums of clock
+// readings are compared, so "off" must give exactly 0 and "on" > 0.
+namespace {
+
+struct TrackCostRun {
+  rail::core::CostClock clock;
+  long newmark_steps = 0;
+};
+
+// sections / pads: call sectionDeflection / padForces after every step, as the track node does when
+// effects.rail_deflection_output / pad_force_output are on (its only callers).
+TrackCostRun runTrackWithClock(const Scene& sc, bool sections, bool pads, int steps = 25) {
+  TrackCostRun r;
+  rt::CosimTrackOptions options;
+  options.cost = &r.clock;
+  rt::CosimTrack track(sc, options);
+  const DirectContact direct(sc);
+  const double z = direct.settledHeight(15.0, 72900.0), v = 10.0;
+  const int section = sections ? track.addSection(15.0) : -1;
+  std::vector<rt::PadForceSample> samples(static_cast<std::size_t>(std::max(1, track.sleeperCount())));
+  rt::RailSectionDeflection defl;
+  cc::WheelStateFrame frame(8);
+  cc::WrenchFrame out(8);
+  frame.count = 8;
+  for (int k = 0; k <= steps; ++k) {
+    frame.step = static_cast<std::uint64_t>(k);
+    frame.time = k * sc.solver.track_step;
+    for (int ws = 0; ws < 4; ++ws)
+      for (int side = 0; side < 2; ++side)
+        setWheel(frame, 2 * ws + side, kStations[ws] + v * frame.time, direct.taping_y, z,
+                 Eigen::Quaterniond::Identity(), Eigen::Vector3d(v, 0.0, 0.0), Eigen::Vector3d(0.0, v / 0.445, 0.0));
+    EXPECT_EQ(track.step(frame, out), rt::CosimStepStatus::kOk);
+    if (sections) track.sectionDeflection(section, defl);
+    if (pads) track.padForces(0.0, 30.0, samples.data(), static_cast<int>(samples.size()));
+  }
+  r.newmark_steps = track.newmarkSteps();
+  return r;
+}
+
+using CC = rail::core::CostClock;
+
+}  // namespace
+
+TEST(CosimTrackCost, FlexibleStepIsSplitIntoContactRhsAndSolve) {
+  const TrackCostRun r = runTrackWithClock(scene("flexible"), false, false);
+  ASSERT_EQ(r.newmark_steps, 25);
+  // One right-hand side and one K_eff solve per Newmark step (the completion is timed with the RHS).
+  EXPECT_EQ(r.clock.calls[CC::kTrackSolve], 25);
+  EXPECT_EQ(r.clock.calls[CC::kTrackRhs], 2 * 25);
+  EXPECT_GT(r.clock.seconds[CC::kTrackSolve], 0.0);
+  EXPECT_EQ(r.clock.contact.evaluations, 8 * 26);  // every wheel of every frame, step 0 included
+  EXPECT_GT(r.clock.contact.detection_seconds, 0.0);
+  EXPECT_GT(r.clock.contact.forces_seconds, 0.0);
+  EXPECT_GT(r.clock.contact.creep_evaluations, 0);  // the wheels are in contact
+  // No window, no outputs asked for: no cost there.
+  EXPECT_EQ(r.clock.calls[CC::kWindowMoves], 0);
+  EXPECT_EQ(r.clock.calls[CC::kRailDeflection], 0);
+  EXPECT_EQ(r.clock.calls[CC::kPadForces], 0);
+  EXPECT_EQ(r.clock.calls[CC::kVehicleRhs], 0);
+}
+
+TEST(CosimTrackCost, RigidFeRunsNoNewmarkWork) {
+  const TrackCostRun r = runTrackWithClock(scene("rigid_fe"), false, false);
+  EXPECT_EQ(r.newmark_steps, 0);
+  EXPECT_EQ(r.clock.calls[CC::kTrackRhs], 0);
+  EXPECT_EQ(r.clock.calls[CC::kTrackSolve], 0);
+  EXPECT_EQ(r.clock.seconds[CC::kTrackSolve], 0.0);
+  EXPECT_EQ(r.clock.counts[CC::kDampingProducts], 0);
+  EXPECT_GT(r.clock.contact.evaluations, 0);
+}
+
+TEST(CosimTrackCost, TrackDampingOffComputesNoDampingProduct) {
+  Scene sc = scene("flexible");
+  sc.effects.track_damping = false;
+  sc.effects.absorbing_ends = false;  // the end dashpots are the other entries of C
+  const TrackCostRun off = runTrackWithClock(sc, false, false);
+  ASSERT_EQ(off.newmark_steps, 25);
+  EXPECT_EQ(off.clock.counts[CC::kDampingProducts], 0);
+  sc.effects.track_damping = true;
+  const TrackCostRun on = runTrackWithClock(sc, false, false);
+  EXPECT_EQ(on.clock.counts[CC::kDampingProducts], 25);  // one C v product per step
+}
+
+TEST(CosimTrackCost, AbsorbingEndsOffComputeNoDashpotForce) {
+  Scene sc = scene("flexible");
+  sc.effects.absorbing_ends = false;
+  const TrackCostRun off = runTrackWithClock(sc, false, false);
+  EXPECT_EQ(off.clock.counts[CC::kEndDashpotForces], 0);
+  EXPECT_EQ(off.clock.counts[CC::kDampingProducts], 25);  // the track's own damping is still there
+  sc.effects.absorbing_ends = true;
+  const TrackCostRun on = runTrackWithClock(sc, false, false);
+  EXPECT_EQ(on.clock.counts[CC::kEndDashpotForces], 4 * 25);  // a dashpot at each of the 4 rail ends
+}
+
+TEST(CosimTrackCost, FlangeContactAndSpinOffCostNothingOnTheTrackSide) {
+  Scene sc = scene("flexible");
+  sc.effects.flange_contact = false;
+  sc.effects.spin_creepage = false;
+  const TrackCostRun off = runTrackWithClock(sc, false, false);
+  EXPECT_EQ(off.clock.contact.flange_searches, 0);
+  EXPECT_EQ(off.clock.contact.flange_detection_seconds, 0.0);
+  EXPECT_GT(off.clock.contact.creep_evaluations, 0);
+  EXPECT_EQ(off.clock.contact.spin_evaluations, 0);
+  sc.effects.flange_contact = true;
+  sc.effects.spin_creepage = true;
+  const TrackCostRun on = runTrackWithClock(sc, false, false);
+  EXPECT_EQ(on.clock.contact.flange_searches, 8 * 26);
+  EXPECT_GT(on.clock.contact.flange_detection_seconds, 0.0);
+  // Semi-implicit Newton included: every creep evaluation has the spin terms.
+  EXPECT_EQ(on.clock.contact.spin_evaluations, on.clock.contact.creep_evaluations);
+  EXPECT_GT(on.clock.contact.spin_evaluations, 0);
+}
+
+TEST(CosimTrackCost, RailDeflectionAndPadForceOutputsCostOnlyWhenAskedFor) {
+  const TrackCostRun off = runTrackWithClock(scene("flexible"), false, false);
+  EXPECT_EQ(off.clock.calls[CC::kRailDeflection], 0);
+  EXPECT_EQ(off.clock.seconds[CC::kRailDeflection], 0.0);
+  EXPECT_EQ(off.clock.calls[CC::kPadForces], 0);
+  EXPECT_EQ(off.clock.seconds[CC::kPadForces], 0.0);
+  const TrackCostRun on = runTrackWithClock(scene("flexible"), true, true);
+  EXPECT_EQ(on.clock.calls[CC::kRailDeflection], 26);
+  EXPECT_GT(on.clock.seconds[CC::kRailDeflection], 0.0);
+  EXPECT_EQ(on.clock.calls[CC::kPadForces], 26);
+  EXPECT_GT(on.clock.seconds[CC::kPadForces], 0.0);
 }

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <rail_contact/contact_geometry_table.hpp>
+#include <rail_core/cost_profile.hpp>
 #include <rail_core/scene_loader.hpp>
 
 #include <algorithm>
@@ -421,5 +422,126 @@ TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
   }
 }
 
+
+// ---- Cost of the effects (rail_core/cost_profile.hpp): an effect that is off costs nothing. ----------
+// Each run is 20 ms of the coach on the 200 m straight at 110 km/h with a cost clock attached; the
+// figures compared are counts and sums of clock readings, so "off" must give exactly 0 and "on" > 0.
+
+struct CostRun {
+  core::CostClock clock;
+  long long irregularity_stations_build = 0;  // Irregularities::stationsEvaluated() during the build
+  long long irregularity_stations_run = 0;    // ... during the run
+};
+
+CostRun RunWithClock(const core::Scene& scene, double t_end = 0.02) {
+  CostRun r;
+  SimulatorSettings settings;
+  settings.cost = &r.clock;
+  const long long s0 = rc::Irregularities::stationsEvaluated();
+  VehicleSimulator sim(scene, settings);
+  const long long s1 = rc::Irregularities::stationsEvaluated();
+  EXPECT_EQ(sim.AdvanceTo(t_end), RunStatus::kFinished) << sim.message();
+  r.irregularity_stations_build = s1 - s0;
+  r.irregularity_stations_run = rc::Irregularities::stationsEvaluated() - s1;
+  return r;
+}
+
+TEST(VehicleSimulatorCost, TheBuildIsNotTimedAndTheRunIs) {
+  const CostRun r = RunWithClock(StraightScene(30.5556, 0.02));
+  // Adams (max step 2e-5 s): right-hand sides, no Jacobian.
+  EXPECT_GT(r.clock.calls[core::CostClock::kVehicleRhs], 0);
+  EXPECT_GT(r.clock.seconds[core::CostClock::kVehicleRhs], 0.0);
+  EXPECT_EQ(r.clock.calls[core::CostClock::kVehicleJacobian], 0);
+  EXPECT_EQ(r.clock.seconds[core::CostClock::kVehicleJacobian], 0.0);
+  // 8 wheels per right-hand side: the contact evaluations are 8 per timed right-hand side exactly.
+  EXPECT_EQ(r.clock.contact.evaluations, 8 * r.clock.calls[core::CostClock::kVehicleRhs]);
+  // The contact parts are nested in the right-hand sides: their sum cannot exceed them.
+  EXPECT_GT(r.clock.contact.detection_seconds, 0.0);
+  EXPECT_GT(r.clock.contact.forces_seconds, 0.0);
+  EXPECT_LE(r.clock.contact.detection_seconds + r.clock.contact.forces_seconds,
+            r.clock.seconds[core::CostClock::kVehicleRhs]);
+  // The track side's parts stay untouched by the vehicle.
+  EXPECT_EQ(r.clock.calls[core::CostClock::kTrackRhs], 0);
+  EXPECT_EQ(r.clock.calls[core::CostClock::kTrackSolve], 0);
+}
+
+TEST(VehicleSimulatorCost, FlangeContactOffSearchesNoFlange) {
+  core::Scene scene = StraightScene(30.5556, 0.02);
+  scene.effects.flange_contact = false;
+  const CostRun off = RunWithClock(scene);
+  EXPECT_EQ(off.clock.contact.flange_searches, 0);
+  EXPECT_EQ(off.clock.contact.flange_detection_seconds, 0.0);
+  EXPECT_GT(off.clock.contact.evaluations, 0);  // the tread was searched
+  scene.effects.flange_contact = true;
+  const CostRun on = RunWithClock(scene);
+  // One flange search per wheel evaluation.
+  EXPECT_EQ(on.clock.contact.flange_searches, on.clock.contact.evaluations);
+  EXPECT_GT(on.clock.contact.flange_detection_seconds, 0.0);
+}
+
+TEST(VehicleSimulatorCost, SpinCreepageOffEvaluatesNoSpinTerm) {
+  core::Scene scene = StraightScene(30.5556, 0.02);
+  scene.effects.spin_creepage = false;
+  const CostRun off = RunWithClock(scene);
+  EXPECT_GT(off.clock.contact.creep_evaluations, 0);
+  EXPECT_EQ(off.clock.contact.spin_evaluations, 0);
+  scene.effects.spin_creepage = true;
+  const CostRun on = RunWithClock(scene);
+  // Every creep evaluation (one per active contact) includes the spin terms.
+  EXPECT_GT(on.clock.contact.spin_evaluations, 0);
+  EXPECT_EQ(on.clock.contact.spin_evaluations, on.clock.contact.creep_evaluations);
+}
+
+TEST(VehicleSimulatorCost, FloorAccelerationsOffCostNothing) {
+  core::Scene scene = StraightScene(30.5556, 0.02);
+  scene.effects.floor_acceleration_output = false;
+  const CostRun off = RunWithClock(scene);
+  EXPECT_EQ(off.clock.calls[core::CostClock::kFloorAccelerations], 0);
+  EXPECT_EQ(off.clock.seconds[core::CostClock::kFloorAccelerations], 0.0);
+  scene.effects.floor_acceleration_output = true;
+  const CostRun on = RunWithClock(scene);
+  EXPECT_GT(on.clock.calls[core::CostClock::kFloorAccelerations], 0);
+  EXPECT_GT(on.clock.seconds[core::CostClock::kFloorAccelerations], 0.0);
+}
+
+TEST(VehicleSimulatorCost, IrregularitiesAreTabulatedAtBuildAndCostNothingDuringTheRun) {
+  // 2 ms only: the realisation's start is rough for the coach's first steps and run time is not the point.
+  core::Scene scene = StraightScene(30.5556, 0.002);
+  scene.effects.irregularities = true;
+  scene.track.irregularities.source = core::IrregularitySource::kPsd;
+  scene.track.irregularities.psd = "fra_class_4";
+  const CostRun on = RunWithClock(scene, 0.002);
+  EXPECT_GT(on.irregularity_stations_build, 0);  // applied: sampled into the geometry tables
+  EXPECT_EQ(on.irregularity_stations_run, 0);    // never evaluated at run time
+  scene.effects.irregularities = false;
+  const CostRun off = RunWithClock(scene, 0.002);
+  EXPECT_EQ(off.irregularity_stations_build, 0);
+  EXPECT_EQ(off.irregularity_stations_run, 0);
+}
+
+TEST(VehicleSimulatorCost, BdfJacobianRightHandSidesAreTimedAsJacobianWithoutChangingTheRun) {
+  const double t_end = 0.01;
+  core::Scene scene = StraightScene(30.5556, t_end);
+  scene.solver.vehicle_method = core::VehicleMethod::kBdf;
+  core::CostClock clock;
+  SimulatorSettings timed;
+  timed.cost = &clock;
+  VehicleSimulator a(scene, timed), b(scene);
+  ASSERT_EQ(a.method(), IntegrationMethod::kBdf);
+  EXPECT_EQ(a.AdvanceTo(t_end), RunStatus::kFinished) << a.message();
+  EXPECT_EQ(b.AdvanceTo(t_end), RunStatus::kFinished) << b.message();
+  const IntegratorCounters ca = a.Counters(), cb = b.Counters();
+  // The wrapper calls CVODE's own difference quotients: the same run to the last bit and the same counts.
+  EXPECT_EQ(ca.steps, cb.steps);
+  EXPECT_EQ(ca.rhs_evals_jacobian, cb.rhs_evals_jacobian);
+  EXPECT_EQ(ca.jacobian_evals, cb.jacobian_evals);
+  EXPECT_EQ((a.state() - b.state()).cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_GT(ca.jacobian_evals, 0);
+  // Every Jacobian right-hand side is timed as Jacobian work, the others (plus one per UpdateOutputs,
+  // i.e. one per AdvanceTo here) as right-hand sides.
+  EXPECT_EQ(clock.calls[core::CostClock::kVehicleJacobian], ca.rhs_evals_jacobian);
+  EXPECT_EQ(clock.calls[core::CostClock::kVehicleRhs], ca.rhs_evals + 1);
+  EXPECT_GT(clock.seconds[core::CostClock::kVehicleJacobian], 0.0);
+}
 }  // namespace
 }  // namespace rail::vehicle

@@ -97,6 +97,10 @@ class Irregularities {
   /// Value and derivatives at s (m).
   void evaluate(double s, IrregularityState& out) const;
 
+  /// Stations evaluated (evaluate() and sampleUniform()) by all objects of the process since it started:
+  /// a cost figure. TrackGeometry tabulates the irregularities when it is built, so a run adds none.
+  static long long stationsEvaluated();
+
   /// Values and derivatives at s0 + i h, i = 0 .. out.size() - 1 (the caller sizes out). Same result as
   /// evaluate() to round-off; a PSD realisation is summed by a rotation recurrence (re-anchored every
   /// 256 stations), which makes building long tables cheap.

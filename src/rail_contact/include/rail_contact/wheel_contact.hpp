@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "rail_contact/contact_cost.hpp"
 #include "rail_contact/contact_detection.hpp"
 #include "rail_contact/creepage.hpp"
 #include "rail_contact/hertz.hpp"
@@ -111,9 +112,11 @@ class WheelContactModel {
 
   /// Evaluates both contacts of one wheel on the rail of the same side. No allocation, no exception;
   /// finite output for any finite input (invalid input gives inactive contacts and zero wrenches).
+  /// cost: when not null, the search and force times and the counts of this evaluation are added to it
+  /// (a few steady-clock reads per contact); null: no timing.
   template <class Deformation>
   void evaluate(const WheelState& wheel, RailSide side, const TrackGeometry& track, const Deformation& deformation,
-                WheelContactWork& work, WheelContactResult& out) const noexcept;
+                WheelContactWork& work, WheelContactResult& out, ContactCost* cost = nullptr) const noexcept;
 
   const ContactDetector& detector() const { return detector_; }
   const WheelContactOptions& options() const { return options_; }

@@ -8,9 +8,83 @@
 #include <string>
 #include <vector>
 
+#include <rail_contact/contact_cost.hpp>
+
 #include "rail_core/scene.hpp"
 
 namespace rail::core {
+
+// The finer split of a run's cost, filled by the cores (VehicleSimulator, CosimTrack, TrackWindow,
+// TrackSimulator, NewmarkIntegrator) when the caller passes one at construction; null = no timing and no
+// cost. Owned by the caller; plain arrays, no allocation; a steady-clock read around each timed part.
+// Nesting in the coarse components of CostProfile (the node prints it):
+//   vehicle_integration > vehicle_rhs, vehicle_jacobian (> contact_detection, contact_forces), floor_accelerations
+//   track_step          > contact_detection, contact_forces, track_rhs, track_solve, window_moves
+//   publish             > rail_deflection, pad_forces, contact_point_output, markers
+struct CostClock {
+  enum Part {
+    kVehicleRhs,           // vehicle right-hand sides for the integrator's steps (contact on the rigid track inside)
+    kVehicleJacobian,      // right-hand sides of CVODE's difference-quotient Jacobians (BDF)
+    kTrackRhs,             // Newmark right-hand side M x1 + C x2 + f and the step's completion (vector work)
+    kTrackSolve,           // Newmark K_eff solve (CHOLMOD), one per step
+    kWindowMoves,          // track window moves (model build or reuse, state carry-over, rail arrays)
+    kFloorAccelerations,   // effects.floor_acceleration_output: accelerometer readings
+    kPadForces,            // effects.pad_force_output: pad forces under the train
+    kMarkers,              // effects.rviz_markers: building and publishing markers
+    kRailDeflection,       // effects.rail_deflection_output: section deflections
+    kContactPointOutput,   // effects.contact_point_output: building and publishing contact points
+    kPartCount
+  };
+  enum Count {
+    kDampingProducts,          // C v products in the Newmark right-hand side (effects.track_damping, end dashpots)
+    kEndDashpotForces,         // end-dashpot forces inside those products (effects.absorbing_ends), per dashpot
+    kIrregularityEvaluations,  // irregularity stations evaluated during the run loop (set by the caller)
+    kCountCount
+  };
+  static const char* name(Part p);
+  static const char* name(Count c);
+
+  void add(Part p, double s) {
+    seconds[p] += s;
+    ++calls[p];
+  }
+
+  // Adds the time from construction to destruction to part p of *clock; nothing (no clock read) when
+  // clock is null.
+  class Scope {
+   public:
+    Scope(CostClock* clock, Part p) : clock_(clock), p_(p) {
+      if (clock_ != nullptr) t0_ = std::chrono::steady_clock::now();
+    }
+    ~Scope() {
+      if (clock_ != nullptr) clock_->add(p_, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count());
+    }
+    Scope(const Scope&) = delete;
+    Scope& operator=(const Scope&) = delete;
+
+   private:
+    CostClock* clock_;
+    Part p_;
+    std::chrono::steady_clock::time_point t0_;
+  };
+
+  std::array<double, kPartCount> seconds{};  // [s]
+  std::array<long, kPartCount> calls{};
+  std::array<long long, kCountCount> counts{};
+  // contact_detection (detection_seconds) and contact_forces (forces_seconds), flange searches, creep
+  // evaluations with spin: filled by the per-wheel contact evaluation.
+  rail::contact::ContactCost contact;
+};
+
+// An optional output of the nodes: runs produce() under part's clock when the effect is on; does nothing
+// (no call, no clock read) when it is off. Returns on.
+template <class F>
+bool TimedOutput(CostClock* clock, CostClock::Part part, bool on, F&& produce) {
+  if (!on) return false;
+  CostClock::Scope scope(clock, part);
+  produce();
+  return true;
+}
 
 class CostProfile {
  public:
@@ -54,9 +128,25 @@ class CostProfile {
   // The profile as YAML: node, wall time of the run loop, simulated time, each component's time, share
   // of the loop's wall time and calls (components never used show 0), the counts, and the scene's
   // effects (what was on).
-  std::string to_yaml(const std::string& node, const Scene& scene, double loop_wall, double simulated) const;
+  // clock: the finer split (nested in the components as CostClock says), with per parent "other" =
+  // parent - its parts, so that the shares add up at each level; null: none.
+  std::string to_yaml(const std::string& node, const Scene& scene, double loop_wall, double simulated,
+                      const CostClock* clock = nullptr) const;
   // The same as a few console lines.
-  std::string to_text(const std::string& node, double loop_wall, double simulated) const;
+  std::string to_text(const std::string& node, double loop_wall, double simulated,
+                      const CostClock* clock = nullptr) const;
+
+  // One line of the finer split: name, seconds, calls and the coarse component it is part of.
+  struct FinerLine {
+    const char* name;
+    double seconds;
+    long calls;
+    Component parent;
+  };
+  // The finer split of clock in this profile (contact under track_step if the profile has track steps,
+  // else under vehicle_integration), fixed order, at most kMaxFinerLines lines.
+  static constexpr int kMaxFinerLines = 12;
+  int finer_lines(const CostClock& clock, std::array<FinerLine, kMaxFinerLines>& lines) const;
 
  private:
   std::array<double, kComponentCount> seconds_{};

@@ -77,6 +77,11 @@ struct CosimTrackOptions {
   /// dt from solver.track_step, include_gravity and track from the fields above. vehicle_length (m, first
   /// to last wheel): 0 = the spread in x of the vehicle data file's load_points (wheel centres).
   TrackWindowSettings window;
+  /// Optional cost clock (must outlive the track; its window.cost is set from this one): contact
+  /// evaluations (contact_detection, contact_forces including the semi-implicit Newton, flange searches,
+  /// spin evaluations), the Newmark parts (track_rhs, track_solve, damping products), window moves, and
+  /// padForces() / sectionDeflection() (pad_forces, rail_deflection). null = no timing.
+  rail::core::CostClock* cost = nullptr;
 };
 
 /// Why step() refused a frame (nothing was evaluated or integrated; with a track window, the window may have
@@ -228,6 +233,8 @@ class CosimTrack {
   int seen_rebuilds_ = 0;      // window rebuilds already handled by onWindowMove
   int cache_drops_ = 0;
   double window_move_s_ = 0.0;
+  rail::core::CostClock* cost_ = nullptr;                     // CosimTrackOptions::cost
+  rail::contact::ContactCost* contact_cost_ = nullptr;        // &cost_->contact, or null
 };
 
 }  // namespace track

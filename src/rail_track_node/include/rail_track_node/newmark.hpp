@@ -7,6 +7,8 @@
 #include <memory>
 #include <vector>
 
+#include <rail_core/cost_profile.hpp>
+
 #include "rail_track_node/sparse_cholesky.hpp"
 #include "rail_track_node/track_mesh.hpp"
 #include "rail_track_node/track_model.hpp"
@@ -51,12 +53,20 @@ struct NewmarkState {
   double t = 0.0;
 };
 
+/// Grounded end dashpots (SpringKind::AbsorbingEnd) of a mesh: the dashpot forces each C v product computes.
+int countEndDashpots(const TrackMesh& mesh);
+
 /// Fixed-step Newmark trapezoidal integrator. Factorises K_eff = K + 4/dt^2 M + 2/dt C once (CHOLMOD);
-/// each step builds one right-hand side in preallocated vectors and does one solve.
+/// each step builds one right-hand side in preallocated vectors and does one solve. The damping product
+/// C (c2 d + v) is skipped when C has no entries (effects.track_damping and absorbing_ends off).
 class NewmarkIntegrator {
  public:
   /// sys must outlive the integrator. include_gravity: add sys.f_gravity to the load of every step.
-  NewmarkIntegrator(const LinearSystem& sys, double dt, bool include_gravity = true);
+  /// cost (optional, must outlive the integrator): right-hand side build and completion into kTrackRhs,
+  /// the K_eff solve of each step into kTrackSolve, C v products into kDampingProducts and, per product,
+  /// end_dashpots (countEndDashpots of the mesh) into kEndDashpotForces. solveEffective() is not timed.
+  NewmarkIntegrator(const LinearSystem& sys, double dt, bool include_gravity = true,
+                    rail::core::CostClock* cost = nullptr, int end_dashpots = 0);
 
   /// State at rest at displacement d0 (zero velocity); the acceleration is solved from
   /// M a0 = f - C v0 - K d0 with f = gravity (if included) + loads. Allocates: call at set-up.
@@ -85,6 +95,9 @@ class NewmarkIntegrator {
   const LinearSystem& sys_;
   double dt_;
   bool include_gravity_;
+  bool damped_;           // C has entries
+  rail::core::CostClock* cost_;
+  int end_dashpots_;
   std::unique_ptr<SparseCholesky> factor_;
   Eigen::VectorXd rhs_, x1_, x2_, d_new_, a_new_;  // per-step work vectors
 };

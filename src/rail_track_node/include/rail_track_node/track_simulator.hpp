@@ -51,6 +51,9 @@ struct SimulatorSettings {
   bool include_gravity = true; ///< f_g in every step (and in the initial static equilibrium)
   double rail_height = 0.172;  ///< rail foot to head top, m (moment arm of the loads: height - centroid)
   rail::core::MovingLoads loads;
+  /// Optional cost clock (must outlive the simulator): the Newmark integrator's parts and counts, and
+  /// sectionDeflection() into kRailDeflection. null = no timing.
+  rail::core::CostClock* cost = nullptr;
 };
 
 class TrackSimulator {

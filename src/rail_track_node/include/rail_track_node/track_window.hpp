@@ -62,6 +62,8 @@ struct TrackWindowSettings {
   bool end_dashpots = true;     ///< absorbing dashpots at the rail ends of every artificial end
   bool include_gravity = true;  ///< d_g (self-weight static state) in the rails' and sections' output
   SceneTrackOptions track;      ///< rail height and gravity
+  /// Optional cost clock of the window's Newmark integrators (NewmarkIntegrator); must outlive the window.
+  rail::core::CostClock* cost = nullptr;
 };
 
 /// Figures of the window since construction.

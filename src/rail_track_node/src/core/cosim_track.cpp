@@ -116,6 +116,7 @@ struct CosimTrack::Implicit {
   std::vector<int> pivot;
   rail::contact::PolachOptions polach;
   long newton_iterations = 0, unconverged = 0;
+  rail::contact::ContactCost* cost = nullptr;  // creep evaluations of law() (CosimTrackOptions::cost)
 
   void law(const rail::contact::WheelContactModel& model, double h, const Link& L, const Eigen::Vector3d& u,
            LawOut& o) const noexcept;
@@ -127,7 +128,8 @@ struct CosimTrack::Implicit {
   }
 };
 
-CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
+CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
+    : cost_(options.cost), contact_cost_(options.cost != nullptr ? &options.cost->contact : nullptr) {
   if (!scene.has_vehicle) throw SceneError(scene.file + ": the co-simulation track needs a vehicle (none in the scene)");
   if (!scene.needs_track_node())
     throw SceneError(scene.file + ": effects.track_model: rigid runs the vehicle alone; the track side needs "
@@ -152,6 +154,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
     ws.dt = scene.solver.track_step;
     ws.include_gravity = options.include_gravity;
     ws.track = options.track;
+    ws.cost = options.cost;
     if (!(ws.vehicle_length > 0.0)) ws.vehicle_length = vehicleWheelSpan(scene);
     const double s_front = scene.vehicle.start_arc_length;
     window_ = std::make_unique<TrackWindow>(scene, ws, s_front - ws.vehicle_length, s_front);
@@ -194,7 +197,8 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
   if (fe_) {
     const TrackModel& model = fe_->model;
     integrator_ =
-        std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity);
+        std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity,
+                                            options.cost, countEndDashpots(model.mesh));
     Eigen::VectorXd d0 = options.include_gravity ? staticGravityDeflection(model.system)
                                                  : Eigen::VectorXd::Zero(model.system.size());
     state_ = integrator_->initialState(d0);
@@ -256,6 +260,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options) {
   im.pivot.assign(static_cast<std::size_t>(6 * n_wheels), 0);
   im.polach = contact_model_->options().polach;
   im.polach.spin = contact_model_->options().spin;
+  im.cost = contact_cost_;
 }
 
 CosimTrack::~CosimTrack() = default;
@@ -297,6 +302,7 @@ int CosimTrack::windowRebuilds() const { return window_ ? window_->stats().rebui
 
 int CosimTrack::padForces(double s_from, double s_to, PadForceSample* out, int capacity) const {
   if (!flexible()) return 0;
+  rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kPadForces);
   const TrackMesh& mesh = window_ ? window_->mesh() : fe_->model.mesh;
   if (!pad_probe_ || pad_probe_moves_ != windowMoves()) {
     pad_probe_.reset(new PadForceProbe(mesh));
@@ -394,7 +400,7 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
     const rc::WheelState ws = contactWheelState(in);
     rc::WheelContactResult& res = result_[id];
     if (fe) {
-      contact_model_->evaluate(ws, side, *geometry_, *deformation_, work_[id], res);
+      contact_model_->evaluate(ws, side, *geometry_, *deformation_, work_[id], res, contact_cost_);
       const int rail = side == rc::RailSide::kLeft ? kLeftRail : kRightRail;
       for (int c = 0; c < 2; ++c) {
         const rc::ContactPointResult& cp = res.contact[c];
@@ -404,7 +410,7 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
                          cp.rail_wrench.moment_in_world, *loads_);
       }
     } else {
-      contact_model_->evaluate(ws, side, *geometry_, rc::RigidRailDeformation(), work_[id], res);
+      contact_model_->evaluate(ws, side, *geometry_, rc::RigidRailDeformation(), work_[id], res, contact_cost_);
     }
     out.wheels[static_cast<std::size_t>(i)].id = in.id;
     writeWrench(i, ws, res, out);
@@ -434,7 +440,9 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
       const auto t0 = std::chrono::steady_clock::now();
       if (window_->follow(s_min, s_max)) {
         onWindowMove();
-        window_move_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const double move_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        window_move_s_ += move_s;
+        if (cost_ != nullptr) cost_->add(rail::core::CostClock::kWindowMoves, move_s);
       }
     } catch (const std::exception&) {
       return CosimStepStatus::kWindowMoveFailed;
@@ -458,7 +466,14 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
         break;
       case CosimCoupling::kSemiImplicit:
         integ().solveStep(st(), *loads_);
-        implicitCorrection(states, out);
+        if (contact_cost_ != nullptr) {
+          // The contact forces solved with the step (Newton, influence-column solves included).
+          const auto t0 = std::chrono::steady_clock::now();
+          implicitCorrection(states, out);
+          contact_cost_->forces_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        } else {
+          implicitCorrection(states, out);
+        }
         integ().completeStep(st());
         break;
     }
@@ -564,6 +579,10 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
     const rc::PolachResult pr = rc::polach_forces(pin, polach);
     o.F_long = pr.Fx;
     o.F_lat = pr.Fy;
+    if (cost != nullptr) {
+      ++cost->creep_evaluations;
+      if (polach.spin) ++cost->spin_evaluations;  // polach_forces evaluated its spin terms
+    }
   }
   o.F_wheel = rc::contact_force_in_world(L.R_contact_to_world, o.F_long, o.F_lat, o.N);
 }
@@ -885,6 +904,7 @@ int CosimTrack::addSection(double s) {
 }
 
 void CosimTrack::sectionDeflection(int i, RailSectionDeflection& out) const {
+  rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kRailDeflection);
   if (window_) {
     window_->sectionDeflection(i, out);
     return;

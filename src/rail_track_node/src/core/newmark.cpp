@@ -24,8 +24,21 @@ bool addRailPointLoad(const TrackMesh& mesh, int rail, double s, const Eigen::Ve
   return ok;
 }
 
-NewmarkIntegrator::NewmarkIntegrator(const LinearSystem& sys, double dt, bool include_gravity)
-    : sys_(sys), dt_(dt), include_gravity_(include_gravity) {
+int countEndDashpots(const TrackMesh& mesh) {
+  int n = 0;
+  for (const SpringDamperElement& e : mesh.springs)
+    if (e.kind == SpringKind::AbsorbingEnd) ++n;
+  return n;
+}
+
+NewmarkIntegrator::NewmarkIntegrator(const LinearSystem& sys, double dt, bool include_gravity,
+                                     rail::core::CostClock* cost, int end_dashpots)
+    : sys_(sys),
+      dt_(dt),
+      include_gravity_(include_gravity),
+      damped_(sys.C.nonZeros() > 0),
+      cost_(cost),
+      end_dashpots_(end_dashpots) {
   if (!(dt > 0.0)) throw std::runtime_error("NewmarkIntegrator: time step must be positive, got " + std::to_string(dt));
   const int n = sys.size();
   if (sys.K.rows() != n || sys.C.rows() != n || (include_gravity && sys.f_gravity.size() != n))
@@ -64,17 +77,28 @@ void NewmarkIntegrator::step(NewmarkState& st, const NodalLoads& loads) {
 void NewmarkIntegrator::solveStep(const NewmarkState& st, const NodalLoads& loads) {
   const double h = dt_;
   const double c0 = 4.0 / (h * h), c1 = 4.0 / h, c2 = 2.0 / h;
-  // K_eff d_{n+1} = f_{n+1} + M (c0 d + c1 v + a) + C (c2 d + v)
-  x1_ = c0 * st.d + c1 * st.v + st.a;
-  x2_ = c2 * st.d + st.v;
-  rhs_.noalias() = sys_.M * x1_;
-  rhs_.noalias() += sys_.C * x2_;
-  if (include_gravity_) rhs_ += sys_.f_gravity;
-  for (int k = 0; k < loads.size(); ++k) rhs_(loads.index(k)) += loads.value(k);
+  {
+    rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackRhs);
+    // K_eff d_{n+1} = f_{n+1} + M (c0 d + c1 v + a) + C (c2 d + v)
+    x1_ = c0 * st.d + c1 * st.v + st.a;
+    rhs_.noalias() = sys_.M * x1_;
+    if (damped_) {
+      x2_ = c2 * st.d + st.v;
+      rhs_.noalias() += sys_.C * x2_;
+      if (cost_ != nullptr) {
+        ++cost_->counts[rail::core::CostClock::kDampingProducts];
+        cost_->counts[rail::core::CostClock::kEndDashpotForces] += end_dashpots_;
+      }
+    }
+    if (include_gravity_) rhs_ += sys_.f_gravity;
+    for (int k = 0; k < loads.size(); ++k) rhs_(loads.index(k)) += loads.value(k);
+  }
+  rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolve);
   factor_->solve(rhs_, d_new_);
 }
 
 void NewmarkIntegrator::completeStep(NewmarkState& st) {
+  rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackRhs);
   const double h = dt_;
   const double c0 = 4.0 / (h * h), c1 = 4.0 / h;
   // a_{n+1} = c0 (d_{n+1} - d_n) - c1 v_n - a_n ;  v_{n+1} = v_n + h/2 (a_n + a_{n+1})

@@ -33,7 +33,7 @@ int loadCapacity(const rail::core::MovingLoads& loads) {
 TrackSimulator::TrackSimulator(const TrackModel& model, const SimulatorSettings& settings)
     : model_(model),
       settings_(settings),
-      integrator_(model.system, settings.dt, settings.include_gravity),
+      integrator_(model.system, settings.dt, settings.include_gravity, settings.cost, countEndDashpots(model.mesh)),
       loads_(loadCapacity(settings.loads)) {
   if (!(settings.t_end >= 0.0) || !std::isfinite(settings.t_end)) {
     std::ostringstream os;
@@ -156,6 +156,7 @@ int TrackSimulator::addSection(double s, const TrackFrameFunction& frames) {
 }
 
 void TrackSimulator::sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const {
+  rail::core::CostClock::Scope timing(settings_.cost, rail::core::CostClock::kRailDeflection);
   const Section& sec = sections_[i];
   out.s = sec.s;
   for (int r = 0; r < 2; ++r) {

@@ -217,7 +217,8 @@ std::unique_ptr<TrackWindow::Window> TrackWindow::buildWindow(int first_sleeper)
     if (rear_cut) addCondensedEnd(*w, false);
     if (front_cut) addCondensedEnd(*w, true);
   }
-  w->integrator = std::make_unique<NewmarkIntegrator>(w->model.system, dt_, false);
+  w->integrator =
+      std::make_unique<NewmarkIntegrator>(w->model.system, dt_, false, settings_.cost, countEndDashpots(mesh));
   w->d_static = settings_.include_gravity ? staticGravityDeflection(w->model.system)
                                           : Eigen::VectorXd::Zero(w->model.system.size());
   return w;

@@ -12,6 +12,8 @@
 #include <Eigen/Core>
 #include <memory>
 
+#include <rail_core/cost_profile.hpp>
+
 #include "rail_vehicle_node/multibody_dynamics.hpp"
 #include "rail_vehicle_node/vehicle_data.hpp"
 #include "rail_vehicle_node/vehicle_model.hpp"
@@ -33,6 +35,9 @@ struct IntegratorSettings {
   double projection_euler_threshold = 1e-6;     // max |‖p‖ - 1| that triggers a projection (rotations use p/‖p‖)
   double projection_tolerance = 1e-12;          // max |Phi| after a projection [m]
   int projection_max_iterations = 20;
+  // Optional timing: right-hand sides into kVehicleRhs, those of the difference-quotient Jacobians (BDF)
+  // into kVehicleJacobian. Must outlive the integrator; null = no timing (CVODE's own DQ Jacobian).
+  core::CostClock* cost = nullptr;
 };
 
 // Work counters since construction (accumulated over re-initialisations).

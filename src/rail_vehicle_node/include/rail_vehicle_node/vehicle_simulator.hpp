@@ -61,6 +61,11 @@ struct SimulatorSettings {
   // switched off and every right-hand side takes the wheel-centre wrenches from this source instead
   // (contacts() then keeps the settling evaluation). Must outlive the simulator.
   const WheelWrenchSource* wheel_wrench_source = nullptr;
+  // Optional cost clock (must outlive the simulator): from the end of the build on, right-hand sides
+  // (vehicle_rhs / vehicle_jacobian, including the one of each UpdateOutputs), the contact evaluations in
+  // them (contact_detection / contact_forces, flange searches, spin evaluations) and floor accelerations.
+  // null = no timing.
+  core::CostClock* cost = nullptr;
 };
 
 // One wheel centre (rail_msgs/WheelState), world frame.
@@ -212,6 +217,7 @@ class VehicleSimulator {
   std::vector<BodyPose> body_out_;
   std::vector<MeasurementOutput> measurement_out_;
   bool measure_ = false;                 // effects.floor_acceleration_output
+  core::CostClock* cost_ = nullptr;      // settings.cost once built
 };
 
 // "bdf" / "adams" choice for solver.vehicle_method auto: Adams (fixed-point, no Jacobian) when the step

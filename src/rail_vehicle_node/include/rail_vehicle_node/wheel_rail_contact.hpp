@@ -63,6 +63,7 @@ struct WheelRailContactData {
   std::vector<Vector3> moment_in_world;             // about the load point [N m]
   bool enabled = true;                              // false: no contact forces (set-up only)
   long long evaluations = 0;                        // wheel evaluations since construction
+  contact::ContactCost* cost = nullptr;             // optional timing of the evaluations (not owned)
 };
 
 // Evaluates wheel k from data.bodies (kinematics already computed) and stores the result, the wrench at

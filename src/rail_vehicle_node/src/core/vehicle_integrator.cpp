@@ -14,6 +14,12 @@
 #include <sstream>
 #include <stdexcept>
 
+// CVODE's own dense difference-quotient Jacobian (cvode_ls.c; exported by libsundials_cvode 6.x, not in its
+// installed headers). Wrapped when a cost clock is attached so that the right-hand sides it calls are
+// timed as Jacobian work; the Jacobian and CVODE's counters are the same as without the wrapper.
+extern "C" int cvLsDQJac(realtype t, N_Vector y, N_Vector fy, SUNMatrix Jac, void* cvode_mem, N_Vector tmp1,
+                         N_Vector tmp2, N_Vector tmp3);
+
 namespace rail::vehicle {
 
 struct VehicleIntegrator::Impl {
@@ -29,7 +35,8 @@ struct VehicleIntegrator::Impl {
   void* cvode = nullptr;
   double t = 0.0;
   bool stepped_since_init = false;     // false right after (re-)initialisation
-  bool ls_counters_stale = false;      // linear-solver counters are reset only at the first step after ReInit
+  bool ls_counters_stale = false;
+  bool in_jacobian = false;            // inside the DQ Jacobian (cost clock attached): RHS timed as Jacobian      // linear-solver counters are reset only at the first step after ReInit
   IntegratorCounters base;             // counters accumulated before the last re-initialisation
   std::array<char, 512> last_error{};  // CVODE's last message (fixed buffer: no allocation)
 
@@ -65,12 +72,23 @@ struct VehicleIntegrator::Impl {
     const int n = self->model.state_size();
     const Eigen::Map<const Eigen::VectorXd> y_map(N_VGetArrayPointer(y), n);
     Eigen::Map<Eigen::VectorXd> y_dot_map(N_VGetArrayPointer(y_dot), n);
+    core::CostClock::Scope timing(self->settings.cost, self->in_jacobian ? core::CostClock::kVehicleJacobian
+                                                                         : core::CostClock::kVehicleRhs);
     try {
       ComputeDerivatives(self->model, t, y_map, y_dot_map, self->data);
     } catch (...) {
       return -1;  // unrecoverable: CVODE stops and AdvanceTo reports it
     }
     return y_dot_map.allFinite() ? 0 : 1;  // non-finite: recoverable, CVODE retries with a smaller step
+  }
+
+  static int Jacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector tmp1,
+                      N_Vector tmp2, N_Vector tmp3) {
+    auto* self = static_cast<Impl*>(user_data);
+    self->in_jacobian = true;
+    const int flag = cvLsDQJac(t, y, fy, J, self->cvode, tmp1, tmp2, tmp3);
+    self->in_jacobian = false;
+    return flag;
   }
 
   static void ErrorHandler(int /*error_code*/, const char* module, const char* function, char* msg, void* user) {
@@ -181,6 +199,7 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
     }
     // No Jacobian function: CVODE uses its difference-quotient approximation.
     s.Check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
+    if (settings.cost != nullptr) s.Check(CVodeSetJacFn(s.cvode, &Impl::Jacobian), "CVodeSetJacFn");
   } else {
     s.nonlinear_solver = SUNNonlinSol_FixedPoint(s.y, 0, s.context);
     if (s.nonlinear_solver == nullptr) throw std::runtime_error("vehicle integrator: fixed-point solver creation failed");

@@ -411,6 +411,7 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
     contact_data_->enabled = false;
     external_active_ = true;
   }
+  is.cost = settings.cost;  // no right-hand side is evaluated before the first AdvanceTo
   integrator_ = std::make_unique<VehicleIntegrator>(model_, *data_, y, 0.0, is);
 
   // Output buffers.
@@ -437,6 +438,9 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
     body_out_[static_cast<std::size_t>(b)].name = model_.bodies()[static_cast<std::size_t>(b)].name;
   }
   UpdateOutputs();
+  // Timing from here on (the build's evaluations are set-up).
+  cost_ = settings.cost;
+  contact_data_->cost = cost_ != nullptr ? &cost_->contact : nullptr;
 }
 
 double VehicleSimulator::SumWheelLoads(const Eigen::VectorXd& y) {
@@ -473,7 +477,10 @@ void VehicleSimulator::ResetState(const Eigen::VectorXd& y) {
 void VehicleSimulator::UpdateOutputs() {
   y_scratch_ = integrator_->state();
   // Kinematics and contact (through the force element) at the current state.
-  ComputeDerivatives(model_, integrator_->time(), y_scratch_, ydot_scratch_, *data_);
+  {
+    core::CostClock::Scope timing(cost_, core::CostClock::kVehicleRhs);
+    ComputeDerivatives(model_, integrator_->time(), y_scratch_, ydot_scratch_, *data_);
+  }
   rc::TrackPoint tp;
   for (std::size_t w = 0; w < wheelset_out_.size(); ++w) {
     const int body = wheelset_bodies_[w];
@@ -521,6 +528,7 @@ void VehicleSimulator::UpdateOutputs() {
     body_out_[b].orientation = EulerParametersFromRotation(k.A);
   }
   if (!measure_) return;
+  core::CostClock::Scope timing(cost_, core::CostClock::kFloorAccelerations);
   // Accelerations from the derivatives evaluated above: v_dot_b = [r_ddot (world); omega_dot' (body)].
   // A point s' of the body: a_P = r_ddot + A (omega_dot' x s' + omega' x (omega' x s')); the accelerometer
   // reads A^T (a_P - g).

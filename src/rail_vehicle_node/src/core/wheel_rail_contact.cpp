@@ -40,7 +40,8 @@ void EvaluateWheel(const WheelRailContactModel& model, const VehicleData& data, 
   state.omega_in_world = b.omega_world;
   state.s_hint = cd.s_hint[i];
   contact::WheelContactResult& out = cd.result[i];
-  model.wheel_model().evaluate(state, w.side, model.track(), contact::RigidRailDeformation(), cd.work[i], out);
+  model.wheel_model().evaluate(state, w.side, model.track(), contact::RigidRailDeformation(), cd.work[i], out,
+                             cd.cost);
   ++cd.evaluations;
   // Keep the hint on the rail section of the last valid contact point (the wheel moves < 1 mm per step).
   const contact::ContactPointResult& tread = out.contact[contact::kTread];
