@@ -21,6 +21,8 @@
 #include <memory>
 #include <string>
 #include <sys/stat.h>
+
+#include "rail_core/ros/master_watch.hpp"
 #include <vector>
 
 #include <rail_core/cost_profile.hpp>
@@ -49,7 +51,16 @@ namespace rt = rail::track;
 namespace {
 
 std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+std::atomic<int> g_signal{0};  // the signal that set g_stop (0: ROS shutdown)
+void onSignal(int s) {
+  g_signal = s;
+  g_stop = true;
+}
+// Why the run loop stopped, for its log line.
+const char* stopReason() {
+  const int s = g_signal;
+  return s == SIGINT ? "SIGINT" : s == SIGTERM ? "SIGTERM" : "ROS shutdown";
+}
 
 // Answers the vehicle's handshake; remembers whether it was accepted.
 struct HandshakeServer {
@@ -252,6 +263,7 @@ void fill(geometry_msgs::Vector3& out, const Eigen::Vector3d& v) {
 
 int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene) {
   const std::string me = ros::this_node::getName();
+  rail::core::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
   // ---- build ----
   std::unique_ptr<rt::SceneTrack> track;
   rt::SimulatorSettings settings;
@@ -352,7 +364,7 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   int exit_code = kExitOk;
   while (true) {
     if (g_stop || !ros::ok()) {
-      ROS_WARN("%s: stopped at t = %.4f s", me.c_str(), sim.time());
+      ROS_WARN("%s: stopped at t = %.4f s (%s)", me.c_str(), sim.time(), stopReason());
       exit_code = kExitInterrupted;
       break;
     }
@@ -383,6 +395,11 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
     }
     if (sim.finished()) break;
     ++k;
+  }
+  if (master_watch.lost()) {
+    ROS_ERROR("%s: the ROS master %s went away: stopped at t = %.4f s", me.c_str(), master_watch.uri().c_str(),
+              sim.time());
+    exit_code = kExitInterrupted;
   }
   if (bag_open) {
     bag.close();
@@ -513,10 +530,14 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   namespace cc = rail::core::coupling;
   const std::string me = ros::this_node::getName();
   CostProfile cost;
+  rail::core::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
+  rail::core::CostClock clock;  // the finer split, filled by the track core (cost_profile.hpp)
+  rt::CosimTrackOptions track_options;
+  track_options.cost = &clock;
   const auto setup0 = std::chrono::steady_clock::now();
   std::unique_ptr<rt::CosimTrack> track;
   try {
-    track.reset(new rt::CosimTrack(scene));
+    track.reset(new rt::CosimTrack(scene, track_options));
   } catch (const std::exception& e) {
     ROS_FATAL("%s: cannot build the track: %s", me.c_str(), e.what());
     return kExitBadInput;
@@ -617,7 +638,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
 
   auto publish = [&](const ros::Time& stamp, const cc::WheelStateFrame& states) {
     CostProfile::Scope timing(cost, CostProfile::kPublish);
-    if (scene.effects.contact_point_output) {
+    rail::core::TimedOutput(&clock, rail::core::CostClock::kContactPointOutput, scene.effects.contact_point_output, [&] {
       points_msg.header.stamp = stamp;
       for (int id = 0; id < track->wheelCount(); ++id) {
         for (int k = 0; k < 2; ++k) {
@@ -631,7 +652,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
         bag.write("/contact_points", stamp, points_msg);
       }
-    }
+    });
     for (int i = 0; i < track->sectionCount(); ++i) {
       track->sectionDeflection(i, deflection);
       rail_msgs::RailDeflection& m = deflection_msgs[static_cast<std::size_t>(i)];
@@ -676,7 +697,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         bag.write("/pad_forces", stamp, pads_msg);
       }
     }
-    if (draw_markers && stamp.toSec() + 1e-12 >= next_marker) {
+    rail::core::TimedOutput(&clock, rail::core::CostClock::kMarkers, draw_markers && stamp.toSec() + 1e-12 >= next_marker, [&] {
       next_marker += marker_period;
       if (window == nullptr) {
         marker_pub.publish(markers->update(track->state()->d, stamp));
@@ -689,7 +710,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         d_total = window->staticState() + window->state().d;
         marker_pub.publish(markers->update(d_total, stamp));
       }
-    }
+    });
   };
 
   cc::TimedTransport timed_transport(*transport, cost);  // adds exchange waits to `cost`
@@ -698,8 +719,10 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   const double period = 1.0 / scene.output.rate;
   std::uint64_t n_out = 0;
   int exit_code = kExitOk;
+  bool stop_logged = false;  // the run loop said why it stopped
   const auto wall0 = std::chrono::steady_clock::now();
   cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count());
+  const long long irregularity_stations0 = rail::contact::Irregularities::stationsEvaluated();
   for (;;) {
     // Step 0 waits for the vehicle's set-up (settling): the handshake timeout; later steps the exchange
     // timeout.
@@ -756,12 +779,22 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       ++n_out;
     }
     if (g_stop || !ros::ok()) {
-      ROS_WARN("%s: stopped at t = %.4f s", me.c_str(), t);
+      ROS_WARN("%s: stopped at t = %.4f s (%s)", me.c_str(), t, stopReason());
+      stop_logged = true;
       exit_code = kExitInterrupted;
       break;
     }
   }
   coupling.close();
+  const double t_stop = coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h;
+  if (master_watch.lost()) {
+    ROS_ERROR("%s: the ROS master %s went away: stopped at t = %.4f s", me.c_str(), master_watch.uri().c_str(),
+              t_stop);
+    exit_code = kExitInterrupted;
+  } else if (g_signal != 0 && !stop_logged) {
+    // The signal ended a wait for the peer (logged above as an interrupted exchange): say which signal.
+    ROS_WARN("%s: stopped at t = %.4f s (%s)", me.c_str(), t_stop, stopReason());
+  }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
   const double t_end = coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h;
   cost.add(CostProfile::kPublish, -cost.seconds(CostProfile::kBagWrite));  // bag writes are inside publishing
@@ -772,13 +805,15 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     cost.set_count("window_rebuilds", track->windowRebuilds());
     cost.set_count("window_move_ms_total", 1e3 * track->windowMoveSeconds());
   }
-  ROS_INFO_STREAM(cost.to_text(me, wall, t_end));
+  clock.counts[rail::core::CostClock::kIrregularityEvaluations] =
+      rail::contact::Irregularities::stationsEvaluated() - irregularity_stations0;
+  ROS_INFO_STREAM(cost.to_text(me, wall, t_end, &clock));
   if (bag.isOpen()) {
     bag.close();
     ROS_INFO("%s: bag closed: %s", me.c_str(), bag_path.c_str());
     const std::string cost_path = bag_path.substr(0, bag_path.size() - 4) + ".cost.yaml";  // <stem>.track.cost.yaml
     if (std::FILE* f = std::fopen(cost_path.c_str(), "w")) {
-      std::fputs(cost.to_yaml(me, scene, wall, t_end).c_str(), f);
+      std::fputs(cost.to_yaml(me, scene, wall, t_end, &clock).c_str(), f);
       std::fclose(f);
     }
   }
@@ -793,6 +828,8 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "rail_track", ros::init_options::NoSigintHandler);
+  // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
+  ::umask(077);
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
   ros::NodeHandle nh, pnh("~");

@@ -42,6 +42,8 @@
 #include <string>
 #include <sys/stat.h>
 
+#include "rail_core/ros/master_watch.hpp"
+
 using namespace rail::core;
 namespace rv = rail::vehicle;
 namespace rc = rail::contact;
@@ -49,7 +51,16 @@ namespace rc = rail::contact;
 namespace {
 
 std::atomic<bool> g_stop{false};
-void OnSignal(int) { g_stop = true; }
+std::atomic<int> g_signal{0};  // the signal that set g_stop (0: ROS shutdown)
+void OnSignal(int s) {
+  g_signal = s;
+  g_stop = true;
+}
+// Why the run loop stopped, for its log line.
+const char* StopReason() {
+  const int s = g_signal;
+  return s == SIGINT ? "SIGINT" : s == SIGTERM ? "SIGTERM" : "ROS shutdown";
+}
 
 // peer: set to the track node's name once it answered.
 int handshake(const Scene& scene, std::string& peer) {
@@ -343,6 +354,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   const std::string node = ros::this_node::getName();
   const bool cosim = scene.cosimulation();
   CostProfile cost;
+  rail::core::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
+  rail::core::CostClock clock;  // the finer split, filled by the simulator (cost_profile.hpp)
+  rv::SimulatorSettings sim_settings;
+  sim_settings.cost = &clock;
   const auto setup0 = std::chrono::steady_clock::now();
   std::unique_ptr<rail::core::coupling::FrameTransport> transport;
   std::unique_ptr<rail::core::coupling::TimedTransport> timed_transport;  // adds exchange waits to `cost`
@@ -363,7 +378,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     }
     try {
       timed_transport = std::make_unique<rail::core::coupling::TimedTransport>(*transport, cost);
-      cosim_vehicle = std::make_unique<rv::CosimVehicle>(scene, *timed_transport);
+      cosim_vehicle = std::make_unique<rv::CosimVehicle>(scene, *timed_transport, sim_settings);
     } catch (const std::exception& e) {
       ROS_FATAL("%s: cannot build the co-simulated vehicle: %s", node.c_str(), e.what());
       transport->close();
@@ -372,7 +387,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     sim = &cosim_vehicle->simulator();
   } else {
     try {
-      sim_alone = std::make_unique<rv::VehicleSimulator>(scene);
+      sim_alone = std::make_unique<rv::VehicleSimulator>(scene, sim_settings);
     } catch (const std::exception& e) {
       ROS_FATAL("%s: cannot build the vehicle: %s", node.c_str(), e.what());
       return kExitBadInput;
@@ -449,15 +464,16 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     out.Update(*sim, stamp, step);
     pub_clock.publish(out.clock);
     pub_states.publish(out.wheel_states);
-    if (own_points) pub_points.publish(out.contact_points);
+    rail::core::TimedOutput(&clock, rail::core::CostClock::kContactPointOutput, own_points,
+                            [&] { pub_points.publish(out.contact_points); });
     pub_wrenches.publish(out.contact_wrenches);
     pub_kinematics.publish(out.kinematics);
     if (own_floor) pub_floor.publish(out.floor);
     tf_broadcaster.sendTransform(out.tf.transforms);
-    if (markers && sim->time() + 1e-12 >= next_marker) {
+    rail::core::TimedOutput(&clock, rail::core::CostClock::kMarkers, markers && sim->time() + 1e-12 >= next_marker, [&] {
       next_marker += marker_period;
       pub_markers.publish(markers->Update(*sim, stamp));
-    }
+    });
     if (!bag.isOpen()) return;
     CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
     if (rec_states) bag.write("/wheel_states", stamp, out.wheel_states);
@@ -470,8 +486,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   };
 
   int rc = kExitOk;
+  bool stop_logged = false;  // the run loop said why it stopped
   const auto wall0 = std::chrono::steady_clock::now();
   cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count());
+  const long long irregularity_stations0 = rail::contact::Irregularities::stationsEvaluated();
   auto last_report = wall0;
   auto report = [&] {
     const auto now = std::chrono::steady_clock::now();
@@ -490,7 +508,8 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
       rv::RunStatus status = rv::RunStatus::kRunning;
       for (std::uint64_t step = 1; status == rv::RunStatus::kRunning; ++step) {
         if (g_stop || !ros::ok()) {
-          ROS_WARN("%s: stopped at t = %.4f s (signal or ROS shutdown); closing the bag", node.c_str(), sim->time());
+          ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim->time(), StopReason());
+          stop_logged = true;
           rc = kExitInterrupted;
           break;
         }
@@ -521,8 +540,9 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
         if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
           if (status == rv::RunStatus::kIntegratorFailed &&
               v.exchange_status() != rail::core::coupling::Status::kOk) {
-            ROS_FATAL("%s: exchange with the track node failed at step %llu (t = %.6f s): %s", node.c_str(),
-                      static_cast<unsigned long long>(v.steps_exchanged()), v.time(), v.message().c_str());
+            ROS_FATAL("%s: exchange with the track node failed at step %llu (t = %.6f s): %s (track node %s)",
+                      node.c_str(), static_cast<unsigned long long>(v.steps_exchanged()), v.time(),
+                      v.message().c_str(), peer.c_str());
             rc = rail::core::coupling::exit_code(v.exchange_status());
           } else {
             ROS_ERROR("%s: run stopped (%s) at t = %.6f s: %s", node.c_str(), StatusName(status), v.time(),
@@ -538,7 +558,8 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
         }
         if (status == rv::RunStatus::kFinished) break;
         if (g_stop || !ros::ok()) {
-          ROS_WARN("%s: stopped at t = %.4f s (signal or ROS shutdown); closing the bag", node.c_str(), v.time());
+          ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), v.time(), StopReason());
+          stop_logged = true;
           rc = kExitInterrupted;
           break;
         }
@@ -563,8 +584,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     cost.set_count("jacobians", static_cast<double>(c.jacobian_evals));
     cost.set_count("projections", static_cast<double>(c.projections));
     if (cosim) cost.set_count("exchanges", static_cast<double>(cosim_vehicle->steps_exchanged()));
-    ROS_INFO_STREAM(cost.to_text(node, wall, sim->time()));
-    WriteCost(bag_path, ".cost.yaml", cost.to_yaml(node, scene, wall, sim->time()), node);
+    clock.counts[rail::core::CostClock::kIrregularityEvaluations] =
+        rail::contact::Irregularities::stationsEvaluated() - irregularity_stations0;
+    ROS_INFO_STREAM(cost.to_text(node, wall, sim->time(), &clock));
+    WriteCost(bag_path, ".cost.yaml", cost.to_yaml(node, scene, wall, sim->time(), &clock), node);
     ROS_INFO("%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
              "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections", node.c_str(),
              rc == kExitOk ? "finished" : "stopped", sim->time(), sim->leading_arc_length(), wall,
@@ -574,6 +597,14 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     ROS_FATAL("%s: internal error at t = %.4f s: %s", node.c_str(), sim->time(), e.what());
     rc = kExitInternal;
     if (cosim_vehicle) cosim_vehicle->Close();
+  }
+  if (master_watch.lost()) {
+    ROS_ERROR("%s: the ROS master %s went away: stopped at t = %.4f s", node.c_str(), master_watch.uri().c_str(),
+              sim->time());
+    rc = kExitInterrupted;
+  } else if (g_signal != 0 && !stop_logged) {
+    // The signal ended a wait for the peer (logged above as an interrupted exchange): say which signal.
+    ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim->time(), StopReason());
   }
   if (bag.isOpen()) {
     bag.close();
@@ -586,6 +617,8 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "rail_vehicle", ros::init_options::NoSigintHandler);
+  // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
+  ::umask(077);
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   ros::NodeHandle nh;
