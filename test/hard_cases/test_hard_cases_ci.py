@@ -1,0 +1,76 @@
+#!/usr/bin/env python3
+"""CI subset of the hard-case suite (hard_cases.py, subset 'ci': the vehicle alone on the rigid track for
+lift-off, two-point contact, standstill, creep speed and derailment, each with its refined run): every
+check of every case must pass. The runs start their own ROS masters (costmap.run_case), so no rostest
+master is needed. Takes about 2-3 minutes on two cores.
+
+  /usr/bin/python3 test_hard_cases_ci.py [--gtest_output=xml:FILE]
+"""
+import os
+import shutil
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+import hard_cases  # noqa: E402
+
+
+class HardCasesCi(unittest.TestCase):
+    rows = None
+
+    @classmethod
+    def setUpClass(cls):
+        cls.out = tempfile.mkdtemp(prefix="hard_cases_ci_")
+        ws = os.environ.get("RAILSIM_WORKSPACE", hard_cases.REPO)
+        cls.rows, cls.wall = hard_cases.run_suite("ci", hard_cases.MODELS, 2, cls.out, ws, 300.0,
+                                                  progress=lambda s: print(s, flush=True))
+
+    @classmethod
+    def tearDownClass(cls):
+        if all(hard_cases.row_passed(r) for r in cls.rows or []):
+            shutil.rmtree(cls.out, ignore_errors=True)   # a failing run's bags and logs are kept
+
+    def _row(self, key):
+        rows = [r for r in self.rows if r["case"].key == key]
+        self.assertTrue(rows, "case %s did not run" % key)
+        return rows[0]
+
+    def _assert_row(self, key):
+        r = self._row(key)
+        ev = r["eval"]
+        for name, st, txt in ev["checks"]:
+            self.assertNotEqual(st, "fail", "%s/%s: %s: %s (run %s)" % (key, r["model"], name, txt, r["run"]))
+        self.assertNotEqual(ev["converge"][0], "fail", "%s/%s: convergence: %s" % (key, r["model"], ev["converge"][1]))
+
+    def test_lift_off_bump(self):
+        self._assert_row("lift_off_bump")
+
+    def test_tight_curve_flange_root(self):
+        self._assert_row("tight_curve_flange_root")
+
+    def test_standstill(self):
+        self._assert_row("standstill")
+
+    def test_creep_speed(self):
+        self._assert_row("creep_speed")
+
+    def test_derailment_climb(self):
+        self._assert_row("derailment_climb")
+
+
+def main():
+    rest = [a for a in sys.argv[1:] if not a.startswith("--gtest_output=")]
+    xml = [a.split("xml:", 1)[1] for a in sys.argv[1:] if a.startswith("--gtest_output=xml:")]
+    suite = unittest.TestLoader().loadTestsFromTestCase(HardCasesCi)
+    if xml:
+        import rosunit
+        result = rosunit.create_xml_runner("railsim_tests", "test_hard_cases_ci", xml[0]).run(suite)
+        rosunit.print_unittest_summary(result)
+    else:
+        result = unittest.TextTestRunner(verbosity=2).run(suite)
+    return 0 if result.wasSuccessful() else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
