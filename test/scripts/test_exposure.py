@@ -364,13 +364,9 @@ class Exposure(unittest.TestCase):
         if transport == "service":
             self.assertTrue(answers and not answers[0][0] and run.vehicle_name in answers[0][1], answers)
 
-    @unittest.skip("needs rail_core topic_transport.cpp TopicTransport::Impl::on_frame() to drop (and report) "
-                   "frames whose publisher is not the handshake's peer (doc/faults.md, change T1)")
     def test_7_foreign_topic_frame_leaves_the_run_unchanged(self):
         self.check_ignored("topic")
 
-    @unittest.skip("needs rail_core service_transport.cpp TrackEnd::serve() to answer a caller that is not the "
-                   "handshake's peer with ok=false without taking its frame (doc/faults.md, change T2)")
     def test_7_foreign_service_call_leaves_the_run_unchanged(self):
         self.check_ignored("service")
 

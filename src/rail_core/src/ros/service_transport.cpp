@@ -177,6 +177,8 @@ struct ServiceTransport::TrackEnd {
   bool closed = false;
   bool withdrawn = false;         // the service was shut down
   std::string vehicle;            // caller node of the last call
+  const void* vehicle_header = nullptr;  // connection header of the vehicle's calls (identifies them without a lookup)
+  long foreign_calls = 0;         // calls from a node that is not the handshake's peer, refused
 
   bool serve(ros::ServiceEvent<rail_msgs::Lockstep::Request, rail_msgs::Lockstep::Response>& event);
   Result receive(coupling::WheelStateFrame& frame, Deadline deadline);
@@ -190,7 +192,23 @@ bool ServiceTransport::TrackEnd::serve(
   const rail_msgs::Lockstep::Request& req = event.getRequest();
   rail_msgs::Lockstep::Response& res = event.getResponse();
   std::unique_lock<std::mutex> lock(m);
-  if (vehicle.empty()) vehicle = event.getCallerName();  // once (a string-keyed header lookup)
+  // Calls count only from the handshake's peer: the connection header identifies it without a string lookup;
+  // a call on another connection is looked up and refused (ok = false, frame not taken) if another node made it.
+  const void* header = &event.getConnectionHeader();
+  if (header != vehicle_header) {
+    const std::string caller = event.getCallerName();
+    if (!o.peer_node.empty() && caller != o.peer_node) {
+      if (foreign_calls++ == 0) {
+        ROS_WARN("service %s: a call from node %s, not this run's vehicle %s, was refused", service.c_str(),
+                 caller.c_str(), o.peer_node.c_str());
+      }
+      res.ok = false;
+      res.error = "node " + caller + " is not this run's vehicle (" + o.peer_node + "): its frame was not used";
+      return true;
+    }
+    vehicle_header = header;
+    if (vehicle.empty()) vehicle = caller;
+  }
   if (closed) {
     res.ok = false;
     res.error = "the track closed the connection";

@@ -60,6 +60,8 @@ struct TopicTransport::Impl {
   bool awaiting = false;       // vehicle: states sent, wrenches not yet received
 
   std::string peer;                      // the peer's node
+  const void* peer_header = nullptr;     // connection header of the peer's frames (identifies them without a lookup)
+  long foreign_frames = 0;               // frames from a node that is not the handshake's peer, dropped
   std::vector<std::string> subscribers;  // nodes subscribed to out_topic (changes only when links change)
   bool peer_dropped = false;             // the peer's subscription to out_topic ended
   bool closed = false;
@@ -110,7 +112,21 @@ bool TopicTransport::Impl::has_subscriber() const {
 template <class Msg>
 void TopicTransport::Impl::on_frame(const ros::MessageEvent<Msg const>& event) {
   const Msg& msg = *event.getConstMessage();
-  if (peer.empty()) peer = event.getPublisherName();  // once
+  // Frames count only from the handshake's peer: the connection header identifies it without a string
+  // lookup; a frame on another connection is looked up once and dropped if another node sent it.
+  const void* header = event.getConnectionHeaderPtr().get();
+  if (header != peer_header) {
+    const std::string& from = event.getPublisherName();
+    if (!o.peer_node.empty() && from != o.peer_node) {
+      if (foreign_frames++ == 0) {
+        ROS_WARN("topic %s: a frame from node %s, not this run's peer %s, was dropped (further ones are dropped "
+                 "silently)", in_topic.c_str(), from.c_str(), o.peer_node.c_str());
+      }
+      return;
+    }
+    peer_header = header;
+    if (peer.empty()) peer = from;
+  }
   if (outcome != Outcome::kWaiting) return;  // (only pumped while waiting)
   if (is_close_marker(msg)) {
     outcome = Outcome::kCloseMarker;

@@ -335,6 +335,17 @@ bool MakeDirs(const std::string& path) {
   return true;
 }
 
+// The exit code of a run that stopped with status s (not kRunning/kFinished).
+int ExitCodeOf(rv::RunStatus s) {
+  switch (s) {
+    case rv::RunStatus::kDerailed:
+    case rv::RunStatus::kLeftTrack: return kExitDerailed;
+    case rv::RunStatus::kNonFinite:
+    case rv::RunStatus::kIntegratorFailed: return kExitNumerical;
+    default: return kExitInternal;
+  }
+}
+
 const char* StatusName(rv::RunStatus s) {
   switch (s) {
     case rv::RunStatus::kRunning: return "running";
@@ -522,7 +533,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
         report();
         if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
           ROS_ERROR("%s: run stopped (%s): %s", node.c_str(), StatusName(status), sim->message().c_str());
-          rc = kExitInternal;
+          rc = ExitCodeOf(status);
         }
       }
     } else {
@@ -547,7 +558,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
           } else {
             ROS_ERROR("%s: run stopped (%s) at t = %.6f s: %s", node.c_str(), StatusName(status), v.time(),
                       v.message().c_str());
-            rc = kExitInternal;
+            rc = ExitCodeOf(status);
           }
           break;
         }
