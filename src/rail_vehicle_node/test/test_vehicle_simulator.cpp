@@ -545,3 +545,25 @@ TEST(VehicleSimulatorCost, BdfJacobianRightHandSidesAreTimedAsJacobianWithoutCha
 }
 }  // namespace
 }  // namespace rail::vehicle
+
+namespace rail::vehicle {
+namespace {
+
+// solver.vehicle_method auto: Adams at the paper's 2e-5 s step cap at speed; BDF at low speed with the
+// built-in contact (stiff viscous creep, see ChooseMethod); Adams again when the wrenches come from the track
+// node (no creep in the vehicle's right-hand side); an explicit choice always wins.
+TEST(ChooseMethod, AutoPicksBdfBelowTheStiffCreepSpeedWithTheBuiltInContact) {
+  core::Solver s;
+  s.vehicle_method = core::VehicleMethod::kAuto;
+  s.vehicle_max_step = 2e-5;
+  EXPECT_EQ(ChooseMethod(s, 30.5556, false), IntegrationMethod::kAdams);
+  EXPECT_EQ(ChooseMethod(s, 0.0, false), IntegrationMethod::kBdf);
+  EXPECT_EQ(ChooseMethod(s, 0.1, false), IntegrationMethod::kBdf);
+  EXPECT_EQ(ChooseMethod(s, kStiffCreepSpeed, false), IntegrationMethod::kAdams);
+  EXPECT_EQ(ChooseMethod(s, 0.0, true), IntegrationMethod::kAdams);
+  s.vehicle_method = core::VehicleMethod::kAdams;
+  EXPECT_EQ(ChooseMethod(s, 0.0, false), IntegrationMethod::kAdams);
+}
+
+}  // namespace
+}  // namespace rail::vehicle

@@ -60,12 +60,13 @@ contact::WheelContactOptions DefaultVehicleContactOptions() {
   return contact::WheelContactOptions{};
 }
 
-IntegrationMethod ChooseMethod(const core::Solver& solver) {
+IntegrationMethod ChooseMethod(const core::Solver& solver, double speed, bool external_wrenches) {
   switch (solver.vehicle_method) {
     case core::VehicleMethod::kBdf: return IntegrationMethod::kBdf;
     case core::VehicleMethod::kAdams: return IntegrationMethod::kAdams;
     case core::VehicleMethod::kAuto: break;
   }
+  if (!external_wrenches && std::abs(speed) < kStiffCreepSpeed) return IntegrationMethod::kBdf;
   return (solver.vehicle_max_step > 0.0 && solver.vehicle_max_step <= 5e-5) ? IntegrationMethod::kAdams
                                                                             : IntegrationMethod::kBdf;
 }
@@ -400,7 +401,7 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   is.rtol = scene.solver.vehicle_rtol;
   is.atol = scene.solver.vehicle_atol;
   is.max_step = scene.solver.vehicle_max_step;
-  method_ = ChooseMethod(scene.solver);
+  method_ = ChooseMethod(scene.solver, scene.vehicle.speed, settings.wheel_wrench_source != nullptr);
   is.method = method_;
   is.max_order = method_ == IntegrationMethod::kBdf ? 5 : 12;
   for (auto& work : contact_data_->work) {
