@@ -10,11 +10,9 @@ the rostest master and publish or call from this test node, which did no handsha
 import glob
 import os
 import re
-import shutil
 import signal
 import stat
 import subprocess
-import tempfile
 import threading
 import time
 import unittest
@@ -24,10 +22,10 @@ import rospy
 import rostest
 from rail_msgs.msg import WheelState, WheelStates
 from rail_msgs.srv import Lockstep, LockstepRequest
-from rosgraph_msgs.msg import Clock
 
 from test_faults import (EXIT_OK, EXIT_PEER_REFUSED, EXIT_PEER_TIMEOUT, EXIT_TIMEOUT, REPO, RUN_TIMEOUT, SCENE,
-                         START_TIMEOUT, Run, bag_series, bag_summary, descendants, free_port, scene_overrides)
+                         START_TIMEOUT, Run, RunTestCase, bag_series, bag_summary, descendants, free_port,
+                         scene_overrides)
 
 RAILSIM = os.path.join(REPO, "railsim")
 COSIM_LAUNCH = os.path.join(REPO, "launch", "cosim.launch")
@@ -125,22 +123,9 @@ def foreign_frame(step):
     return m
 
 
-class Exposure(unittest.TestCase):
-    clock = 0.0
+class Exposure(RunTestCase):
+    WORK_PREFIX = "railsim_exposure_"
     _cache = {}
-
-    @classmethod
-    def setUpClass(cls):
-        cls.work = tempfile.mkdtemp(prefix="railsim_exposure_")
-        rospy.Subscriber("/clock", Clock, cls._on_clock)
-
-    @classmethod
-    def tearDownClass(cls):
-        shutil.rmtree(cls.work, ignore_errors=True)
-
-    @classmethod
-    def _on_clock(cls, msg):
-        cls.clock = msg.clock.to_sec()
 
     # --- 5 and 6: a run started as ./railsim starts it ---------------------------------------------------
     def railsim_run(self):

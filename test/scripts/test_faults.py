@@ -293,13 +293,15 @@ def free_port():
 STOP_TIME = re.compile(r"stopped (?:at |after \d+ steps \()t = ([0-9.]+) s")
 
 
-class Faults(unittest.TestCase):
+class RunTestCase(unittest.TestCase):
+    """Shared by the fault and exposure tests: a scratch directory per class and the latest /clock of the
+    runs. Subclasses set WORK_PREFIX and their own _cache."""
     clock = 0.0
-    _cache = {}
+    WORK_PREFIX = "railsim_"
 
     @classmethod
     def setUpClass(cls):
-        cls.work = tempfile.mkdtemp(prefix="railsim_node_faults_")
+        cls.work = tempfile.mkdtemp(prefix=cls.WORK_PREFIX)
         rospy.Subscriber("/clock", Clock, cls._on_clock)
 
     @classmethod
@@ -309,6 +311,11 @@ class Faults(unittest.TestCase):
     @classmethod
     def _on_clock(cls, msg):
         cls.clock = msg.clock.to_sec()
+
+
+class Faults(RunTestCase):
+    WORK_PREFIX = "railsim_node_faults_"
+    _cache = {}
 
     def latest_clock(self):
         return type(self).clock
