@@ -149,7 +149,8 @@ std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, do
     << "  contact_point_output: " << on_off(e.contact_point_output) << "\n"
     << "  rviz_markers: " << on_off(e.rviz_markers) << "\n"
     << "  floor_acceleration_output: " << on_off(e.floor_acceleration_output) << "\n"
-    << "  pad_force_output: " << on_off(e.pad_force_output) << "\n";
+    << "  pad_force_output: " << on_off(e.pad_force_output) << "\n"
+    << "  energy_output: " << on_off(e.energy_output) << "\n";
   return o.str();
 }
 

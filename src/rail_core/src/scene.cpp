@@ -199,6 +199,15 @@ std::string to_yaml(const Scene& s) {
     e << YAML::EndSeq << YAML::EndMap;
   }
 
+  if (s.has_vehicle) {
+    const Contact& c = s.contact;
+    e << YAML::Key << "contact" << YAML::Value << YAML::BeginMap;
+    num(e, "friction", c.friction);
+    num(e, "restitution", c.restitution);
+    num(e, "impact_velocity_floor", c.impact_velocity_floor);
+    e << YAML::EndMap;
+  }
+
   const Effects& f = s.effects;
   e << YAML::Key << "effects" << YAML::Value << YAML::BeginMap;
   kv(e, "track_model", to_string(f.track_model));
@@ -213,6 +222,7 @@ std::string to_yaml(const Scene& s) {
   kv(e, "rviz_markers", f.rviz_markers);
   kv(e, "floor_acceleration_output", f.floor_acceleration_output);
   kv(e, "pad_force_output", f.pad_force_output);
+  kv(e, "energy_output", f.energy_output);
   e << YAML::EndMap;
 
   const Solver& v = s.solver;
@@ -319,6 +329,7 @@ std::string describe(const Scene& s, Role role) {
   flag("rviz_markers", f.rviz_markers);
   flag("floor_acceleration_output", f.floor_acceleration_output && s.has_vehicle);
   flag("pad_force_output", f.pad_force_output && s.effects.track_model == TrackModel::kFlexible);
+  flag("energy_output", f.energy_output && s.has_vehicle);
   o << "effects on: " << detail::join(on) << "\n";
   o << "effects off: " << (off.empty() ? "none" : detail::join(off)) << "\n";
   const Solver& v = s.solver;

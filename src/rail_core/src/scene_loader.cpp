@@ -21,7 +21,8 @@ using detail::MapReader;
 
 const std::vector<std::string> kKnownTopics = {
     "wheel_states", "contact_wrenches", "contact_points", "rail_deflection", "wheelset_kinematics",
-    "markers",      "tf",               "clock",          "floor_accelerations", "pad_forces"};
+    "markers",      "tf",               "clock",          "floor_accelerations", "pad_forces",
+    "vehicle_energy", "track_energy"};
 
 // Built-in profiles (everything else names a profile file).
 static const std::vector<std::string> kBuiltinRailProfiles = {"uic60"};
@@ -291,6 +292,22 @@ void read_vehicle(MapReader& root, Scene& s, const Context& ctx) {
   r.finish();
 }
 
+void read_contact(MapReader& root, Scene& s) {
+  const YAML::Node n = root.child("contact");
+  if (!n) return;
+  MapReader r(n, "contact", root.file());
+  Contact& c = s.contact;
+  // Bounds: a friction coefficient above 1 is not a wheel on a rail (sanded dry rail reaches ~0.5); e is a
+  // ratio of velocities; the floor keeps eq. 9's damping finite and below a penetration rate of 10 m/s.
+  r.number("friction", c.friction);
+  in_range(r, "friction", c.friction, 0.0, 1.0, "(-)");
+  r.number("restitution", c.restitution);
+  in_range(r, "restitution", c.restitution, 0.0, 1.0, "(-)");
+  r.number("impact_velocity_floor", c.impact_velocity_floor);
+  in_range(r, "impact_velocity_floor", c.impact_velocity_floor, 1e-6, 10.0, "m/s");
+  r.finish();
+}
+
 void read_moving_loads(MapReader& root, Scene& s, const Context& ctx) {
   MapReader r(root.child("moving_loads"), "moving_loads", ctx.file);
   MovingLoads& m = s.moving_loads;
@@ -336,6 +353,7 @@ void read_effects(MapReader& root, Scene& s) {
   r.boolean("rviz_markers", e.rviz_markers);
   r.boolean("floor_acceleration_output", e.floor_acceleration_output);
   r.boolean("pad_force_output", e.pad_force_output);
+  r.boolean("energy_output", e.energy_output);
   r.finish();
 }
 
@@ -474,11 +492,15 @@ void check_consistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     if (t == "floor_accelerations" && !s.effects.floor_acceleration_output)
       needs = "effects.floor_acceleration_output: true";
     if (t == "pad_forces" && !s.effects.pad_force_output) needs = "effects.pad_force_output: true";
+    if ((t == "vehicle_energy" || t == "track_energy") && !s.effects.energy_output) needs = "effects.energy_output: true";
     if (needs) fail_at(file, key, "'" + t + "' is recorded only with " + needs, 0);
     if (t == "rail_deflection" && s.effects.track_model == TrackModel::kRigid) {
       fail_at(file, key,
               "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
               "move: zeros)", 0);
+    }
+    if (t == "track_energy" && s.effects.track_model != TrackModel::kFlexible) {
+      fail_at(file, key, "'track_energy' needs the integrated FE track: effects.track_model flexible", 0);
     }
     if (t == "pad_forces" && s.effects.track_model != TrackModel::kFlexible) {
       fail_at(file, key, "'pad_forces' needs the integrated FE track: effects.track_model flexible", 0);
@@ -614,8 +636,12 @@ Scene load_scene_text(const std::string& text, const std::string& file, const st
   if (s.has_vehicle) {
     root.child("moving_loads");  // known, absent
     read_vehicle(root, s, ctx);
+    read_contact(root, s);
   } else {
     root.child("vehicle");
+    if (root.has("contact")) {
+      fail_at(file, "contact", "a moving-load scene has no wheel-rail contact; remove the section", 0);
+    }
     read_moving_loads(root, s, ctx);
   }
   read_solver(root, s);

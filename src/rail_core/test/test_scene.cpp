@@ -149,11 +149,11 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
       {"negative radius", replaced(kBase, "radius: 500.0, cant: 0.1}", "radius: -500, cant: 0.1}"),
        "scene.yaml: track.segments[2].radius: must be > 0, got -500.0 (line 8)"},
       {"unknown key", kBase + "effects2: 1\n",
-       "scene.yaml: effects2: unknown key (known here: description, effects, moving_loads, name, output, "
+       "scene.yaml: effects2: unknown key (known here: contact, description, effects, moving_loads, name, output, "
        "solver, track, vehicle) (line 21)"},
       {"misspelt effect", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  flange_contat: true"),
        "scene.yaml: effects.flange_contat: unknown key (known here: absorbing_ends, contact_point_output, "
-       "creep_law, flange_contact, floor_acceleration_output, irregularities, pad_force_output, "
+       "creep_law, energy_output, flange_contact, floor_acceleration_output, irregularities, pad_force_output, "
        "rail_deflection_output, rviz_markers, spin_creepage, track_damping, track_model) (line 16)"},
       {"missing field", replaced(kBase, "  speed: 30.0\n", ""),
        "scene.yaml: vehicle.speed: missing (required) (line 10)"},
@@ -191,7 +191,8 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        "rigid_fe (rails that do not move: zeros)"},
       {"unknown topic", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_state]"),
        "scene.yaml: output.topics[0]: unknown topic 'wheel_state' (known: wheel_states, contact_wrenches, "
-       "contact_points, rail_deflection, wheelset_kinematics, markers, tf, clock, floor_accelerations, pad_forces) "
+       "contact_points, rail_deflection, wheelset_kinematics, markers, tf, clock, floor_accelerations, pad_forces, "
+       "vehicle_energy, track_energy) "
        "(line 20)"},
       {"floor accelerations recorded with the effect off",
        replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, floor_accelerations]"),
@@ -201,8 +202,28 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        replaced(replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, pad_forces]"),
                 "track_model: rigid_fe", "track_model: rigid_fe\n  pad_force_output: true"),
        "scene.yaml: output.topics[1]: 'pad_forces' needs the integrated FE track: effects.track_model flexible"},
+      {"energy recorded with the effect off",
+       replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, vehicle_energy]"),
+       "scene.yaml: output.topics[1]: 'vehicle_energy' is recorded only with effects.energy_output: true"},
+      {"track energy without the integrated FE track",
+       replaced(replaced(kBase, "topics: [wheel_states]", "topics: [track_energy]"),
+                "track_model: rigid_fe", "track_model: rigid_fe\n  energy_output: true"),
+       "scene.yaml: output.topics[0]: 'track_energy' needs the integrated FE track: effects.track_model flexible"},
       {"negative pad force margin", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states]\n  pad_force_margin: -1"),
        "scene.yaml: output.pad_force_margin: must be between 0.0 and 100.0 m, got -1.0 (line 21)"},
+      {"friction above 1", kBase + "contact: {friction: 1.5}\n",
+       "scene.yaml: contact.friction: must be between 0.0 and 1.0 (-), got 1.5 (line 21)"},
+      {"restitution not a number", kBase + "contact:\n  restitution: high\n",
+       "scene.yaml: contact.restitution: must be a number, got 'high' (line 22)"},
+      {"zero impact-velocity floor", kBase + "contact: {impact_velocity_floor: 0}\n",
+       "scene.yaml: contact.impact_velocity_floor: must be between 1e-06 and 10.0 m/s, got 0.0 (line 21)"},
+      {"unknown contact key", kBase + "contact: {mu: 0.4}\n",
+       "scene.yaml: contact.mu: unknown key (known here: friction, impact_velocity_floor, restitution) (line 21)"},
+      {"contact data without a vehicle",
+       replaced(replaced(kBase, "vehicle:\n  data: vehicle_data.yaml\n  start_arc_length: 25.0\n  speed: 30.0\n  back_to_back: 1.592\n",
+                         "moving_loads:\n  loads: [{vertical: 1.0e5}]\ncontact: {friction: 0.4}\n"),
+                "track_model: rigid_fe", "track_model: flexible"),
+       "scene.yaml: contact: a moving-load scene has no wheel-rail contact; remove the section"},
       {"vehicle off the track", replaced(kBase, "start_arc_length: 25.0", "start_arc_length: 150.0"),
        "scene.yaml: vehicle.start_arc_length: must lie on the track [0.0, 150.0) m, got 150.0 (line 11)"},
       {"irregularities on without a source", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  irregularities: true"),
@@ -218,6 +239,22 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
     SCOPED_TRACE(c.what);
     EXPECT_EQ(error_of(c.text), c.message);
   }
+}
+
+TEST(Scene, ContactSectionReachesTheSceneAndItsHash) {
+  const Scene base = load(kBase);
+  EXPECT_DOUBLE_EQ(base.contact.friction, 0.3);  // the defaults are rail_contact's
+  EXPECT_DOUBLE_EQ(base.contact.restitution, 0.5);
+  EXPECT_DOUBLE_EQ(base.contact.impact_velocity_floor, 0.01);
+  const Scene wet = load(kBase + "contact: {friction: 0.15, restitution: 0.8, impact_velocity_floor: 0.1}\n");
+  EXPECT_DOUBLE_EQ(wet.contact.friction, 0.15);
+  EXPECT_DOUBLE_EQ(wet.contact.restitution, 0.8);
+  EXPECT_DOUBLE_EQ(wet.contact.impact_velocity_floor, 0.1);
+  EXPECT_NE(wet.hash, base.hash);  // two nodes with different rail conditions refuse each other
+  EXPECT_NE(to_yaml(wet).find("contact:\n  friction: 0.15\n  restitution: 0.8\n  impact_velocity_floor: 0.1"),
+            std::string::npos) << to_yaml(wet);
+  // Overrides reach it like any key.
+  EXPECT_DOUBLE_EQ(load_scene_text(kBase, "scene.yaml", kData, {"contact.friction=0.45"}).contact.friction, 0.45);
 }
 
 TEST(Scene, MissingSceneFileNamesIt) {

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -349,6 +350,53 @@ TEST(VehicleSimulator, FloorAccelerometersReadTheDerivativeOfTheFloorVelocityMin
   }
   // The check means something only if the carbody moves: sway of the order of 0.1-1 m/s^2 in the curve.
   EXPECT_GT(largest_lateral, 0.05);
+}
+
+// Sum over the active contacts of 2/5 N delta: the energy stored in a Hertz spring N = K delta^1.5 at its
+// penetration (the integral of K x^1.5 from 0 to delta), which /vehicle_energy leaves out.
+double HertzEnergy(const VehicleSimulator& sim) {
+  double e = 0.0;
+  for (const auto& wheel : sim.contacts())
+    for (const auto& c : wheel.contact)
+      if (c.active) e += 0.4 * c.N * std::max(0.0, c.penetration);
+  return e;
+}
+
+TEST(VehicleSimulator, EnergyOnlyFallsWithNoDriveOnRigidRails) {
+  // The coach coasts (no drive, no brake) into the tight curve on fixed rails: nothing puts energy in,
+  // the creep forces of curving, the contact damping and the suspension dampers take it out. The vehicle's
+  // mechanical energy (effects.energy_output) plus the Hertz springs' 2/5 N delta must never rise above its
+  // start value by more than the integrator's error: 1e-6 of the kinetic energy (rtol 1e-6 on the
+  // velocities, whose squares make the energy; ~6 J of 5.7 MJ). It must also fall: the curving work of the
+  // creep forces over the 0.3 s (flanging wheelsets, of the order of 10 kN of creep force at a few cm/s of
+  // slip) is far above that error.
+  core::Scene scene = core::load_scene_file(kScenes + "tight_curve.yaml");
+  scene.vehicle.start_arc_length = 145.0;
+  scene.effects.energy_output = true;
+  scene.solver.end.kind = core::EndKind::kTime;
+  scene.solver.end.value = 0.3;
+  VehicleSimulator sim(scene);
+  const double e0 = sim.energy().kinetic + sim.energy().potential + HertzEnergy(sim);
+  const double kinetic0 = sim.energy().kinetic;
+  EXPECT_NEAR(kinetic0, 0.5 * kCoachMass * scene.vehicle.speed * scene.vehicle.speed, 0.02 * kinetic0);  // + spin
+  double highest = -1e300, e = e0;
+  RunStatus status = RunStatus::kRunning;
+  for (int i = 1; status == RunStatus::kRunning; ++i) {
+    status = sim.AdvanceTo(std::min(0.3, 1e-3 * i));
+    ASSERT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
+    e = sim.energy().kinetic + sim.energy().potential + HertzEnergy(sim);
+    highest = std::max(highest, e - e0);
+  }
+  std::printf("energy: start %.3f J, highest rise %.3f J, end change %.3f J\n", e0, highest, e - e0);
+  EXPECT_LT(highest, 1e-6 * kinetic0);
+  EXPECT_LT(e - e0, -10.0 * 1e-6 * kinetic0);
+}
+
+TEST(VehicleSimulator, EnergyIsNotComputedWhenTheEffectIsOff) {
+  VehicleSimulator sim(StraightScene(30.5556, 0.01));
+  ASSERT_EQ(sim.AdvanceTo(0.01), RunStatus::kFinished) << sim.message();
+  EXPECT_EQ(sim.energy().kinetic, 0.0);
+  EXPECT_EQ(sim.energy().potential, 0.0);
 }
 
 TEST(VehicleSimulator, FloorAccelerationsAreNotComputedWhenTheEffectIsOff) {

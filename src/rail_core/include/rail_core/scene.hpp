@@ -108,6 +108,14 @@ struct MovingLoads {
   std::vector<MovingLoad> loads;
 };
 
+// Wheel-rail interface data a user varies between runs (rail condition, contact damping). The rest of the
+// contact data (materials, Polach's reduction factors, detection settings) is rail_contact's.
+struct Contact {
+  double friction = 0.3;                 // mu0, maximum friction coefficient [-] (dry rail 0.3-0.4, wet 0.1-0.2)
+  double restitution = 0.5;              // e of the Hertz normal damping (paper eq. 9) [-], 0..1
+  double impact_velocity_floor = 0.01;   // floor on the impact penetration rate in eq. 9 [m/s]
+};
+
 // What is simulated. An effect that is off is not built and costs nothing.
 struct Effects {
   TrackModel track_model = TrackModel::kFlexible;
@@ -122,6 +130,7 @@ struct Effects {
   bool rviz_markers = false;             // publish visualization markers
   bool floor_acceleration_output = false;  // carbody floor accelerations at the vehicle's measurement points
   bool pad_force_output = false;         // rail-pad forces and rail displacements under the train (flexible)
+  bool energy_output = false;            // mechanical energy of the vehicle (and of the flexible track)
 };
 
 struct End {
@@ -169,6 +178,7 @@ struct Scene {
   bool has_vehicle = false;
   Vehicle vehicle;
   MovingLoads moving_loads;
+  Contact contact;                       // with a vehicle only
   Effects effects;
   Solver solver;
   Output output;

@@ -63,8 +63,9 @@ enum class CosimCoupling {
 
 /// What the scene does not say (constant after building).
 struct CosimTrackOptions {
-  /// Contact data without a scene key (friction, materials, Polach, detection); the scene's effects
-  /// (flange_contact, spin_creepage, creep_law) override its fields, as on the vehicle side.
+  /// Contact data without a scene key (materials, Polach, detection); the scene's effects (flange_contact,
+  /// spin_creepage, creep_law) and contact section (friction, restitution, impact-velocity floor) override
+  /// its fields, as on the vehicle side.
   rail::contact::WheelContactOptions contact;
   SceneTrackOptions track;         ///< rail height and gravity of the FE track (flexible only)
   bool include_gravity = true;     ///< track self-weight f_g in every Newmark step and in the initial state
@@ -173,6 +174,11 @@ class CosimTrack {
   /// capacity of them into out; returns how many (0 with rigid_fe). The pads are indexed on the first call
   /// and again after a window move (allocates; rare); otherwise no allocation.
   int padForces(double s_from, double s_to, PadForceSample* out, int capacity) const;
+  /// Mechanical energy of the FE track (J) relative to its self-weight equilibrium d_s (K d_s = f_g): kinetic
+  /// 1/2 v' M v and potential 1/2 (d - d_s)' K (d - d_s), which is the strain energy plus the work of gravity
+  /// counted from d_s. With a track window: over the window, w being already relative to d_s
+  /// (TrackWindow::dynamicEnergy). Returns false (zeros) with rigid_fe. No allocation.
+  bool energy(double& kinetic, double& potential) const noexcept;
   /// Sleepers of the integrated mesh (full track or window; 0 with rigid_fe): enough capacity for padForces.
   int sleeperCount() const;
   /// Same for any displacement vector d over the FE free DOFs (flexible full-length; e.g. a static
@@ -223,6 +229,8 @@ class CosimTrack {
   std::unique_ptr<NewmarkIntegrator> integrator_;
   NewmarkState state_;
   std::unique_ptr<NodalLoads> loads_;
+  Eigen::VectorXd d_static_;                             // full-length: self-weight equilibrium (energy zero)
+  mutable Eigen::VectorXd energy_scratch_, energy_dd_;   // energy() work vectors
   std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
   std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
   std::vector<Section> sections_;

@@ -142,6 +142,8 @@ class TrackWindow {
 
   /// Mechanical energy of w, 1/2 w'^T M w' + 1/2 w^T K w (J), over the current window. No allocation.
   double dynamicEnergy() const;
+  /// The same split into kinetic 1/2 w'^T M w' and potential 1/2 w^T K w (J). No allocation.
+  void dynamicEnergy(double& kinetic, double& potential) const;
 
   /// Adds a rail deflection section at arc length s (m) on the line (set-up only); returns its index. Its
   /// self-weight static value is solved once on a line piece of 2 * static_half_length around s.

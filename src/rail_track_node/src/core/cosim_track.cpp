@@ -184,6 +184,10 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   contact.flange_contact = scene.effects.flange_contact;
   contact.spin = scene.effects.spin_creepage;
   contact.creep_law = rc::CreepLaw::kPolach;  // core::CreepLaw has Polach only
+  // The scene's contact section (friction, eq. 9 damping) over the caller's contact data.
+  contact.friction = scene.contact.friction;
+  contact.damping.restitution = scene.contact.restitution;
+  contact.damping.impact_velocity_floor = scene.contact.impact_velocity_floor;
   contact_model_ = std::make_unique<rc::WheelContactModel>(wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
                                                            Eigen::Vector2d(0.0, -section_depth), contact);
   work_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactWork());
@@ -202,6 +206,9 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     Eigen::VectorXd d0 = options.include_gravity ? staticGravityDeflection(model.system)
                                                  : Eigen::VectorXd::Zero(model.system.size());
     state_ = integrator_->initialState(d0);
+    d_static_ = d0;  // the zero of energy(): the self-weight equilibrium
+    energy_scratch_.resize(d0.size());
+    energy_dd_.resize(d0.size());
   }
   const TrackMesh& mesh = feMesh();
   // Two contacts per wheel, each spread over the 12 DOFs of one rail element.
@@ -925,6 +932,22 @@ void CosimTrack::sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionD
     out.displacement[r].noalias() = p.P_u * d_e;
     out.rotation[r].noalias() = p.P_theta * d_e;
   }
+}
+
+bool CosimTrack::energy(double& kinetic, double& potential) const noexcept {
+  kinetic = potential = 0.0;
+  if (window_) {
+    window_->dynamicEnergy(kinetic, potential);
+    return true;
+  }
+  if (!fe_) return false;
+  const LinearSystem& sys = fe_->model.system;
+  energy_scratch_.noalias() = sys.M * state_.v;
+  kinetic = 0.5 * state_.v.dot(energy_scratch_);
+  energy_dd_ = state_.d - d_static_;
+  energy_scratch_.noalias() = sys.K * energy_dd_;
+  potential = 0.5 * energy_dd_.dot(energy_scratch_);
+  return true;
 }
 
 }  // namespace track

@@ -487,12 +487,17 @@ const TrackModel& TrackWindow::model() const { return window_->model; }
 const Eigen::VectorXd& TrackWindow::staticState() const { return window_->d_static; }
 
 double TrackWindow::dynamicEnergy() const {
+  double kinetic = 0.0, potential = 0.0;
+  dynamicEnergy(kinetic, potential);
+  return kinetic + potential;
+}
+
+void TrackWindow::dynamicEnergy(double& kinetic, double& potential) const {
   const LinearSystem& sys = window_->model.system;
   energy_scratch_.noalias() = sys.M * state_.v;
-  double e = 0.5 * state_.v.dot(energy_scratch_);
+  kinetic = 0.5 * state_.v.dot(energy_scratch_);
   energy_scratch_.noalias() = sys.K * state_.d;
-  e += 0.5 * state_.d.dot(energy_scratch_);
-  return e;
+  potential = 0.5 * state_.d.dot(energy_scratch_);
 }
 
 // The rails of `mesh` as the contact search sees them: one BeamRailDeformation element per FE rail beam

@@ -35,6 +35,7 @@
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/RailDeflection.h>
 #include <rail_msgs/RailPadForces.h>
+#include <rail_msgs/Energy.h>
 #include <rail_msgs/WheelStates.h>
 
 #include <rail_core/ros/contact_point_message.hpp>
@@ -601,7 +602,14 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     v->reserve(pad_samples.size());
   }
   pads_msg.arc_length.reserve(pad_samples.size());
-  if (!scene.output.bag.empty() && (rec_points || rec_deflection || rec_pads)) {
+  // Mechanical energy of the FE track (effects.energy_output, flexible track).
+  const bool energy = scene.effects.energy_output && track->flexible();
+  const bool rec_energy = energy && contains(scene.output.topics, "track_energy");
+  ros::Publisher energy_pub;
+  if (energy) energy_pub = nh.advertise<rail_msgs::Energy>("/track_energy", 100);
+  rail_msgs::Energy energy_msg;
+  energy_msg.header.frame_id = "track";
+  if (!scene.output.bag.empty() && (rec_points || rec_deflection || rec_pads || rec_energy)) {
     bag_path = bagPath(pnh, scene.output.bag);
     const std::size_t dot = bag_path.rfind(".bag");
     bag_path = (dot != std::string::npos && dot + 4 == bag_path.size() ? bag_path.substr(0, dot) : bag_path) +
@@ -695,6 +703,16 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       if (rec_pads && bag.isOpen()) {
         CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
         bag.write("/pad_forces", stamp, pads_msg);
+      }
+    }
+    if (energy) {
+      track->energy(energy_msg.kinetic, energy_msg.potential);
+      energy_msg.total = energy_msg.kinetic + energy_msg.potential;
+      energy_msg.header.stamp = stamp;
+      energy_pub.publish(energy_msg);
+      if (rec_energy && bag.isOpen()) {
+        CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
+        bag.write("/track_energy", stamp, energy_msg);
       }
     }
     rail::core::TimedOutput(&clock, rail::core::CostClock::kMarkers, draw_markers && stamp.toSec() + 1e-12 >= next_marker, [&] {

@@ -48,9 +48,9 @@ contact::WheelContactOptions DefaultVehicleContactOptions();
 
 // What the scene does not say (constant after building).
 struct SimulatorSettings {
-  // Contact data the scene has no key for: friction mu0, restitution e, materials, Polach parameters,
-  // detection settings. The effects (flange_contact, spin_creepage, creep_law) come from the scene and
-  // override these fields.
+  // Contact data the scene has no key for: materials, Polach parameters, detection settings. The scene's
+  // effects (flange_contact, spin_creepage, creep_law) and contact section (friction mu0, restitution e,
+  // impact-velocity floor) override those fields.
   contact::WheelContactOptions contact = DefaultVehicleContactOptions();
   // Derailment: a wheel centre more than this above its settled height relative to the track plane [m];
   // 0 = the wheel profile's flange height.
@@ -97,6 +97,13 @@ struct WheelsetTrackOutput {
 // force a - g in the point's body frame (x forward, y left, z up) [m/s^2].
 struct MeasurementOutput {
   Vector3 specific_force_in_body = Vector3::Zero();
+};
+
+// Mechanical energy of the vehicle (rail_msgs/Energy) [J]: kinetic (translation, rotation, spin) and
+// potential (gravity from z = 0, suspension springs, bump stops; not the Hertz contact springs).
+struct EnergyOutput {
+  double kinetic = 0.0;
+  double potential = 0.0;
 };
 
 // Pose of one body for tf.
@@ -158,6 +165,8 @@ class VehicleSimulator {
   // One per model().measurement_points(), filled only when the scene's effects.floor_acceleration_output
   // is on (otherwise left at zero: no cost).
   const std::vector<MeasurementOutput>& measurements() const { return measurement_out_; }
+  // Filled only when the scene's effects.energy_output is on (otherwise zero: no cost).
+  const EnergyOutput& energy() const { return energy_out_; }
 
   // Replaces the state (e.g. a test's initial lateral offset); re-initialises the integrator.
   void ResetState(const Eigen::VectorXd& y);
@@ -217,6 +226,8 @@ class VehicleSimulator {
   std::vector<BodyPose> body_out_;
   std::vector<MeasurementOutput> measurement_out_;
   bool measure_ = false;                 // effects.floor_acceleration_output
+  EnergyOutput energy_out_;
+  bool energy_ = false;                  // effects.energy_output
   core::CostClock* cost_ = nullptr;      // settings.cost once built
 };
 

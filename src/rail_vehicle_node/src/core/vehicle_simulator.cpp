@@ -307,6 +307,10 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   options.flange_contact = scene.effects.flange_contact;
   options.spin = scene.effects.spin_creepage;
   options.creep_law = rc::CreepLaw::kPolach;  // core::CreepLaw has Polach only
+  // The scene's contact section (friction, eq. 9 damping) over the caller's contact data.
+  options.friction = scene.contact.friction;
+  options.damping.restitution = scene.contact.restitution;
+  options.damping.impact_velocity_floor = scene.contact.impact_velocity_floor;
   nominal_height_ = scene.vehicle.nominal_radius;
   contact_model_ = std::make_unique<WheelRailContactModel>(
       *track_, wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
@@ -431,6 +435,7 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   body_out_.assign(static_cast<std::size_t>(model_.n_bodies()), BodyPose());
   measurement_out_.assign(model_.measurement_points().size(), MeasurementOutput());
   measure_ = scene.effects.floor_acceleration_output;
+  energy_ = scene.effects.energy_output;
   if (measure_ && measurement_out_.empty()) {
     throw std::runtime_error(scene.file + ": effects.floor_acceleration_output is on but the vehicle data file " +
                              scene.vehicle.data.path + " has no measurement_points");
@@ -527,6 +532,11 @@ void VehicleSimulator::UpdateOutputs() {
     const BodyKinematics& k = data_->bodies[b];
     body_out_[b].p_in_world = k.r;
     body_out_[b].orientation = EulerParametersFromRotation(k.A);
+  }
+  if (energy_) {
+    // From the bodies' kinematics evaluated above (multibody_dynamics.hpp).
+    energy_out_.kinetic = KineticEnergy(model_, *data_);
+    energy_out_.potential = PotentialEnergy(model_, *data_);
   }
   if (!measure_) return;
   core::CostClock::Scope timing(cost_, core::CostClock::kFloorAccelerations);

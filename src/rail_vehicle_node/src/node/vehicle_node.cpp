@@ -24,6 +24,7 @@
 #include <rail_msgs/WheelStates.h>
 #include <rail_msgs/WheelsetKinematics.h>
 #include <rail_msgs/FloorAccelerations.h>
+#include <rail_msgs/Energy.h>
 #include <rail_vehicle_node/cosim_vehicle.hpp>
 #include <rail_vehicle_node/vehicle_simulator.hpp>
 
@@ -109,6 +110,7 @@ struct Outputs {
   rail_msgs::ContactWrenches contact_wrenches;
   rail_msgs::WheelsetKinematics kinematics;
   rail_msgs::FloorAccelerations floor;  // effects.floor_acceleration_output
+  rail_msgs::Energy energy;             // effects.energy_output
   tf2_msgs::TFMessage tf;
   rosgraph_msgs::Clock clock;
   rail::contact::TrackPoint track_point_;  // scratch of Update
@@ -123,6 +125,7 @@ struct Outputs {
     kinematics.wheelsets.resize(sim.wheelsets().size());
     const auto& points = sim.model().measurement_points();
     floor.header.frame_id = "carbody";
+    energy.header.frame_id = "world";
     floor.names.resize(points.size());
     floor.position.resize(points.size());
     floor.specific_force.resize(points.size());
@@ -162,6 +165,10 @@ struct Outputs {
     wheel_states.header.stamp = contact_points.header.stamp = contact_wrenches.header.stamp = stamp;
     kinematics.header.stamp = stamp;
     floor.header.stamp = stamp;
+    energy.header.stamp = stamp;
+    energy.kinetic = sim.energy().kinetic;
+    energy.potential = sim.energy().potential;
+    energy.total = energy.kinetic + energy.potential;
     clock.clock = stamp;
     wheel_states.step = contact_wrenches.step = step;
     for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
@@ -428,6 +435,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   if (own_floor) {
     pub_floor = nh.advertise<rail_msgs::FloorAccelerations>("floor_accelerations", 100);
   }
+  // Mechanical energy of the vehicle (effects.energy_output).
+  const bool own_energy = scene.effects.energy_output;
+  ros::Publisher pub_energy;
+  if (own_energy) pub_energy = nh.advertise<rail_msgs::Energy>("vehicle_energy", 100);
   // rviz markers (effects.rviz_markers): built only when on, published at ~marker_rate (default 25 Hz).
   ros::Publisher pub_markers;
   std::unique_ptr<VehicleMarkers> markers;
@@ -461,6 +472,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   const bool rec_wrenches = bag.isOpen() && Records(scene, "contact_wrenches");
   const bool rec_kinematics = bag.isOpen() && Records(scene, "wheelset_kinematics");
   const bool rec_floor = bag.isOpen() && Records(scene, "floor_accelerations") && own_floor;
+  const bool rec_energy = bag.isOpen() && Records(scene, "vehicle_energy") && own_energy;
   const bool rec_tf = bag.isOpen() && Records(scene, "tf");
   const bool rec_clock = bag.isOpen() && Records(scene, "clock");
 
@@ -480,6 +492,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     pub_wrenches.publish(out.contact_wrenches);
     pub_kinematics.publish(out.kinematics);
     if (own_floor) pub_floor.publish(out.floor);
+    if (own_energy) pub_energy.publish(out.energy);
     tf_broadcaster.sendTransform(out.tf.transforms);
     rail::core::TimedOutput(&clock, rail::core::CostClock::kMarkers, markers && sim->time() + 1e-12 >= next_marker, [&] {
       next_marker += marker_period;
@@ -492,6 +505,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     if (rec_wrenches) bag.write("/contact_wrenches", stamp, out.contact_wrenches);
     if (rec_kinematics) bag.write("/wheelset_kinematics", stamp, out.kinematics);
     if (rec_floor) bag.write("/floor_accelerations", stamp, out.floor);
+    if (rec_energy) bag.write("/vehicle_energy", stamp, out.energy);
     if (rec_tf) bag.write("/tf", stamp, out.tf);
     if (rec_clock) bag.write("/clock", stamp, out.clock);
   };
