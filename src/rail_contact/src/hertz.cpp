@@ -245,6 +245,8 @@ void update_impact_memory(ImpactMemory& memory, double delta, double delta_dot) 
     if (!memory.in_contact) {
       memory.in_contact = true;
       memory.impact_velocity = std::max(delta_dot, 0.0);
+    } else if (delta_dot > memory.impact_velocity && std::isfinite(delta_dot)) {
+      memory.impact_velocity = delta_dot;  // pushed in harder than at onset: see ImpactMemory
     }
   } else {
     memory.in_contact = false;

@@ -244,11 +244,39 @@ TEST(NormalForce, RestitutionOfSingleImpact) {
     const double k4x = v + dt * k3v, k4v = acc(x + dt * k3x, v + dt * k3v);
     x += dt / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
     v += dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
+    if (x >= 0.0) rc::update_impact_memory(memory, x, v);  // as the contact evaluation does every call
   }
+  // In a true impact the approach rate only falls after onset: the memory keeps the onset rate (eq. 9).
+  EXPECT_DOUBLE_EQ(memory.impact_velocity, v_in);
   rc::update_impact_memory(memory, x, v);
   EXPECT_FALSE(memory.in_contact);
   EXPECT_LT(x, 0.0);
   EXPECT_NEAR(-v / v_in, 0.95, 0.01);
+}
+
+TEST(NormalForce, MemoryKeepsTheLargestApproachRateSoASoftStartIsNotOverdamped) {
+  // A contact that starts at a tiny approach rate (the floor applies) and is then pushed in at 0.36 m/s (the
+  // flange-climb hard case's reappearing tread contact): with the onset rate alone eq. 9's bracket would be
+  // 1 + 0.5625 * 0.36 / 0.01 = 21; with the largest rate since onset it is 1 + 0.5625 = 1.5625 at most.
+  const double K = 7e10, delta = 115e-6;
+  const rc::NormalDampingParams p;  // e = 0.5, floor 0.01 m/s
+  const double elastic = K * delta * std::sqrt(delta);
+  rc::ImpactMemory memory;
+  rc::update_impact_memory(memory, 1e-9, 0.0);  // soft onset
+  EXPECT_DOUBLE_EQ(memory.impact_velocity, 0.0);
+  rc::update_impact_memory(memory, delta, 0.36);
+  EXPECT_DOUBLE_EQ(memory.impact_velocity, 0.36);
+  const double N = rc::damped_normal_force(K, delta, 0.36, memory.impact_velocity, p);
+  EXPECT_NEAR(N, elastic * (1.0 + 0.75 * (1.0 - 0.25)), 1e-9 * elastic);
+  // Separating at the same rate afterwards: 1 - 0.5625, positive (the onset rate alone gave a negative
+  // bracket, N clamped to 0, for any separation faster than 0.018 m/s).
+  rc::update_impact_memory(memory, delta, -0.36);
+  EXPECT_DOUBLE_EQ(memory.impact_velocity, 0.36);
+  EXPECT_NEAR(rc::damped_normal_force(K, delta, -0.36, memory.impact_velocity, p), elastic * (1.0 - 0.5625),
+              1e-9 * elastic);
+  rc::update_impact_memory(memory, -1e-9, 0.0);  // contact lost: forgotten
+  EXPECT_FALSE(memory.in_contact);
+  EXPECT_EQ(memory.impact_velocity, 0.0);
 }
 
 TEST(NormalForce, ValidationRejectsBadParameters) {

@@ -427,16 +427,20 @@ TEST(CosimTrack, FlexibleStandingWheelsetSettlesToStaticLoads) {
 
 // The problem the semi-implicit coupling solves (doc/cosim_track.md): with the explicit coupling and the
 // default contact data, the standing wheelset of the test above (lowered over 20 ms onto the flexible
-// rails) chatters: the damper of eq. 9 acts on a one-step-old rail velocity with a loop gain
-// 2 c / (h k_rail) of about 2.2 and the wheels lose contact again and again. Over t in [20, 30] ms at
-// h = 2e-5 s the explicit run must lose contact in at least a quarter of the steps (the open-points note
-// reported every other step); the semi-implicit run in none.
+// rails) oscillates: the damper of eq. 9 acts on a one-step-old rail velocity with a loop gain
+// 2 c / (h k_rail) of about 2.2. While rail_contact's impact memory held the onset rate only, eq. 9's
+// bracket went negative on separation and the wheels lost contact in every other step; with the largest
+// approach rate since onset (hertz.hpp, ImpactMemory) the bracket stays within [0.44, 1.56] and contact is
+// kept, but the load still swings (measured 49-144 kN about Q = 100 kN). Over t in [20, 30] ms at
+// h = 2e-5 s: the explicit run's wheel load spans more than 0.5 Q peak to peak; the semi-implicit run's
+// less than 0.1 Q (measured 97-103 kN) and it never loses contact.
 TEST(CosimTrack, ExplicitCouplingChattersWithContactDampingSemiImplicitDoesNot) {
-  const double h = 2e-5, s0 = 15.0;
+  const double h = 2e-5, s0 = 15.0, Q = 100000.0;
   const Scene sc = scene("flexible", h, 1);
   const DirectContact direct(sc);
-  const double z_rigid = direct.settledHeight(s0, 100000.0);
+  const double z_rigid = direct.settledHeight(s0, Q);
   long losses[2] = {0, 0};
+  double span[2] = {0.0, 0.0};
   for (int scheme = 0; scheme < 2; ++scheme) {
     rt::CosimTrackOptions options;
     options.coupling = scheme == 0 ? rt::CosimCoupling::kExplicit : rt::CosimCoupling::kSemiImplicit;
@@ -447,8 +451,15 @@ TEST(CosimTrack, ExplicitCouplingChattersWithContactDampingSemiImplicitDoesNot) 
                                          std::lround(0.02 / h) + 1);
     EXPECT_EQ(lowered.t.size() + held.t.size(), std::size_t(1502));
     losses[scheme] = held.losses;
+    double lo = 1e300, hi = -1e300;
+    for (const auto* f : {&held.Fz0, &held.Fz1})
+      for (double x : *f) lo = std::min(lo, x), hi = std::max(hi, x);
+    span[scheme] = hi - lo;
+    std::printf("%s coupling: contact losses %ld, wheel loads %.1f .. %.1f kN\n", scheme == 0 ? "explicit" : "semi-implicit",
+                held.losses, lo / 1e3, hi / 1e3);
   }
-  EXPECT_GE(losses[0], 2 * 500 / 4) << "explicit coupling: contact losses over 500 steps, both wheels";
+  EXPECT_GT(span[0], 0.5 * Q) << "explicit coupling: the load should swing";
+  EXPECT_LT(span[1], 0.1 * Q) << "semi-implicit coupling";
   EXPECT_EQ(losses[1], 0) << "semi-implicit coupling";
 }
 
