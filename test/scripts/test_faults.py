@@ -469,8 +469,6 @@ class Faults(RunTestCase):
         self.assert_bag_readable(run.bag, log, at_least_until=0.3 - 1e-9)
         self.assert_clean(run)
 
-    @unittest.skip("needs rail_core shm_transport.cpp ShmRegion::create() to report a replaced stale region "
-                   "and the nodes to log it (doc/faults.md, change S1)")
     def test_2_replaced_region_is_reported(self):
         crashed, left, run, _, _ = self.stale_regions()
         replaced = run.vehicle.lines(r"stale") + run.track.lines(r"stale")

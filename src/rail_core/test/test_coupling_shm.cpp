@@ -359,9 +359,14 @@ TEST_F(ShmTest, LiveRegionIsRefusedClosedOneReplaced) {
     EXPECT_EQ(std::string(e.what()).rfind("shm transport: region " + spec.name + " is in use by pid " +
                                           std::to_string(getpid()) + " on host '", 0), 0u) << e.what();
   }
+  EXPECT_EQ(first.replaced_stale(), "");  // the name was free
   first.header().state.fetch_or(shm::kWriterClosed);
   ShmRegion second = ShmRegion::create(spec);  // the closed one is stale: replaced
   EXPECT_EQ(second.header().state.load(), 0u);
+  EXPECT_EQ(second.replaced_stale().rfind("replaced the stale region " + spec.name + " left by pid " +
+                                              std::to_string(getpid()) + " on host '", 0), 0u)
+      << second.replaced_stale();
+  EXPECT_NE(second.replaced_stale().find("' (closed by its writer)"), std::string::npos) << second.replaced_stale();
   struct stat a {}, b {};
   ASSERT_EQ(stat(("/dev/shm" + spec.name).c_str(), &b), 0);
   second.unlink_if_same();
@@ -396,6 +401,9 @@ TEST_F(ShmTest, StaleRegionOfKilledProcessIsReplaced) {
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the track now polls the stale region
   ShmTransport t(options(Role::kVehicle));
   EXPECT_EQ(t.peer_pid(), track);
+  EXPECT_EQ(t.replaced_stale().rfind("replaced the stale region " + name(Role::kVehicle) + " left by pid " +
+                                         std::to_string(doomed) + " on host '", 0), 0u) << t.replaced_stale();
+  EXPECT_NE(t.replaced_stale().find("' (its creator is gone)"), std::string::npos) << t.replaced_stale();
   VehicleCoupling v(config(), t);
   for (std::uint64_t k = 0; k < 3; ++k) {
     fill_states(v.states(), k);

@@ -158,7 +158,7 @@ bool shm_process_alive(std::int64_t pid, std::uint64_t start_time) {
 // --- ShmRegion ------------------------------------------------------------------------------------------
 
 ShmRegion::ShmRegion(ShmRegion&& o) noexcept
-    : name_(std::move(o.name_)), fd_(o.fd_), base_(o.base_), size_(o.size_) {
+    : name_(std::move(o.name_)), replaced_(std::move(o.replaced_)), fd_(o.fd_), base_(o.base_), size_(o.size_) {
   o.fd_ = -1;
   o.base_ = nullptr;
   o.size_ = 0;
@@ -168,6 +168,7 @@ ShmRegion& ShmRegion::operator=(ShmRegion&& o) noexcept {
   if (this != &o) {
     unmap();
     name_ = std::move(o.name_);
+    replaced_ = std::move(o.replaced_);
     fd_ = o.fd_;
     base_ = o.base_;
     size_ = o.size_;
@@ -202,6 +203,7 @@ void ShmRegion::unlink_if_same() {
 
 ShmRegion ShmRegion::create(const Spec& spec) {
   const std::size_t size = shm_region_size(spec.kind, spec.wheel_capacity);
+  std::string replaced;  // what was replaced on an earlier attempt
   for (int attempt = 0;; ++attempt) {
     const int fd = shm_open(spec.name.c_str(), O_CREAT | O_EXCL | O_RDWR, 0600);
     if (fd >= 0) {
@@ -236,6 +238,7 @@ ShmRegion ShmRegion::create(const Spec& spec) {
       std::strncpy(h->creator_host, host.c_str(), kShmHostNameSize - 1);
       h->state.store(0, std::memory_order_relaxed);
       h->magic.store(kShmMagic, std::memory_order_release);
+      r.replaced_ = replaced;
       return r;
     }
     if (errno != EEXIST || attempt >= 20)
@@ -249,7 +252,7 @@ ShmRegion ShmRegion::create(const Spec& spec) {
     if (old < 0) continue;  // unlinked meanwhile: try again
     struct stat st {};
     bool stale = false;
-    std::string owner;
+    std::string owner, why = "(incomplete, left by a creator that died while setting it up)";
     if (fstat(old, &st) == 0 && static_cast<std::size_t>(st.st_size) >= sizeof(ShmHeader)) {
       void* p = mmap(nullptr, sizeof(ShmHeader), PROT_READ, MAP_SHARED, old, 0);
       if (p != MAP_FAILED) {
@@ -259,9 +262,11 @@ ShmRegion ShmRegion::create(const Spec& spec) {
           std::this_thread::sleep_for(kIncompleteHeaderGrace);
           stale = h->magic.load(std::memory_order_acquire) != kShmMagic;
         } else {
-          stale = !creator_alive(*h) || (h->state.load(std::memory_order_acquire) & kWriterClosed);
+          const bool alive = creator_alive(*h);
+          stale = !alive || (h->state.load(std::memory_order_acquire) & kWriterClosed);
           owner = "pid " + std::to_string(h->creator_pid) + " on host '" +
                   std::string(h->creator_host, strnlen(h->creator_host, kShmHostNameSize)) + "'";
+          why = "left by " + owner + (alive ? " (closed by its writer)" : " (its creator is gone)");
         }
         munmap(p, sizeof(ShmHeader));
       }
@@ -275,6 +280,7 @@ ShmRegion ShmRegion::create(const Spec& spec) {
                                                 (owner.empty() ? std::string("another process") : owner) +
                                                 " (another run with the same scene and run id?)");
     shm_unlink(spec.name.c_str());  // stale: replace it
+    replaced = "replaced the stale region " + spec.name + " " + why;
   }
 }
 

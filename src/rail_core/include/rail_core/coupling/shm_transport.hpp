@@ -71,9 +71,14 @@ class ShmRegion {
   // Unlink the name if it still refers to this region (not to a newer one of the same name).
   void unlink_if_same();
   void unmap();
+  // After create(): what it replaced, "" when the name was free: "replaced the stale region <name> left
+  // by pid P on host 'H' (its creator is gone)", "(closed by its writer)" or "(incomplete, left by a
+  // creator that died while setting it up)". For the node's log.
+  const std::string& replaced_stale() const { return replaced_; }
 
  private:
   std::string name_;
+  std::string replaced_;
   int fd_ = -1;
   void* base_ = nullptr;
   std::size_t size_ = 0;
@@ -98,6 +103,8 @@ class ShmTransport : public FrameTransport {
   const std::string& write_region_name() const { return write_.name(); }
   const std::string& read_region_name() const { return read_.name(); }
   std::int64_t peer_pid() const { return peer_pid_; }
+  // This side's region replaced a stale one of a crashed run: ShmRegion::replaced_stale(), else "".
+  const std::string& replaced_stale() const { return write_.replaced_stale(); }
 
  private:
   // Wait until the region's turn flag equals `want_reader_turn`; the peer's closed bit ends the wait.

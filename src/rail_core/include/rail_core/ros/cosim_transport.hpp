@@ -3,7 +3,9 @@
 // Header-only, used at set-up only (allocates, may throw).
 #pragma once
 
+#include <ros/console.h>
 #include <ros/node_handle.h>
+#include <ros/this_node.h>
 
 #include <rail_core/coupling/protocol.hpp>
 #include <rail_core/coupling/shm_transport.hpp>
@@ -59,7 +61,11 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> MakeTransport(
       o.run_id = ShmRunId(pnh);
       o.attach_timeout = scene.solver.handshake_timeout;
       o.interrupt = interrupt;
-      return std::make_unique<coupling::ShmTransport>(o);
+      auto t = std::make_unique<coupling::ShmTransport>(o);
+      if (!t->replaced_stale().empty()) {  // a crashed run's region: say so, the run goes on
+        ROS_WARN("%s: shm transport: %s", ros::this_node::getName().c_str(), t->replaced_stale().c_str());
+      }
+      return t;
     }
     case Transport::kService: {
       ros_glue::ServiceTransportOptions o;
