@@ -56,6 +56,15 @@ void in_range(MapReader& r, const char* key, double v, double lo, double hi, con
   }
 }
 
+// A curve radius tighter than any track a rail vehicle runs on (tram depots reach ~15 m; EN 13803 main
+// lines 150 m and up) is a typing error, not a scenario: refused before it becomes a curvature of 1e300.
+constexpr double kMinCurveRadius = 10.0;  // [m]
+void min_radius(MapReader& r, const char* key, double v) {
+  if (v < kMinCurveRadius) {
+    r.fail(key, "must be >= " + format_double(kMinCurveRadius) + " m (0 = straight where allowed)" + got(v));
+  }
+}
+
 std::string dir_of(const std::string& path) {
   const auto pos = path.find_last_of('/');
   if (pos == std::string::npos) return ".";
@@ -123,14 +132,17 @@ Segment read_segment(const YAML::Node& node, const std::string& path, const Cont
       r.require("radius");
       r.number("radius", seg.radius);
       positive(r, "radius", seg.radius);
+      min_radius(r, "radius", seg.radius);
       r.number("cant", seg.cant);
       in_range(r, "cant", seg.cant, 0.0, 0.25, "m");
       break;
     case SegmentType::kTransition:
       r.number("radius_start", seg.radius_start);
       non_negative(r, "radius_start", seg.radius_start);
+      if (seg.radius_start > 0.0) min_radius(r, "radius_start", seg.radius_start);
       r.number("radius_end", seg.radius_end);
       non_negative(r, "radius_end", seg.radius_end);
+      if (seg.radius_end > 0.0) min_radius(r, "radius_end", seg.radius_end);
       r.number("cant_start", seg.cant_start);
       in_range(r, "cant_start", seg.cant_start, 0.0, 0.25, "m");
       r.number("cant_end", seg.cant_end);
@@ -204,7 +216,14 @@ void read_track(MapReader& root, Scene& s, const Context& ctx) {
   in_range(r, "gauge_measuring_depth", t.gauge_measuring_depth, 0.0, 0.03, "m");
   r.number("cant_reference_width", t.cant_reference_width);
   if (t.cant_reference_width == 0.0) t.cant_reference_width = t.gauge + 0.065;
-  in_range(r, "cant_reference_width", t.cant_reference_width, t.gauge, t.gauge + 0.2, "m");
+  if (!(t.cant_reference_width >= t.gauge && t.cant_reference_width <= t.gauge + 0.2)) {
+    // Named against the gauge, and the gauge's origin when the scene left it to its default.
+    r.fail("cant_reference_width", "must be between track.gauge (" + format_double(t.gauge) + " m) and track.gauge + 0.2 m" +
+                                       got(t.cant_reference_width) +
+                                       (r.has("gauge") ? std::string()
+                                                       : "; track.gauge is not set, so its default " +
+                                                             format_double(t.gauge) + " m applies"));
+  }
   r.string("rail_profile", t.rail_profile);
   if (!contains(kBuiltinRailProfiles, t.rail_profile)) {
     t.rail_profile_file = resolve_file(r, "rail_profile", t.rail_profile, ctx);
@@ -300,7 +319,7 @@ void read_contact(MapReader& root, Scene& s) {
   // Bounds: a friction coefficient above 1 is not a wheel on a rail (sanded dry rail reaches ~0.5); e is a
   // ratio of velocities; the floor keeps eq. 9's damping finite and below a penetration rate of 10 m/s.
   r.number("friction", c.friction);
-  in_range(r, "friction", c.friction, 0.0, 1.0, "(-)");
+  if (!(c.friction > 0.0 && c.friction <= 1.0)) r.fail("friction", "must be > 0 and <= 1" + got(c.friction));
   r.number("restitution", c.restitution);
   in_range(r, "restitution", c.restitution, 0.0, 1.0, "(-)");
   r.number("impact_velocity_floor", c.impact_velocity_floor);
