@@ -30,6 +30,7 @@ const char* CostClock::name(Part p) {
     case kMarkers: return "markers";
     case kRailDeflection: return "rail_deflection";
     case kContactPointOutput: return "contact_point_output";
+    case kEnergyOutput: return "energy_output";
     case kPartCount: break;
   }
   return "?";
@@ -66,6 +67,7 @@ int CostProfile::finer_lines(const CostClock& k, std::array<FinerLine, kMaxFiner
   part(CostClock::kPadForces, kPublish);
   part(CostClock::kContactPointOutput, kPublish);
   part(CostClock::kMarkers, kPublish);
+  part(CostClock::kEnergyOutput, track_side ? kPublish : kVehicleIntegration);
   return n;
 }
 

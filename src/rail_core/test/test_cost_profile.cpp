@@ -65,11 +65,12 @@ TEST(CostProfile, TimedTransportTimesBothDirectionsAndForwardsFrames) {
   EXPECT_EQ(tv.role(), Role::kVehicle);
 }
 
-// The node-level optional outputs (effects.rviz_markers, contact_point_output) go through TimedOutput:
+// The node-level optional outputs (effects.rviz_markers, contact_point_output, the track's energy_output) go
+// through TimedOutput:
 // off, the output is not produced and its part shows exactly zero time and calls; on, it is produced
 // under its part's clock.
 TEST(CostClock, TimedOutputOffProducesNothingAndCostsNothing) {
-  for (CostClock::Part part : {CostClock::kMarkers, CostClock::kContactPointOutput}) {
+  for (CostClock::Part part : {CostClock::kMarkers, CostClock::kContactPointOutput, CostClock::kEnergyOutput}) {
     CostClock clock;
     int produced = 0;
     EXPECT_FALSE(TimedOutput(&clock, part, false, [&] { ++produced; }));

@@ -552,6 +552,17 @@ TEST(VehicleSimulatorCost, FloorAccelerationsOffCostNothing) {
   EXPECT_GT(on.clock.seconds[core::CostClock::kFloorAccelerations], 0.0);
 }
 
+TEST(VehicleSimulatorCost, EnergyOutputOffCostsNothing) {
+  core::Scene scene = StraightScene(30.5556, 0.02);
+  const CostRun off = RunWithClock(scene);
+  EXPECT_EQ(off.clock.calls[core::CostClock::kEnergyOutput], 0);
+  EXPECT_EQ(off.clock.seconds[core::CostClock::kEnergyOutput], 0.0);
+  scene.effects.energy_output = true;
+  const CostRun on = RunWithClock(scene);
+  EXPECT_GT(on.clock.calls[core::CostClock::kEnergyOutput], 0);
+  EXPECT_GT(on.clock.seconds[core::CostClock::kEnergyOutput], 0.0);
+}
+
 TEST(VehicleSimulatorCost, IrregularitiesAreTabulatedAtBuildAndCostNothingDuringTheRun) {
   // 2 ms only: the realisation's start is rough for the coach's first steps and run time is not the point.
   core::Scene scene = StraightScene(30.5556, 0.002);

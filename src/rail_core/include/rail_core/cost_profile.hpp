@@ -18,9 +18,10 @@ namespace rail::core {
 // TrackSimulator, NewmarkIntegrator) when the caller passes one at construction; null = no timing and no
 // cost. Owned by the caller; plain arrays, no allocation; a steady-clock read around each timed part.
 // Nesting in the coarse components of CostProfile (the node prints it):
-//   vehicle_integration > vehicle_rhs, vehicle_jacobian (> contact_detection, contact_forces), floor_accelerations
+//   vehicle_integration > vehicle_rhs, vehicle_jacobian (> contact_detection, contact_forces), floor_accelerations,
+//                         energy_output (vehicle side)
 //   track_step          > contact_detection, contact_forces, track_rhs, track_solve, window_moves
-//   publish             > rail_deflection, pad_forces, contact_point_output, markers
+//   publish             > rail_deflection, pad_forces, contact_point_output, markers, energy_output (track side)
 struct CostClock {
   enum Part {
     kVehicleRhs,           // vehicle right-hand sides for the integrator's steps (contact on the rigid track inside)
@@ -33,6 +34,7 @@ struct CostClock {
     kMarkers,              // effects.rviz_markers: building and publishing markers
     kRailDeflection,       // effects.rail_deflection_output: section deflections
     kContactPointOutput,   // effects.contact_point_output: building and publishing contact points
+    kEnergyOutput,         // effects.energy_output: vehicle (in its outputs) or FE track (publish) energy
     kPartCount
   };
   enum Count {
@@ -145,7 +147,7 @@ class CostProfile {
   };
   // The finer split of clock in this profile (contact under track_step if the profile has track steps,
   // else under vehicle_integration), fixed order, at most kMaxFinerLines lines.
-  static constexpr int kMaxFinerLines = 12;
+  static constexpr int kMaxFinerLines = 13;
   int finer_lines(const CostClock& clock, std::array<FinerLine, kMaxFinerLines>& lines) const;
 
  private:

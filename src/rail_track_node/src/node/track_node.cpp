@@ -705,7 +705,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         bag.write("/pad_forces", stamp, pads_msg);
       }
     }
-    if (energy) {
+    rail::core::TimedOutput(&clock, rail::core::CostClock::kEnergyOutput, energy, [&] {
       track->energy(energy_msg.kinetic, energy_msg.potential);
       energy_msg.total = energy_msg.kinetic + energy_msg.potential;
       energy_msg.header.stamp = stamp;
@@ -714,7 +714,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
         bag.write("/track_energy", stamp, energy_msg);
       }
-    }
+    });
     rail::core::TimedOutput(&clock, rail::core::CostClock::kMarkers, draw_markers && stamp.toSec() + 1e-12 >= next_marker, [&] {
       next_marker += marker_period;
       if (window == nullptr) {

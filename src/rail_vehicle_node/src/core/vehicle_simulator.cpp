@@ -534,6 +534,7 @@ void VehicleSimulator::UpdateOutputs() {
     body_out_[b].orientation = EulerParametersFromRotation(k.A);
   }
   if (energy_) {
+    core::CostClock::Scope timing(cost_, core::CostClock::kEnergyOutput);
     // From the bodies' kinematics evaluated above (multibody_dynamics.hpp).
     energy_out_.kinetic = KineticEnergy(model_, *data_);
     energy_out_.potential = PotentialEnergy(model_, *data_);
