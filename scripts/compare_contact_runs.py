@@ -5,7 +5,7 @@ wheel load Q, the leading outer wheel's mean lateral force Y over the run's last
 dips (a sample below 30 % of both neighbours while they carry more than 20 kN), active contacts reported
 with N = 0, and the derailment instant. Each run gets its own ROS master port and output directory.
 
-  scripts/compare_contact_runs.py --before WS_A --after WS_B [--out DIR] [--scene FILE:END_S[:override ...]]
+  scripts/compare_contact_runs.py --before WS_A --after WS_B [--out DIR] [--scene "FILE[;key=value;...]" ...]
 
 Without --scene the shipped comparison set runs: the tight curve (R 150 m) from s = 145 m for 1 s, the
 paper's scene for 1.5 s, the lift-off bump and the flange-climb hard cases. Exit 0, or 2 on a usage error.
@@ -26,6 +26,7 @@ DEFAULT_SCENES = [
     ("config/scenes/tight_curve.yaml", ["vehicle.start_arc_length=145.0", "solver.end={time: 1.0}"]),
     ("config/scenes/paper_demo.yaml", ["solver.end={time: 1.5}", "effects.irregularities=false"]),
     ("config/scenes/hard/lift_off_bump.yaml", []),
+    ("config/scenes/hard/hunting_high_speed.yaml", []),
 ]
 
 
@@ -68,9 +69,9 @@ def main(argv=None):
     ap.add_argument("--before", required=True)
     ap.add_argument("--after", required=True)
     ap.add_argument("--out", default="output/contact_compare")
-    ap.add_argument("--scene", action="append", help="FILE[:override ...] (repeatable)")
+    ap.add_argument("--scene", action="append", help="FILE[;key=value;...] (repeatable)")
     a = ap.parse_args(argv)
-    scenes = DEFAULT_SCENES if not a.scene else [(s.split(":")[0], s.split(":")[1:]) for s in a.scene]
+    scenes = DEFAULT_SCENES if not a.scene else [(s.split(";")[0], s.split(";")[1:]) for s in a.scene]
     rows = []
     for scene, ov in scenes:
         name = os.path.splitext(os.path.basename(scene))[0]

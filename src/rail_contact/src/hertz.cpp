@@ -254,4 +254,30 @@ void update_impact_memory(ImpactMemory& memory, double delta, double delta_dot) 
   }
 }
 
+HertzGeometry limit_lateral_width(const HertzGeometry& hz, double delta, double max_b,
+                                  const HertzOptions& options) noexcept {
+  const auto width = [delta](const HertzGeometry& h) { return h.b(h.load(delta)); };
+  if (!(max_b > 0.0) || !(delta > 0.0) || !(width(hz) > max_b)) return hz;
+  // b at a given approach falls as B grows (A fixed): bracket, then bisect on log B.
+  double lo = hz.B, hi = hz.B;
+  HertzGeometry h = hz;
+  for (int i = 0; i < 60 && width(h) > max_b; ++i) {
+    lo = hi;
+    hi *= 2.0;
+    h = compute_hertz(hz.A, hi, hz.E_star, options);
+  }
+  for (int i = 0; i < 40 && hi > lo * (1.0 + 1e-6); ++i) {
+    const double mid = std::sqrt(lo * hi);
+    const HertzGeometry m = compute_hertz(hz.A, mid, hz.E_star, options);
+    if (width(m) > max_b) {
+      lo = mid;
+    } else {
+      hi = mid;
+      h = m;
+    }
+  }
+  h.flags |= hz.flags | kHertzWidthClamped;
+  return h;
+}
+
 }  // namespace rail::contact

@@ -26,6 +26,8 @@ void validate(const WheelContactOptions& o) {
   validate(o.damping);
   validate(o.polach);
   if (!(o.merge_distance >= 0.0)) fail("merge_distance", o.merge_distance, "m must not be negative");
+  if (!(o.max_lateral_semi_axis >= 0.0))
+    fail("max_lateral_semi_axis", o.max_lateral_semi_axis, "m must not be negative (0 = no limit)");
   if (!(o.creepage.v_eps > 0.0)) fail("creepage.v_eps", o.creepage.v_eps, "m/s must be positive");
 }
 
@@ -126,7 +128,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     kc.wheel_lateral = g.wheel_curvature;
     kc.rail_rolling = 0.0;
     kc.rail_lateral = g.rail_curvature;
-    const HertzGeometry hz = compute_hertz(kc, E_star_, options_.hertz);
+    const HertzGeometry hz = limit_lateral_width(compute_hertz(kc, E_star_, options_.hertz), c.penetration,
+                                                 options_.max_lateral_semi_axis, options_.hertz);
     c.hertz_flags = hz.flags;
     if (k == kFlange && out.contact[kTread].penetration > 0.0 &&
         (out.contact[kTread].p_wheel_in_world - g.p_wheel_in_world).norm() < options_.merge_distance) {

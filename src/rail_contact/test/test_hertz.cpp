@@ -254,6 +254,28 @@ TEST(NormalForce, RestitutionOfSingleImpact) {
   EXPECT_NEAR(-v / v_in, 0.95, 0.01);
 }
 
+TEST(Hertz, NearConformalPatchIsLimitedToTheLateralWidth) {
+  // Flange root against the gauge corner: rolling curvature of a 0.45 m wheel (A = 1.1 /m), lateral
+  // curvatures cancelling to B = 1e-3 /m. Unlimited, a 0.25 mm approach gives an ellipse metres wide and a
+  // stiffness many times the tread's; limited to b = 10 mm, B is raised until b is 10 mm at that approach.
+  const double E_star = 1.15e11, delta = 250e-6, max_b = 0.010;
+  const rc::HertzGeometry conformal = rc::compute_hertz(1.1, 1e-3, E_star);
+  ASSERT_GT(conformal.b(conformal.load(delta)), 0.3);
+  const rc::HertzGeometry limited = rc::limit_lateral_width(conformal, delta, max_b);
+  EXPECT_NEAR(limited.b(limited.load(delta)), max_b, 1e-5 * max_b);
+  EXPECT_TRUE(limited.flags & rc::kHertzWidthClamped);
+  EXPECT_DOUBLE_EQ(limited.A, conformal.A);
+  EXPECT_GT(limited.B, conformal.B);
+  EXPECT_LT(limited.K, 0.5 * conformal.K);
+  // A tread contact (rail crown R 0.3 m against the tread: B ~ 0.6 /m) is far inside the limit: unchanged.
+  const rc::HertzGeometry tread = rc::compute_hertz(1.1, 0.6, E_star);
+  const rc::HertzGeometry same = rc::limit_lateral_width(tread, 100e-6, max_b);
+  EXPECT_EQ(same.K, tread.K);
+  EXPECT_EQ(same.B, tread.B);
+  EXPECT_FALSE(same.flags & rc::kHertzWidthClamped);
+  EXPECT_EQ(rc::limit_lateral_width(conformal, delta, 0.0).K, conformal.K);  // 0: no limit
+}
+
 TEST(NormalForce, MemoryKeepsTheLargestApproachRateSoASoftStartIsNotOverdamped) {
   // A contact that starts at a tiny approach rate (the floor applies) and is then pushed in at 0.36 m/s (the
   // flange-climb hard case's reappearing tread contact): with the onset rate alone eq. 9's bracket would be

@@ -57,6 +57,7 @@ enum HertzFlag : std::uint32_t {
   kHertzNonPositiveCurvature = 1u << 1,  ///< A or B <= 0 (conformal/convex-concave): clamped
   kHertzRatioClamped = 1u << 2,       ///< max(A,B)/min(A,B) above max_curvature_ratio: clamped
   kHertzBadInput = 1u << 3,           ///< non-finite curvature or E* <= 0: unit-less fallback
+  kHertzWidthClamped = 1u << 4,       ///< near-conformal: B raised so b stays within the patch width limit
 };
 
 /// Load-independent Hertz solution for one contact geometry. With N the normal load [N]:
@@ -84,6 +85,14 @@ struct HertzGeometry {
   /// Elastic (undamped) load at approach delta [N]: K delta^1.5; 0 for delta <= 0.
   double load(double delta) const noexcept;
 };
+
+/// A near-conformal contact (flange root against the gauge corner: wheel and rail lateral curvatures almost
+/// cancel, B -> 0) has a Hertz ellipse as wide as B allows and a stiffness that grows without bound, while
+/// Hertz's theory holds only for a patch small against the profile radii around it. Returns hz when its
+/// lateral semi-axis at the elastic load K delta^1.5 is within max_b; otherwise the geometry with B raised
+/// (bisection, A kept) until it is max_b, flagged kHertzWidthClamped. No allocation.
+HertzGeometry limit_lateral_width(const HertzGeometry& hz, double delta, double max_b,
+                                  const HertzOptions& options = {}) noexcept;
 
 /// Relative curvature coefficients A = (k_wx + k_rx)/2, B = (k_wy + k_ry)/2 [1/m].
 void relative_curvatures(const PrincipalCurvatures& k, double& A, double& B) noexcept;
