@@ -113,7 +113,8 @@ def load_contact_points(path):
     """The /contact_points topic of a bag (rail_msgs/ContactPoints), sorted by time.
 
     Returns a dict: t [s] (N,); per point slot (N, P) arrays wheel_id, side, kind (KIND_TREAD/KIND_FLANGE),
-    active (bool), normal_force [N], creep_force_longitudinal [N], creep_force_lateral [N], arc_length [m].
+    active (bool), normal_force [N], creep_force_longitudinal [N], creep_force_lateral [N], arc_length [m],
+    penetration [m].
     Messages with fewer than P points are padded with inactive slots (wheel_id -1, forces 0).
     """
     msgs = _messages(path, "/contact_points", "the flange contact forces")
@@ -122,7 +123,7 @@ def load_contact_points(path):
     t = np.array([m.header.stamp.to_sec() for m in msgs])
     out = {"t": t}
     ints = {"wheel_id": -1, "side": -1, "kind": -1}
-    floats = ("normal_force", "creep_force_longitudinal", "creep_force_lateral", "arc_length")
+    floats = ("normal_force", "creep_force_longitudinal", "creep_force_lateral", "arc_length", "penetration")
     for k, fill in ints.items():
         out[k] = np.full((n, p), fill, dtype=int)
     for k in floats:
