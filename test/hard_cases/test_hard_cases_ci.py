@@ -13,7 +13,9 @@ import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "scripts"))
 import hard_cases  # noqa: E402
+import rosunit_main  # noqa: E402
 
 
 class HardCasesCi(unittest.TestCase):
@@ -60,16 +62,8 @@ class HardCasesCi(unittest.TestCase):
 
 
 def main():
-    rest = [a for a in sys.argv[1:] if not a.startswith("--gtest_output=")]
-    xml = [a.split("xml:", 1)[1] for a in sys.argv[1:] if a.startswith("--gtest_output=xml:")]
     suite = unittest.TestLoader().loadTestsFromTestCase(HardCasesCi)
-    if xml:
-        import rosunit
-        result = rosunit.create_xml_runner("railsim_tests", "test_hard_cases_ci", xml[0]).run(suite)
-        rosunit.print_unittest_summary(result)
-    else:
-        result = unittest.TextTestRunner(verbosity=2).run(suite)
-    return 0 if result.wasSuccessful() else 1
+    return rosunit_main.run(suite, "test_hard_cases_ci")
 
 
 if __name__ == "__main__":

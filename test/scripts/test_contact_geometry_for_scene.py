@@ -14,6 +14,9 @@ import sys
 import tempfile
 import unittest
 
+sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+import rosunit_main  # noqa: E402
+
 REPO = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", ".."))
 TOOL = os.path.join(REPO, "src", "rail_contact", "scripts", "contact_geometry_for_scene.py")
 CG = os.path.join(REPO, "devel", "lib", "rail_contact", "contact_geometry")
@@ -74,15 +77,8 @@ class ContactGeometryForScene(unittest.TestCase):
 
 
 def main():
-    xml = [a.split("xml:", 1)[1] for a in sys.argv[1:] if a.startswith("--gtest_output=xml:")]
     suite = unittest.TestLoader().loadTestsFromTestCase(ContactGeometryForScene)
-    if xml:
-        import rosunit
-        result = rosunit.create_xml_runner("railsim_tests", "test_contact_geometry_for_scene", xml[0]).run(suite)
-        rosunit.print_unittest_summary(result)
-    else:
-        result = unittest.TextTestRunner(verbosity=2).run(suite)
-    return 0 if result.wasSuccessful() else 1
+    return rosunit_main.run(suite, "test_contact_geometry_for_scene")
 
 
 if __name__ == "__main__":

@@ -37,6 +37,9 @@ import unittest
 import yaml
 
 HERE = os.path.dirname(os.path.realpath(__file__))
+sys.path.insert(0, HERE)
+import rosunit_main  # noqa: E402  (this directory's shared test main)
+
 TEST_DIR = os.path.dirname(HERE)                    # the railsim_tests package (repo/test)
 REPO = os.path.dirname(TEST_DIR)
 SEED = 20240611
@@ -590,14 +593,7 @@ def main():
     for cls in (FuzzInputs, BadReplayBag):
         if not only or cls.__name__ in only:
             suite.addTests(unittest.defaultTestLoader.loadTestsFromTestCase(cls))
-    xml = [a.split("xml:", 1)[1] for a in rest if a.startswith("--gtest_output=xml:")]
-    if xml:  # JUnit XML as rosunit writes it (both classes in one file)
-        import rosunit
-        result = rosunit.create_xml_runner("railsim_tests", "test_fuzz_inputs", xml[0]).run(suite)
-        rosunit.print_unittest_summary(result)
-    else:
-        result = unittest.TextTestRunner(verbosity=2).run(suite)
-    return 0 if result.wasSuccessful() else 1
+    return rosunit_main.run(suite, "test_fuzz_inputs", rest)  # both classes in one XML file
 
 
 if __name__ == "__main__":
