@@ -620,6 +620,10 @@ TEST(ChooseMethod, AutoPicksBdfBelowTheStiffCreepSpeedWithTheBuiltInContact) {
   EXPECT_EQ(ChooseMethod(s, 0.1, false), IntegrationMethod::kBdf);
   EXPECT_EQ(ChooseMethod(s, kStiffCreepSpeed, false), IntegrationMethod::kAdams);
   EXPECT_EQ(ChooseMethod(s, 0.0, true), IntegrationMethod::kAdams);
+  // Above a 5e-5 s cap BDF on the vehicle's own contact, Adams in co-simulation at any cap.
+  s.vehicle_max_step = 8e-5;
+  EXPECT_EQ(ChooseMethod(s, 30.5556, false), IntegrationMethod::kBdf);
+  EXPECT_EQ(ChooseMethod(s, 30.5556, true), IntegrationMethod::kAdams);
   s.vehicle_method = core::VehicleMethod::kAdams;
   EXPECT_EQ(ChooseMethod(s, 0.0, false), IntegrationMethod::kAdams);
 }

@@ -66,7 +66,8 @@ IntegrationMethod ChooseMethod(const core::Solver& solver, double speed, bool ex
     case core::VehicleMethod::kAdams: return IntegrationMethod::kAdams;
     case core::VehicleMethod::kAuto: break;
   }
-  if (!external_wrenches && std::abs(speed) < kStiffCreepSpeed) return IntegrationMethod::kBdf;
+  if (external_wrenches) return IntegrationMethod::kAdams;  // suspension only: not stiff (see the header)
+  if (std::abs(speed) < kStiffCreepSpeed) return IntegrationMethod::kBdf;
   return (solver.vehicle_max_step > 0.0 && solver.vehicle_max_step <= 5e-5) ? IntegrationMethod::kAdams
                                                                             : IntegrationMethod::kBdf;
 }
