@@ -1,0 +1,73 @@
+#!/usr/bin/env python3
+"""Benchmark of the accuracy-cost issue's targets on this machine (prints its figures; not a test): the
+paper's scene over the same simulated time run alone on the rigid track, co-simulated on the rigid FE track
+and on the flexible track (the latter at the track steps the accuracy-cost map shows), and the flexible run
+on the 5 km version of the scene. Each case runs --repeat times, one at a time (run nothing else meanwhile);
+the figure is the median of the slower node's loop wall time (set-up excluded, from the cost profiles),
+per simulated second, and its ratio to the run alone.
+
+  scripts/bench_targets.py [--repeat 3] [--end 1.5] [--out DIR] [--workspace WS]
+"""
+import argparse
+import os
+import statistics
+import sys
+
+REPO = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
+sys.path.insert(0, os.path.join(REPO, "src", "rail_analysis", "src"))
+from rail_analysis import costmap  # noqa: E402
+
+PAPER = os.path.join(REPO, "config", "scenes", "paper_demo.yaml")
+PAPER_5KM = os.path.join(REPO, "test", "scenes", "paper_demo_5km.yaml")
+TOPICS = ["wheelset_kinematics"]
+CASES = [  # name, scene, overrides
+    ("standalone", PAPER, {"effects.track_model": "rigid", "effects.rail_deflection_output": False}),
+    ("rigid_fe", PAPER, {"effects.track_model": "rigid_fe"}),
+    ("flexible, track step 2e-5 s", PAPER, {}),
+    ("flexible, track step 4e-5 s", PAPER, {"solver.track_step": 4e-5, "solver.vehicle_max_step": 4e-5}),
+    ("flexible, track step 8e-5 s", PAPER, {"solver.track_step": 8e-5, "solver.vehicle_max_step": 8e-5}),
+    ("flexible, 5 km line, 2e-5 s", PAPER_5KM, {}),
+]
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--end", type=float, default=1.5, help="simulated seconds of every run")
+    ap.add_argument("--out", default=os.path.join(REPO, "output", "bench_targets"))
+    ap.add_argument("--workspace", default=REPO)
+    a = ap.parse_args(argv)
+    rows = []
+    for name, scene, ov in CASES:
+        overrides = dict(ov)
+        overrides.update({"solver.end": {"time": a.end}, "output.topics": TOPICS, "output.bag": "run.bag"})
+        loops, walls = [], []
+        for i in range(a.repeat):
+            case_dir = os.path.join(a.out, name.replace(" ", "_").replace(",", ""), str(i))
+            spec = {"case_dir": case_dir, "name": name, "case_id": name, "settings_hash": "", "scene": scene,
+                    "overrides": costmap.override_items(overrides), "workspace": a.workspace, "timeout": 1800.0}
+            rec = costmap.run_case(spec)
+            if rec.get("status") != "ok":
+                print("%s: run %d %s (exit %s): %s" % (name, i, rec.get("status"), rec.get("exit_code"),
+                                                       (rec.get("log_tail") or "").strip()[-300:]))
+                return 1
+            cost = costmap.read_cost(case_dir)
+            loops.append(max(p["loop_wall_time"] for p in cost.values()))
+            walls.append(rec["wall_time"])
+            print("%-30s run %d: loop %.2f s, launch to exit %.2f s" % (name, i, loops[-1], walls[-1]), flush=True)
+        rows.append((name, statistics.median(loops), statistics.median(walls)))
+    base = rows[0][1]
+    print("\n| run (%.2f s simulated, median of %d) | loop wall [s] | per simulated s | x standalone | launch to exit [s] |"
+          % (a.end, a.repeat))
+    print("|---|---|---|---|---|")
+    for name, loop, wall in rows:
+        print("| %s | %.2f | %.2f | %.2f | %.1f |" % (name, loop, loop / a.end, loop / base, wall))
+    flex = [r for r in rows if r[0] == "flexible, track step 2e-5 s"][0]
+    five = [r for r in rows if r[0].startswith("flexible, 5 km")][0]
+    print("\n5 km against 500 m (flexible, 2e-5 s): loop %+.1f %%, launch to exit %+.1f %%" % (
+        100 * (five[1] / flex[1] - 1), 100 * (five[2] / flex[2] - 1)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
