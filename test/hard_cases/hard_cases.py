@@ -28,9 +28,6 @@ from rail_analysis import costmap, loading, safety  # noqa: E402  (after the pat
 
 SCENES = os.path.join(REPO, "config", "scenes", "hard")
 MODELS = ("rigid", "rigid_fe", "flexible")
-# Models that get a refined (convergence) run in most cases: a flexible refined run costs ~250 s of wall
-# time per simulated second here, so it is kept for the cases where the flexible track is the point.
-RIGID_MODELS = ("rigid", "rigid_fe")
 DOCS_MARKER = "<!-- everything below this line is written by test/hard_cases/run_hard_cases.py -->"
 # Solver defaults of the scene format (docs/scene.md, solver): used when a scene does not set them.
 SOLVER_DEFAULTS = {"track_step": 2e-5, "vehicle_max_step": 2e-5, "vehicle_rtol": 1e-6, "vehicle_atol": 1e-8}
@@ -236,21 +233,22 @@ CASES = [
          "tread and flange root both in contact on the outer wheel", MODELS, ("rigid",),
          ("mean Y leading outer, last 0.3 s", "kN", 1e-3, mean_y_leading_outer, 0.05,
           "quasi-static curving force: 5 %"),
-         specific=check_two_point, converge_models=RIGID_MODELS),
+         specific=check_two_point),
     Case("standstill", "3a. start from standstill (speed 0)",
          "settles to the closed-form static wheel load Q0 = m g / 8", MODELS, ("rigid",),
          ("mean Q, last 0.2 s", "kN", 1e-3, mean_q_all, 0.01, "a static load: 1 %"),
-         specific=check_static, converge_models=RIGID_MODELS, extra=LOW_SPEED_EXTRA),
+         specific=check_static, extra=LOW_SPEED_EXTRA),
     Case("creep_speed", "3b. run at 0.1 m/s",
          "settles to Q0 at a tiny rolling speed (creepages divided by ~0.1 m/s)", MODELS, ("rigid",),
          ("mean Q, last 0.2 s", "kN", 1e-3, mean_q_all, 0.01, "a static load: 1 %"),
-         specific=check_static, converge_models=RIGID_MODELS, extra=LOW_SPEED_EXTRA),
+         specific=check_static, extra=LOW_SPEED_EXTRA),
     Case("hunting_high_speed", "4. 450 km/h on straight standard-gauge track (conicity 0.18) after a 4 mm alignment kink",
          "lateral motion bounded (limit cycle, no blow-up)", MODELS, (),
          ("lateral amplitude, 2nd half", "mm", 1e3, lateral_amplitude_late, 0.20,
           "a limit cycle's amplitude: 20 %"),
-         specific=check_bounded_hunting, converge_models=RIGID_MODELS),
-    Case("coarse_steps", "5. coarse corner of the accuracy-cost map: track step 8e-5 s, rtol 1e-5",
+         specific=check_bounded_hunting),
+    Case("coarse_steps",
+         "5. coarse corner of the accuracy-cost map: track step 8e-5 s, rtol 1e-5, over german_high irregularities",
          "stable, or refused at start naming the limit", ("rigid_fe", "flexible"), (),
          ("RMS Q leading wheelset", "kN", 1e-3, q_rms_leading, 0.02,
           "against the refined run (4e-5 s, rtol 1e-6): 2 %"),
@@ -259,14 +257,14 @@ CASES = [
          "forces bounded and finite over large irregularities", MODELS, (),
          ("RMS Q leading wheelset", "kN", 1e-3, q_rms_leading, 0.03,
           "an RMS over 1 s of irregular track: 3 %; the peak, an impact sampled at 1 kHz, moved by 18-22 % "
-          "between base and refined runs and is no converging figure"), converge_models=RIGID_MODELS),
+          "between base and refined runs and is no converging figure")),
     Case("stiff_pad_soft_ballast", "7. pad 10x stiffer, ballast 10x softer (paper_track_stiff_pad.yaml)",
          "stable co-simulation with a stiff pad on a soft foundation", ("flexible",), (),
          ("RMS Q leading wheelset", "kN", 1e-3, q_rms_leading, 0.02, "a mean level: 2 %")),
     Case("derailment_climb", "8. flange climb: R = 150 m at 108 km/h, very dry rail (mu 0.6)",
          "derailment detected and reported (wheel, s, t); clean stop, readable bag, no NaN", MODELS, ("rigid",),
          ("derailment time", "s", 1.0, derail_time, 0.05, "the detection instant: 5 %"),
-         expect="derail", specific=check_derailed, converge_models=RIGID_MODELS),
+         expect="derail", specific=check_derailed),
 ]
 
 
