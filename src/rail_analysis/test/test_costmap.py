@@ -16,9 +16,11 @@ import json
 import math
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 HERE = os.path.dirname(os.path.realpath(__file__))
@@ -327,6 +329,37 @@ class Sweep(unittest.TestCase):
         self.assertEqual(costmap.read_result(os.path.dirname(res["default"]))["settings_hash"],
                          g.cases[1].settings_hash)
         self.assertEqual(os.stat(res["loose"]).st_mtime_ns, before["loose"])
+
+    def test_4_a_sweep_stopped_mid_run_leaves_nothing_running_and_resumes(self):
+        # SIGTERM to the tool while its second case runs (one job): it stops that launch (roslaunch and its
+        # nodes), exits 130, keeps the first case's result; a rerun skips that case and runs the rest.
+        self.assertEqual(self.proc.returncode, 0, self.proc.stderr)
+        out = os.path.join(self.work, "stopped")
+        env = dict(os.environ, PYTHONPATH=PKG_SRC + os.pathsep + os.environ.get("PYTHONPATH", ""), MPLBACKEND="Agg",
+                   PATH="/usr/bin:/bin:" + os.environ.get("PATH", ""))
+        tool = subprocess.Popen([sys.executable, SCRIPT, self.grid, "--out", out, "--jobs", "1"],
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        g = costmap.Grid(self.grid)
+        first = os.path.join(out, "cases", g.cases[0].case_id, costmap.RESULT)
+        second_log = os.path.join(out, "cases", g.cases[1].case_id, "run.log")
+        deadline = time.monotonic() + 300.0
+        while time.monotonic() < deadline and not (os.path.isfile(first) and os.path.isfile(second_log)):
+            time.sleep(0.2)
+        self.assertTrue(os.path.isfile(first), "the first case did not finish in 300 s")
+        time.sleep(1.0)  # the second launch is up
+        tool.send_signal(signal.SIGTERM)
+        stdout, stderr = tool.communicate(timeout=60)
+        self.assertEqual(tool.returncode, 130, stdout + stderr)
+        self.assertIn("interrupted; finished cases keep their result.yaml, a rerun resumes", stderr)
+        # Nothing of the stopped case is left running (its launch ran from its own case directory).
+        left = subprocess.run(["pgrep", "-f", os.path.join(out, "cases")], stdout=subprocess.PIPE, text=True).stdout
+        self.assertEqual(left.strip(), "", "processes left: " + left)
+        proc = run_tool([self.grid, "--out", out, "--jobs", "2"])
+        self.assertEqual(proc.returncode, 0, proc.stdout + proc.stderr)
+        self.assertIn("%s: current result, skipped" % g.cases[0].name, proc.stdout)
+        rows = load_csv(os.path.join(out, "map.csv"))
+        for name in ("tight", "default", "loose"):
+            self.assertEqual(rows[name]["status"], "ok", rows[name])
 
     def test_3_dask_cluster_gives_the_same_metrics(self):
         self.assertEqual(self.proc.returncode, 0, self.proc.stderr)
