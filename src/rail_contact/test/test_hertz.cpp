@@ -262,7 +262,8 @@ TEST(Hertz, NearConformalPatchIsLimitedToTheLateralWidth) {
   const rc::HertzGeometry conformal = rc::compute_hertz(1.1, 1e-3, E_star);
   ASSERT_GT(conformal.b(conformal.load(delta)), 0.3);
   const rc::HertzGeometry limited = rc::limit_lateral_width(conformal, delta, max_b);
-  EXPECT_NEAR(limited.b(limited.load(delta)), max_b, 1e-5 * max_b);
+  EXPECT_LE(limited.b(limited.load(delta)), max_b);
+  EXPECT_GT(limited.b(limited.load(delta)), (1.0 - 2e-4) * max_b);
   EXPECT_TRUE(limited.flags & rc::kHertzWidthClamped);
   EXPECT_DOUBLE_EQ(limited.A, conformal.A);
   EXPECT_GT(limited.B, conformal.B);
