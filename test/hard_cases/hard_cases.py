@@ -65,12 +65,11 @@ ENERGY_ABS = 100.0
 
 class Case(object):
     """One hard case: key (also the scene's stem), title, what it checks, models it runs on (all subset)
-    and in the CI subset, its expectation ('run', 'derail', 'run_or_refuse'), the contact-force factor,
+    and in the CI subset (each with its refined run), its expectation ('run', 'derail', 'run_or_refuse'),
     the key figure (name, unit, function of the run's data, allowed relative change under refinement,
     why), and per-model extra overrides."""
 
-    def __init__(self, key, title, checks, models, ci_models, key_figure, expect="run", force_factor=FORCE_FACTOR,
-                 extra=None, converge_models=None, specific=None):
+    def __init__(self, key, title, checks, models, ci_models, key_figure, expect="run", extra=None, specific=None):
         self.key = key
         self.scene = os.path.join(SCENES, key + ".yaml")
         self.title = title
@@ -79,9 +78,7 @@ class Case(object):
         self.ci_models = tuple(ci_models)
         self.key_figure = key_figure          # (name, unit, scale for the table, function(data), rel tol, why)
         self.expect = expect
-        self.force_factor = force_factor
         self.extra = extra or {}              # {model: {key: value}}
-        self.converge_models = tuple(converge_models if converge_models is not None else models)
         self.specific = specific              # function(data) -> (status, text): the case's own check
 
 
@@ -330,8 +327,7 @@ def plan_runs(subset, models, out_dir):
             if m not in models:
                 continue
             runs.append(Run(c, m, False, out_dir))
-            if m in c.converge_models:
-                runs.append(Run(c, m, True, out_dir))
+            runs.append(Run(c, m, True, out_dir))
     return runs
 
 
@@ -538,8 +534,8 @@ def evaluate(run, rec, fine=None):
         q = np.concatenate([k["left_force"][:, :, 2].ravel(), k["right_force"][:, :, 2].ravel()])
         qmax = float(np.nanmax(q))
         f_imp, v_z, v_y, K = impact_force(d)
-        lim = c.force_factor * d["q0"] + IMPACT_MARGIN * f_imp
-        checks.append(("Q < %g Q0 + %g F_impact" % (c.force_factor, IMPACT_MARGIN), "pass" if qmax < lim else "fail",
+        lim = FORCE_FACTOR * d["q0"] + IMPACT_MARGIN * f_imp
+        checks.append(("Q < %g Q0 + %g F_impact" % (FORCE_FACTOR, IMPACT_MARGIN), "pass" if qmax < lim else "fail",
                        "Q max %.1f kN, bound %.0f kN (F_impact %.0f kN: v down %.2f m/s, v lateral %.2f m/s, "
                        "K = %.3g N/m^1.5)" % (qmax / 1e3, lim / 1e3, f_imp / 1e3, v_z, v_y, K)))
     if d["bags"]:
@@ -672,7 +668,7 @@ def markdown_table(rows, total_wall, subset, models, jobs):
         lines.append("- **%s** (`config/scenes/hard/%s.yaml`): %s. Key figure: %s, refined run (track step and "
                      "vehicle max step halved, rtol and atol / 10) within %g %% (%s). Contact-force bound %g Q0 + %g F_impact."
                      % (c.title, c.key, c.checks, c.key_figure[0], 100 * c.key_figure[4], c.key_figure[5],
-                        c.force_factor, IMPACT_MARGIN))
+                        FORCE_FACTOR, IMPACT_MARGIN))
     return "\n".join(lines) + "\n"
 
 
