@@ -198,13 +198,28 @@ class ShmTest : public ::testing::Test {
     for (pid_t& c : children)
       if (c == pid) c = 0;
   }
-  bool wait_exists(Role writer, double timeout = 10.0) {
+  // Waits until the writer's region is complete (its magic is stored last), not merely named: a process
+  // killed between creating the name and finishing the header leaves an incomplete region, another case.
+  bool wait_complete(Role writer, double timeout = 10.0) {
     const auto t0 = Clock::now();
-    while (!exists(writer)) {
+    for (;;) {
+      bool complete = false;
+      const int fd = shm_open(name(writer).c_str(), O_RDONLY, 0);
+      if (fd >= 0) {
+        struct stat st {};
+        if (fstat(fd, &st) == 0 && static_cast<std::size_t>(st.st_size) >= sizeof(shm::ShmHeader)) {
+          void* p = mmap(nullptr, sizeof(shm::ShmHeader), PROT_READ, MAP_SHARED, fd, 0);
+          if (p != MAP_FAILED) {
+            complete = static_cast<const shm::ShmHeader*>(p)->magic.load(std::memory_order_acquire) == shm::kShmMagic;
+            munmap(p, sizeof(shm::ShmHeader));
+          }
+        }
+        close(fd);
+      }
+      if (complete) return true;
       if (seconds_since(t0) > timeout) return false;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
-    return true;
   }
 
   std::string run_id;
@@ -374,6 +389,27 @@ TEST_F(ShmTest, LiveRegionIsRefusedClosedOneReplaced) {
   EXPECT_NE(stat(("/dev/shm" + spec.name).c_str(), &a), 0);
 }
 
+// A creator killed between naming its region and completing the header leaves an empty region (before
+// ftruncate) or a sized one without its magic: both are replaced after the grace for a creator still at
+// work (1 s), and the message says why.
+TEST_F(ShmTest, IncompleteRegionOfDeadCreatorIsReplaced) {
+  const ShmRegion::Spec spec{name(Role::kVehicle), shm::FrameKind::kWheelStates, kWheels, kHash};
+  for (const bool sized : {false, true}) {
+    const int fd = shm_open(spec.name.c_str(), O_CREAT | O_EXCL | O_RDWR, 0600);
+    ASSERT_GE(fd, 0);
+    if (sized) ASSERT_EQ(ftruncate(fd, static_cast<off_t>(shm::shm_region_size(spec.kind, spec.wheel_capacity))), 0);
+    close(fd);
+    const auto t0 = Clock::now();
+    ShmRegion r = ShmRegion::create(spec);
+    EXPECT_GE(seconds_since(t0), 0.9) << "replaced before the grace, sized " << sized;
+    EXPECT_EQ(r.header().magic.load(), shm::kShmMagic);
+    EXPECT_EQ(r.header().creator_pid, getpid());
+    EXPECT_EQ(r.replaced_stale(), "replaced the stale region " + spec.name +
+                                      " (incomplete, left by a creator that died while setting it up)");
+    r.unlink_if_same();
+  }
+}
+
 // A vehicle killed with SIGKILL leaves its region; the next run's track does not attach to it, and the
 // next vehicle replaces it, after which the run works.
 TEST_F(ShmTest, StaleRegionOfKilledProcessIsReplaced) {
@@ -382,7 +418,7 @@ TEST_F(ShmTest, StaleRegionOfKilledProcessIsReplaced) {
     ShmTransport t(vehicle_options);  // creates v2t, then waits for a track that never comes
     return 20;
   });
-  ASSERT_TRUE(wait_exists(Role::kVehicle));
+  ASSERT_TRUE(wait_complete(Role::kVehicle));
   kill9(doomed);
   ASSERT_TRUE(exists(Role::kVehicle)) << "the killed process's region should still be there";
   {  // the stale region names a dead creator
