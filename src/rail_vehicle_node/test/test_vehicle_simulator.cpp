@@ -215,23 +215,58 @@ TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
   EXPECT_NEAR(wavelength, klingel, 0.02 * klingel);
 }
 
-// Disabled: with S1002 on UIC60 1/20 at 1668 mm gauge and 1592 mm back-to-back the conicity is ~0.009, the
-// bogie's kinematic wavelength ~75 m (2.5 s at 110 km/h), and after 1.5 s the offset has grown to 4.8 mm
-// (half a cycle of the bogie mode): a decay cannot be judged within a test's run time. Kept to be enabled
-// with a run of several periods.
-TEST(VehicleSimulator, DISABLED_WheelsetOffsetDecaysOnStraightTrackBelowCriticalSpeed) {
-  // The coach at 30.6 m/s (110 km/h, the paper's speed) on straight track; the leading wheelset (with its
-  // axleboxes) starts 3 mm off the centre line. Below the critical speed the motion decays: after 1.5 s
-  // the amplitude is below a third of the offset.
-  VehicleSimulator sim(StraightScene(30.5556, 1.5));
+// Equivalent conicity (EN 15302 principle, rail_contact's contact-geometry table) of the scene's wheelset on
+// its track at a lateral amplitude, with the half distance e between the contact points.
+double SceneConicity(const core::Scene& scene, double amplitude, double& e) {
+  rc::WheelsetTrackSpec spec;
+  spec.track_gauge = scene.track.gauge;
+  spec.gauge_depth = scene.track.gauge_measuring_depth;
+  spec.back_to_back = scene.vehicle.back_to_back;
+  spec.nominal_radius = scene.vehicle.nominal_radius;
+  rc::ContactGeometryTable table(rc::makeS1002(), rc::makeUic60Rail(scene.track.rail_inclination), spec);
+  std::vector<double> ys, delta_r;
+  for (const rc::ContactGeometryRow& row : table.table(-3 * amplitude, 3 * amplitude, 0.1e-3)) {
+    if (!row.ok) return std::nan("");
+    ys.push_back(row.y);
+    delta_r.push_back(row.delta_r);
+  }
+  e = table.contactHalfDistance();
+  return rc::equivalentConicity(ys, delta_r, amplitude, e, scene.vehicle.nominal_radius);
+}
+
+TEST(VehicleSimulator, WheelsetOffsetDecaysOnStraightTrackBelowCriticalSpeed) {
+  // The coach at 30.6 m/s (110 km/h, the paper's speed) on straight standard-gauge track (1435 mm, rails at
+  // 1/40) with wheelsets of 1356 mm back-to-back: S1002 on UIC60 there has an equivalent conicity of 0.10 at
+  // 3 mm falling to 0.025 at 0.5 mm (contact_geometry --back-to-back 1.356), so a small motion is less
+  // excited than a large one. The leading wheelset (with its axleboxes) starts 3 mm off the centre line.
+  // Other wheelsets do not suit this test: the paper's Iberian one (conicity 0.009, kinematic wavelength
+  // ~75 m, 2.5 s at this speed) is too slow to judge within a test's run; the nominal 1360 mm one has 0.57
+  // at 0.5 mm and 0.18 at 3 mm, and the coach (no yaw dampers) settles into a +-1 mm oscillation of about
+  // Klingel's wavelength at that amplitude (6.9 m at 72 km/h, 7.4 m at 110 km/h): a small-amplitude limit
+  // cycle, which that geometry's conicity falling with amplitude allows, not a decay.
+  // Below the critical speed the motion decays: from 2.0 s to 2.5 s the amplitude is below a fifth of the
+  // offset (measured 0.21 mm against 0.6 mm).
+  core::Scene scene = StraightScene(30.5556, 2.5);
+  scene.track.gauge = 1.435;
+  scene.track.cant_reference_width = 1.500;
+  scene.track.rail_inclination = 1.0 / 40.0;
+  scene.vehicle.back_to_back = 1.356;
+  VehicleSimulator sim(scene);
   const double offset = 3e-3;
   ShiftBodies(sim, {"ws1", "ab1_left", "ab1_right"}, offset);
-  const LateralRecord rec = RunAndRecord(sim, 0, 1.5, 1e-3);
+  const LateralRecord rec = RunAndRecord(sim, 0, 2.5, 1e-3);
   ASSERT_FALSE(rec.t.empty());
-  const double late = rec.MaxAbs(1.2);
-  std::printf("coach, wheelset 1 offset %.1f mm: max |y| over 1.2-1.5 s %.4f mm, crossings %zu\n", offset * 1e3,
-              late * 1e3, rec.Crossings(0.0).size());
-  EXPECT_LT(late, offset / 3.0);
+  double e = 0.0;
+  const double lambda = SceneConicity(scene, offset, e);
+  const double wheelset = 2.0 * M_PI * std::sqrt(scene.vehicle.nominal_radius * e / lambda);
+  const double late = rec.MaxAbs(2.0);
+  std::printf("coach, 1435 mm gauge, 1356 mm back-to-back, wheelset 1 offset %.1f mm: conicity %.4f at the offset "
+              "(Klingel wavelength %.2f m); zero crossings %zu; max |y| from 0 s %.4f mm, from 1.0 s %.4f mm, from "
+              "2.0 s %.4f mm\n",
+              offset * 1e3, lambda, wheelset, rec.Crossings(0.0).size(), rec.MaxAbs(0.0) * 1e3, rec.MaxAbs(1.0) * 1e3,
+              late * 1e3);
+  EXPECT_GE(rec.Crossings(0.0).size(), 2u) << "the motion should oscillate, not creep back";
+  EXPECT_LT(late, offset / 5.0);
 }
 
 // The tight curve from inside the circle (as in the test below), the first t_end seconds, with the given
