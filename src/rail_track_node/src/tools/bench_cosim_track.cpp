@@ -10,7 +10,9 @@
 // moves, one on the straight (moves reuse the factor) and one on the R = 500 m curve (every move
 // refactorises): the median step without moves, the move steps (move + the influence columns solved
 // again) and the moves' own time.
-//   bench_cosim_track [steps] [window_steps]   (defaults 500 and 20000; window_steps 0 skips the window runs)
+//   bench_cosim_track [steps] [window_steps] [cost 0|1]
+// (defaults 500, 20000 and 0; window_steps 0 skips the window runs; cost 1 passes a cost clock to the track,
+// as the node does, so that the clock's own overhead can be measured against cost 0)
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -21,6 +23,7 @@
 #include <vector>
 
 #include <rail_contact/profile.hpp>
+#include <rail_core/cost_profile.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
 
@@ -109,13 +112,17 @@ static void runWindow(rail::core::Scene scene, double s_front0, int steps, const
               static_cast<double>(track.newtonIterations()) / steps, bad);
 }
 
+static bool g_cost = false;  // pass a cost clock to the track (argument 3)
+
 static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::CosimCoupling coupling, int steps,
                 bool window = false) {
   scene.effects.track_model = model;
   scene.solver.track_window.enabled = window;
   const Clock::time_point t0 = Clock::now();
+  rail::core::CostClock clock;
   rt::CosimTrackOptions options;
   options.coupling = coupling;
+  if (g_cost) options.cost = &clock;
   rt::CosimTrack track(scene, options);
   const double build = std::chrono::duration<double>(Clock::now() - t0).count();
   cc::WheelStateFrame frame(8);
@@ -156,6 +163,8 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
 int main(int argc, char** argv) {
   const int steps = argc > 1 ? std::max(10, std::atoi(argv[1])) : 500;
   const int window_steps = argc > 2 ? std::max(0, std::atoi(argv[2])) : 20000;
+  g_cost = argc > 3 && std::atoi(argv[3]) != 0;
+  std::printf("cost clock %s\n", g_cost ? "on" : "off");
   const rail::core::Scene scene = rail::core::load_scene_file(configDir() + "/scenes/paper_demo.yaml");
   run(scene, rail::core::TrackModel::kRigidFe, rt::CosimCoupling::kExplicit, steps);
   run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kSemiImplicit, steps);
