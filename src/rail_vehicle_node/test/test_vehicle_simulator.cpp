@@ -148,6 +148,25 @@ void RollingRadii(VehicleSimulator& sim, double dy, double& r_left, double& r_ri
   y_right = right.p_contact_in_world.y();
 }
 
+// Equivalent conicity (EN 15302 principle, rail_contact's contact-geometry table) of the scene's wheelset on
+// its track at a lateral amplitude, with the half distance e between the contact points.
+double SceneConicity(const core::Scene& scene, double amplitude, double& e) {
+  rc::WheelsetTrackSpec spec;
+  spec.track_gauge = scene.track.gauge;
+  spec.gauge_depth = scene.track.gauge_measuring_depth;
+  spec.back_to_back = scene.vehicle.back_to_back;
+  spec.nominal_radius = scene.vehicle.nominal_radius;
+  rc::ContactGeometryTable table(rc::makeS1002(), rc::makeUic60Rail(scene.track.rail_inclination), spec);
+  std::vector<double> ys, delta_r;
+  for (const rc::ContactGeometryRow& row : table.table(-3 * amplitude, 3 * amplitude, 0.1e-3)) {
+    if (!row.ok) return std::nan("");
+    ys.push_back(row.y);
+    delta_r.push_back(row.delta_r);
+  }
+  e = table.contactHalfDistance();
+  return rc::equivalentConicity(ys, delta_r, amplitude, e, scene.vehicle.nominal_radius);
+}
+
 TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
   // One wheelset of the coach (Table 3 mass and inertia) under the coach's axle load, free of any
   // suspension, on straight track at 20 m/s: the kinematic oscillation of Klingel. With S1002 on UIC60
@@ -176,21 +195,9 @@ TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
   // radius there, lambda the equivalent conicity at the oscillation's amplitude from rail_contact's
   // contact-geometry table (EN 15302 principle) for the same wheelset and track.
   const double amplitude = 2e-3;
-  rc::WheelsetTrackSpec spec;
-  spec.track_gauge = scene.track.gauge;
-  spec.gauge_depth = scene.track.gauge_measuring_depth;
-  spec.back_to_back = scene.vehicle.back_to_back;
-  spec.nominal_radius = scene.vehicle.nominal_radius;
-  rc::ContactGeometryTable table(rc::makeS1002(), rc::makeUic60Rail(scene.track.rail_inclination), spec);
-  std::vector<double> ys, delta_r;
-  for (const rc::ContactGeometryRow& row : table.table(-3 * amplitude, 3 * amplitude, 0.1e-3)) {
-    ASSERT_TRUE(row.ok) << "contact-geometry table row at y = " << row.y;
-    ys.push_back(row.y);
-    delta_r.push_back(row.delta_r);
-  }
-  const double e = table.contactHalfDistance();
+  double e = 0.0;
+  const double lambda = SceneConicity(scene, amplitude, e);
   const double r0 = scene.vehicle.nominal_radius;
-  const double lambda = rc::equivalentConicity(ys, delta_r, amplitude, e, r0);
   ASSERT_TRUE(std::isfinite(lambda) && lambda > 0.0) << "equivalent conicity " << lambda;
   const double klingel = 2.0 * M_PI * std::sqrt(r0 * e / lambda);
   // Cross-check from the simulator's own contact: the rolling-radius difference slope at the amplitude.
@@ -213,25 +220,6 @@ TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
   // nonlinearity of Delta r over the amplitude and the wheelset's roll and spin creep; the zero crossings
   // are interpolated from 1 ms samples (1e-4 of the period). Measured 0.2 %; tolerance 2 %.
   EXPECT_NEAR(wavelength, klingel, 0.02 * klingel);
-}
-
-// Equivalent conicity (EN 15302 principle, rail_contact's contact-geometry table) of the scene's wheelset on
-// its track at a lateral amplitude, with the half distance e between the contact points.
-double SceneConicity(const core::Scene& scene, double amplitude, double& e) {
-  rc::WheelsetTrackSpec spec;
-  spec.track_gauge = scene.track.gauge;
-  spec.gauge_depth = scene.track.gauge_measuring_depth;
-  spec.back_to_back = scene.vehicle.back_to_back;
-  spec.nominal_radius = scene.vehicle.nominal_radius;
-  rc::ContactGeometryTable table(rc::makeS1002(), rc::makeUic60Rail(scene.track.rail_inclination), spec);
-  std::vector<double> ys, delta_r;
-  for (const rc::ContactGeometryRow& row : table.table(-3 * amplitude, 3 * amplitude, 0.1e-3)) {
-    if (!row.ok) return std::nan("");
-    ys.push_back(row.y);
-    delta_r.push_back(row.delta_r);
-  }
-  e = table.contactHalfDistance();
-  return rc::equivalentConicity(ys, delta_r, amplitude, e, scene.vehicle.nominal_radius);
 }
 
 TEST(VehicleSimulator, WheelsetOffsetDecaysOnStraightTrackBelowCriticalSpeed) {
