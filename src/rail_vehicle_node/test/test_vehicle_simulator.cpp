@@ -229,9 +229,10 @@ TEST(VehicleSimulator, WheelsetOffsetDecaysOnStraightTrackBelowCriticalSpeed) {
   // excited than a large one. The leading wheelset (with its axleboxes) starts 3 mm off the centre line.
   // Other wheelsets do not suit this test: the paper's Iberian one (conicity 0.009, kinematic wavelength
   // ~75 m, 2.5 s at this speed) is too slow to judge within a test's run; the nominal 1360 mm one has 0.57
-  // at 0.5 mm and 0.18 at 3 mm, and the coach (no yaw dampers) settles into a +-1 mm oscillation of about
-  // Klingel's wavelength at that amplitude (6.9 m at 72 km/h, 7.4 m at 110 km/h): a small-amplitude limit
-  // cycle, which that geometry's conicity falling with amplitude allows, not a decay.
+  // at 0.5 mm and 0.18 at 3 mm, and the coach (no yaw dampers) settles into a +-1 mm oscillation (6.9 m
+  // wavelength at 72 km/h, 7.4 m at 110 km/h: between a free wheelset's Klingel wavelength at 1 mm, 6.2 m
+  // for a conicity of 0.36, and a rigid bogie's, about 2x that): a small-amplitude limit cycle, which that
+  // geometry's conicity falling with amplitude allows, not a decay.
   // Below the critical speed the motion decays: from 2.0 s to 2.5 s the amplitude is below a fifth of the
   // offset (measured 0.21 mm against 0.6 mm).
   core::Scene scene = StraightScene(30.5556, 2.5);
