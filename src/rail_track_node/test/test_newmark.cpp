@@ -255,10 +255,7 @@ namespace {
 rt::EndReflectionResult reflection(bool lateral, bool absorbing, bool damping) {
   rt::TrackData data = rt::loadTrackData(paperTrackPath());
   data.absorbing_ends.enabled = absorbing;
-  if (!damping) {
-    for (rt::BeamSection* b : {&data.rail, &data.sleeper}) b->rayleigh_alpha = b->rayleigh_beta = 0.0;
-    for (rt::SpringDamperData* sd : {&data.pad, &data.ballast, &data.sleeper_interaction}) sd->c.setZero();
-  }
+  if (!damping) rt::removeTrackDamping(data);
   rt::EndReflectionOptions o;
   o.frequency = 500.0;
   o.lateral = lateral;

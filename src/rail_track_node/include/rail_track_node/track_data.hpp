@@ -62,5 +62,9 @@ TrackData loadTrackData(const std::string& path);
 /// Same, from YAML text; source_name stands for the file name in messages.
 TrackData parseTrackData(const std::string& yaml_text, const std::string& source_name);
 
+/// Removes the track's own damping (effects.track_damping off): every Rayleigh coefficient of rails and
+/// sleepers and every pad, ballast and sleeper-interaction damper. The absorbing ends are left as they are.
+void removeTrackDamping(TrackData& data);
+
 }  // namespace track
 }  // namespace rail

@@ -39,13 +39,7 @@ TrackData sceneTrackData(const Scene& scene, const rc::GeometrySpec& geometry, c
                      " m from the centre) lie beyond the sleeper ends (track.data: " + scene.track.data.path +
                      ": layout.sleeper_length " +
                      std::to_string(L.sleeper_length) + " m)");
-  if (!scene.effects.track_damping) {
-    for (BeamSection* b : {&data.rail, &data.sleeper}) {
-      b->rayleigh_alpha = 0.0;
-      b->rayleigh_beta = 0.0;
-    }
-    for (SpringDamperData* s : {&data.pad, &data.ballast, &data.sleeper_interaction}) s->c.setZero();
-  }
+  if (!scene.effects.track_damping) removeTrackDamping(data);
   data.absorbing_ends.enabled = scene.effects.absorbing_ends;
   return data;
 }

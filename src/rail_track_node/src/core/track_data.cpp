@@ -241,5 +241,13 @@ TrackData loadTrackData(const std::string& path) {
   return parseTrackData(ss.str(), path);
 }
 
+void removeTrackDamping(TrackData& data) {
+  for (BeamSection* b : {&data.rail, &data.sleeper}) {
+    b->rayleigh_alpha = 0.0;
+    b->rayleigh_beta = 0.0;
+  }
+  for (SpringDamperData* s : {&data.pad, &data.ballast, &data.sleeper_interaction}) s->c.setZero();
+}
+
 }  // namespace track
 }  // namespace rail

@@ -74,10 +74,7 @@ int main(int argc, char** argv) {
     std::cerr << "track_end_reflection: " << e.what() << "\n";
     return 2;
   }
-  if (!damping) {
-    for (rt::BeamSection* b : {&data.rail, &data.sleeper}) b->rayleigh_alpha = b->rayleigh_beta = 0.0;
-    for (rt::SpringDamperData* sd : {&data.pad, &data.ballast, &data.sleeper_interaction}) sd->c.setZero();
-  }
+  if (!damping) rt::removeTrackDamping(data);
   std::ofstream out;
   if (!csv.empty()) {
     out.open(csv);
