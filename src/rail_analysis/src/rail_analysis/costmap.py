@@ -453,17 +453,72 @@ _running = {}   # pid -> Popen of the launches in progress (stopped when the too
 _running_lock = threading.Lock()
 
 
+def _live_processes(pgid=None, cmdline_part=None):
+    """Pids of this user's live (not zombie) processes in process group pgid, or whose command line holds
+    cmdline_part, from /proc."""
+    pids = []
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit() or int(entry) == os.getpid():
+            continue
+        try:
+            if os.stat("/proc/" + entry).st_uid != os.getuid():
+                continue
+            with open("/proc/%s/stat" % entry) as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            if fields[0] == "Z":
+                continue
+            if pgid is not None and int(fields[2]) == pgid:
+                pids.append(int(entry))
+            elif cmdline_part is not None:
+                with open("/proc/%s/cmdline" % entry, "rb") as f:
+                    if cmdline_part.encode() in f.read():
+                        pids.append(int(entry))
+        except (OSError, IndexError, ValueError):
+            continue
+    return pids
+
+
+def _group_members(pgid):
+    return _live_processes(pgid=pgid)
+
+
 def _stop(proc, grace=15.0):
-    """SIGINT to the launch's process group (roslaunch shuts its nodes and master down), SIGKILL after grace."""
+    """SIGINT to the launch's process group (roslaunch shuts its nodes and master down), SIGKILL to what is
+    left of the group after grace. Returns once no live process of the group is left: roslaunch can exit
+    while the last of its nodes is still shutting down."""
+    deadline = time.monotonic() + grace
     try:
         os.killpg(proc.pid, signal.SIGINT)
         proc.wait(timeout=grace)
     except (ProcessLookupError, subprocess.TimeoutExpired):
+        pass
+    while _group_members(proc.pid) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    if proc.poll() is None or _group_members(proc.pid):
         try:
             os.killpg(proc.pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
         proc.wait()
+        end = time.monotonic() + 5.0
+        while _group_members(proc.pid) and time.monotonic() < end:
+            time.sleep(0.05)
+    # A master that roslaunch started in its own session is outside the group; one that a launch stopped
+    # during its start-up left behind still names the case directory (its log) on its command line.
+    case_dir = getattr(proc, "case_dir", None)
+    if case_dir:
+        for sig, wait in ((signal.SIGINT, 5.0), (signal.SIGKILL, 5.0)):
+            left = _live_processes(cmdline_part=case_dir)
+            if not left:
+                break
+            for pid in left:
+                try:
+                    os.kill(pid, sig)
+                except ProcessLookupError:
+                    pass
+            end = time.monotonic() + wait
+            while _live_processes(cmdline_part=case_dir) and time.monotonic() < end:
+                time.sleep(0.05)
 
 
 def stop_all():
@@ -544,6 +599,7 @@ def run_case(spec):
         log.write("# %s\n" % " ".join(cmd[4:]))
         log.flush()
         proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+        proc.case_dir = case_dir  # what _stop clears up after the launch
         with _running_lock:
             _running[proc.pid] = proc
         try:
