@@ -177,6 +177,21 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
   if (tread_.numSegments() < 1 || flange_.numSegments() < 1 || rail_.numSegments() < 1)
     throw std::runtime_error("ContactDetector: empty wheel or rail profile curve");
 
+  // A curve whose points run the other way has its solid on the wrong side: every contact would look
+  // for the rail from inside. Refuse it here, where the cause can still be named.
+  {
+    const Vector2d top = railTopPoint(rail_);
+    const double u_top = rail_.closestParameter(top);
+    if (!(rail_.normal(u_top).y() > 0.5))
+      throw std::runtime_error(
+          "ContactDetector: the rail profile's outward normal at its highest point points down: its points "
+          "run gauge side -> field side (order them by increasing y toward the gauge side, orderByIncreasingY)");
+    double u_tap = 0.0;
+    if (tread_.findCoordinate(0, 0.0, tread_.uMin(), tread_.uMax(), u_tap) && !(tread_.normal(u_tap).y() < -0.5))
+      throw std::runtime_error(
+          "ContactDetector: the wheel tread's outward normal at the taping line points toward the axle: its "
+          "points run flange -> field side (order them by increasing y toward the flange, orderByIncreasingY)");
+  }
   auto normalSign = [](const ProfileCurve& c) {
     const double u = 0.5 * c.uMax();
     return c.normal(u).dot(perp(c.tangent(u))) >= 0.0 ? 1.0 : -1.0;

@@ -1,10 +1,7 @@
 // contact_geometry: writes the contact-geometry table of a wheelset on straight rigid track as CSV, and
-// the equivalent conicity against amplitude (EN 15302 principle) as a second CSV.
-//
-// Usage: contact_geometry --out table.csv [--conicity conicity.csv] [--wheel FILE] [--rail FILE]
-//          [--gauge 1.435] [--back-to-back 1.360] [--radius 0.46] [--inclination 0.025]
-//          [--y-max 0.010] [--dy 0.0001] [--yaw 0] [--load Q_N] [--speed V_mps] [--friction 0.3]
-// Without --wheel / --rail: S1002 and UIC60 (inclined by --inclination, tan of the cant angle). SI units.
+// the equivalent conicity against amplitude (EN 15302 principle) as a second CSV. `--help` lists the
+// options. Rows that cannot be solved are listed on stderr with the reason; a table with no solved row
+// exits 1.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -17,59 +14,101 @@
 
 namespace rc = rail::contact;
 
+namespace {
+
+const char* const kUsage =
+    "usage: contact_geometry --out table.csv [options]\n"
+    "\n"
+    "Contact-geometry table of a wheelset on straight rigid track: for each lateral displacement y the\n"
+    "contact points on wheel and rail, contact angles, rolling radii and their difference; with --load\n"
+    "also the loaded wheelset (each wheel carries the load vertically, rolling freely about its axle):\n"
+    "normal loads, ellipses, creepages and creep forces. SI units; y > 0 moves the wheelset to the left.\n"
+    "\n"
+    "options:\n"
+    "  --out FILE            table CSV (default contact_geometry.csv)\n"
+    "  --conicity FILE       equivalent conicity against amplitude (EN 15302 principle) as CSV\n"
+    "  --wheel FILE          wheel profile (.prw SIMPACK, .whl MiniProf, plain 'y z'); default S1002\n"
+    "  --rail FILE           rail profile (.prr, .ban, plain); default UIC60 tilted by --inclination\n"
+    "  --inclination I       tan of the rail cant applied to the rail (default 0.025 = 1:40; 0 for a\n"
+    "                        file whose profile is inclined already)\n"
+    "  --gauge G             track gauge, m, at 14 mm below the rail top (default 1.435)\n"
+    "  --back-to-back B      distance between the flange back faces, m (default 1.360)\n"
+    "  --taping-line D       flange back face to taping line, m (default 0.070)\n"
+    "  --radius R0           nominal rolling radius, m (default 0.46)\n"
+    "  --y-min Y, --y-max Y  lateral displacement range, m (default -y_max .. 0.010)\n"
+    "  --dy DY               step, m (default 0.0001)\n"
+    "  --yaw PSI             yaw angle, rad (default 0)\n"
+    "  --yaw-per-shift K     yaw grows with the displacement: yaw = PSI + K y, rad/m (default 0)\n"
+    "  --load Q              vertical load per wheel, N (loaded columns; needs --speed)\n"
+    "  --speed V             forward speed, m/s\n"
+    "  --fixed-spin          pitch rate fixed at V / R0 instead of free rolling\n"
+    "  --friction MU         friction coefficient (default 0.3)\n"
+    "  -h, --help            this text\n"
+    "\n"
+    "exit status: 0 table written with every row solved or the unsolved rows listed on stderr;\n"
+    "1 no row solved or bad data; 2 bad option.\n";
+
+[[noreturn]] void usageError(const std::string& what) {
+  std::fprintf(stderr, "contact_geometry: %s (contact_geometry --help lists the options)\n", what.c_str());
+  std::exit(2);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   std::string out = "contact_geometry.csv", conicity_out, wheel_file, rail_file;
-  double gauge = 1.435, b2b = 1.360, radius = 0.46, incl = 1.0 / 40.0, y_max = 0.010, dy = 1e-4, yaw = 0.0;
+  double gauge = 1.435, b2b = 1.360, taping = rc::kTapingLineFromFlangeBack, radius = 0.46, incl = 1.0 / 40.0;
+  double y_max = 0.010, dy = 1e-4, yaw = 0.0, yaw_per_y = 0.0;
+  double y_min = std::nan("");
   double load = 0.0, speed = 0.0, friction = 0.3;
+  bool fixed_spin = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "contact_geometry: %s needs a value\n", a.c_str());
-        std::exit(2);
-      }
+      if (i + 1 >= argc) usageError(a + " needs a value");
       return argv[++i];
     };
     auto num = [&]() {
       const std::string v = next();
       char* end = nullptr;
       const double x = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0' || !std::isfinite(x)) {
-        std::fprintf(stderr, "contact_geometry: %s: not a number (%s)\n", a.c_str(), v.c_str());
-        std::exit(2);
-      }
+      if (end == v.c_str() || *end != '\0' || !std::isfinite(x)) usageError(a + ": not a number (" + v + ")");
       return x;
     };
+    if (a == "-h" || a == "--help") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
     if (a == "--out") out = next();
     else if (a == "--conicity") conicity_out = next();
     else if (a == "--wheel") wheel_file = next();
     else if (a == "--rail") rail_file = next();
     else if (a == "--gauge") gauge = num();
     else if (a == "--back-to-back") b2b = num();
+    else if (a == "--taping-line") taping = num();
     else if (a == "--radius") radius = num();
     else if (a == "--inclination") incl = num();
+    else if (a == "--y-min") y_min = num();
     else if (a == "--y-max") y_max = num();
     else if (a == "--dy") dy = num();
     else if (a == "--yaw") yaw = num();
+    else if (a == "--yaw-per-shift") yaw_per_y = num();
     else if (a == "--load") load = num();
     else if (a == "--speed") speed = num();
+    else if (a == "--fixed-spin") fixed_spin = true;
     else if (a == "--friction") friction = num();
-    else {
-      std::fprintf(stderr, "contact_geometry: unknown option %s (see the header of contact_geometry_main.cpp)\n", a.c_str());
-      return 2;
-    }
+    else usageError("unknown option " + a);
   }
+  if (std::isnan(y_min)) y_min = -y_max;
+  if (load > 0.0 && !(speed > 0.0)) usageError("--load needs --speed > 0 (the creepages are relative to it)");
   try {
     const rc::WheelProfile wheel = wheel_file.empty() ? rc::makeS1002() : rc::loadWheelProfile(wheel_file);
-    rc::ProfileCurve rail;
-    if (rail_file.empty()) {
-      rail = rc::makeUic60Rail(incl);
-    } else {
-      rail = rc::ProfileCurve(rc::tiltProfile(rc::readProfilePoints(rail_file), incl), rc::SolidSide::Right);
-    }
+    const rc::ProfileCurve rail =
+        rail_file.empty() ? rc::makeUic60Rail(incl) : rc::loadRailProfile(rail_file, {}, {}, incl);
     rc::WheelsetTrackSpec spec;
     spec.track_gauge = gauge;
     spec.back_to_back = b2b;
+    spec.taping_line_from_flange_back = taping;
     spec.nominal_radius = radius;
     rc::WheelContactOptions options;
     options.friction = friction;
@@ -77,9 +116,28 @@ int main(int argc, char** argv) {
     rc::LoadCase lc;
     lc.wheel_load = load;
     lc.speed = speed;
-    const std::vector<rc::ContactGeometryRow> rows = table.table(-y_max, y_max, dy, yaw, lc);
-    rc::writeContactGeometryCsv(out, rows);
-    std::printf("wrote %s (%zu rows)\n", out.c_str(), rows.size());
+    lc.free_rolling = !fixed_spin;
+    const std::vector<rc::ContactGeometryRow> rows = table.table(y_min, y_max, dy, yaw, lc, yaw_per_y);
+    int failed = 0;
+    for (const rc::ContactGeometryRow& r : rows) {
+      if (r.ok) continue;
+      ++failed;
+      std::fprintf(stderr, "contact_geometry: row y = %.6g m, yaw = %.6g rad not solved: %s\n", r.y, r.yaw,
+                   r.failure.c_str());
+    }
+    if (failed == static_cast<int>(rows.size())) {
+      std::fprintf(stderr,
+                   "contact_geometry: no row of %zu solved (wheel %s, rail %s); %s not written\n", rows.size(),
+                   wheel_file.empty() ? "S1002" : wheel_file.c_str(), rail_file.empty() ? "UIC60" : rail_file.c_str(),
+                   out.c_str());
+      return 1;
+    }
+    const int written = rc::writeContactGeometryCsv(out, rows);
+    if (failed > 0)
+      std::printf("wrote %s (%d rows; %d of %zu rows not solved, listed above)\n", out.c_str(), written, failed,
+                  rows.size());
+    else
+      std::printf("wrote %s (%d rows)\n", out.c_str(), written);
     if (!conicity_out.empty()) {
       std::vector<double> y, dr;
       for (const rc::ContactGeometryRow& r : rows)
@@ -96,6 +154,8 @@ int main(int argc, char** argv) {
         const double g = rc::equivalentConicity(y, dr, A, e0, radius, &lambda);
         f << A << ',' << g << ',' << lambda << ',' << e0 << ',' << radius << '\n';
       }
+      f.close();
+      if (!f) throw std::runtime_error(conicity_out + ": write failed");
       double l3;
       std::printf("wrote %s; equivalent conicity at 3 mm: %.4f (e0 = %.4f m)\n", conicity_out.c_str(),
                   rc::equivalentConicity(y, dr, 0.003, e0, radius, &l3), e0);

@@ -33,7 +33,8 @@ ContactGeometryTable::ContactGeometryTable(const WheelProfile& wheel, const Prof
   check("nominal_radius", spec.nominal_radius, 0.1, 2.0);
   const Eigen::Vector2d gp = gaugePoint(rail, spec.gauge_depth);
   h_rail_ = 0.5 * spec.track_gauge + gp.x();
-  e_wheel_ = 0.5 * spec.back_to_back + flangeBackY(wheel);
+  check("taping_line_from_flange_back", spec.taping_line_from_flange_back, 0.0, 0.2);
+  e_wheel_ = 0.5 * spec.back_to_back + spec.taping_line_from_flange_back;
   GeometrySpec gs;
   SegmentSpec seg;
   seg.type = SegmentSpec::Type::Straight;
@@ -45,12 +46,13 @@ ContactGeometryTable::ContactGeometryTable(const WheelProfile& wheel, const Prof
   track_ = std::make_unique<TrackGeometry>(gs);
   x0_ = 10.0;
   model_ = std::make_unique<WheelContactModel>(wheel, spec.nominal_radius, rail, spec.rail_section_centre_yz, options);
-  z_guess_ = spec.nominal_radius + railTopPoint(rail).y();
+  rail_top_yz_ = railTopPoint(rail);
+  z_guess_ = spec.nominal_radius + rail_top_yz_.y();
   roll_guess_ = 0.0;
 }
 
-void ContactGeometryTable::place(double y, double yaw, double z, double roll, const LoadCase& load, WheelState& left,
-                                 WheelState& right) const {
+void ContactGeometryTable::place(double y, double yaw, double z, double roll, double speed, double omega,
+                                 WheelState& left, WheelState& right) const {
   const Eigen::Matrix3d R = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
                              Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
                                 .toRotationMatrix();
@@ -60,15 +62,15 @@ void ContactGeometryTable::place(double y, double yaw, double z, double roll, co
     w.R_wheelset_to_world = R;
     w.p_centre_in_world = c + R * Eigen::Vector3d(0.0, k == 0 ? e_wheel_ : -e_wheel_, 0.0);
     w.s_hint = x0_;
-    w.v_centre_in_world = load.speed * Eigen::Vector3d::UnitX();
-    w.omega_in_world = (load.speed / spec_.nominal_radius) * R.col(1);
+    w.v_centre_in_world = speed * Eigen::Vector3d::UnitX();
+    w.omega_in_world = omega * R.col(1);
   }
 }
 
 void ContactGeometryTable::detectBoth(double y, double yaw, double z, double roll, ContactGeometry (&left)[2],
                                       ContactGeometry (&right)[2]) {
   WheelState wl, wr;
-  place(y, yaw, z, roll, LoadCase(), wl, wr);
+  place(y, yaw, z, roll, 0.0, 0.0, wl, wr);
   for (int k = 0; k < 2; ++k) {
     const bool is_left = k == 0;
     const WheelState& ws = is_left ? wl : wr;
@@ -130,31 +132,49 @@ bool ContactGeometryTable::solveRigid(double y, double yaw, double& z, double& r
   return false;
 }
 
-bool ContactGeometryTable::solveLoaded(double y, double yaw, const LoadCase& load, double& z, double& roll) {
-  auto forces = [&](double zz, double rr) {
+bool ContactGeometryTable::solveLoaded(double y, double yaw, const LoadCase& load, double& z, double& roll,
+                                       double& omega) {
+  // Residuals (N): each wheel's vertical force minus Q and, free rolling, the net moment of the contact
+  // forces about the axle divided by r0 (zero: no traction or braking torque).
+  const double omega_scale = load.speed / spec_.nominal_radius;
+  auto residual = [&](double zz, double rr, double ww) {
     WheelState wl, wr;
-    place(y, yaw, zz, rr, load, wl, wr);
+    place(y, yaw, zz, rr, load.speed, ww, wl, wr);
     WheelContactResult res;
-    Eigen::Vector2d f;
+    Eigen::Vector3d f;
     model_->evaluate(wl, RailSide::kLeft, *track_, RigidRailDeformation(), work_[0], res);
     f[0] = res.wheel_centre.force_in_world.z() - load.wheel_load;
+    f[2] = res.wheel_centre.moment_in_wheelset.y();
     model_->evaluate(wr, RailSide::kRight, *track_, RigidRailDeformation(), work_[1], res);
     f[1] = res.wheel_centre.force_in_world.z() - load.wheel_load;
+    f[2] = (f[2] + res.wheel_centre.moment_in_wheelset.y()) / spec_.nominal_radius;
     return f;
   };
+  const bool solve_omega = load.free_rolling && omega_scale > 0.0;
+  omega = omega_scale;
   z -= 5e-5;  // start inside the rails: the Hertz force has zero slope at zero penetration
-  for (int it = 0; it < 40; ++it) {
-    const Eigen::Vector2d f = forces(z, roll);
+  for (int it = 0; it < 80; ++it) {
+    Eigen::Vector3d f = residual(z, roll, omega);
+    if (!solve_omega) f[2] = 0.0;
     if (!f.allFinite()) return false;
     if (f.cwiseAbs().maxCoeff() < 1e-6 * load.wheel_load) return true;
-    const double h = 1e-8;
-    Eigen::Matrix2d J;
-    J.col(0) = (forces(z + h, roll) - f) / h;
-    J.col(1) = (forces(z, roll + h) - f) / h;
-    const Eigen::Vector2d dx = J.fullPivLu().solve(-f);
+    const double hz = 1e-8, hw = 1e-7 * omega_scale;
+    Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
+    J.col(0) = (residual(z + hz, roll, omega) - f) / hz;
+    J.col(1) = (residual(z, roll + hz, omega) - f) / hz;
+    if (solve_omega) {
+      J.col(2) = (residual(z, roll, omega + hw) - f) / hw;
+    } else {
+      J.row(2).setZero();
+      J.col(2).setZero();
+      J(2, 2) = 1.0;
+      J(0, 2) = J(1, 2) = 0.0;
+    }
+    const Eigen::Vector3d dx = J.fullPivLu().solve(-f);
     if (!dx.allFinite()) return false;
     z += std::clamp(dx[0], -2e-5, 2e-5);
     roll += std::clamp(dx[1], -2e-5, 2e-5);
+    if (solve_omega) omega += std::clamp(dx[2], -2e-3 * omega_scale, 2e-3 * omega_scale);
   }
   return false;
 }
@@ -163,9 +183,20 @@ ContactGeometryRow ContactGeometryTable::row(double y, double yaw, const LoadCas
   ContactGeometryRow r;
   r.y = y;
   r.yaw = yaw;
+  r.z_loaded = r.roll_loaded = r.pitch_rate = kNaN;
   double z, roll;
   if (!solveRigid(y, yaw, z, roll)) {
     r.z = r.roll = r.delta_r = kNaN;
+    // Say which wheel found no contact point at the last position tried.
+    ContactGeometry gl[2], gr[2];
+    detectBoth(y, yaw, z_guess_, roll_guess_, gl, gr);
+    int kl, kr;
+    wheelGap(gl, kl);
+    wheelGap(gr, kr);
+    if (kl < 0 && kr < 0) r.failure = "no contact point found on either wheel (tread and flange)";
+    else if (kl < 0) r.failure = "no contact point found on the left wheel (tread and flange)";
+    else if (kr < 0) r.failure = "no contact point found on the right wheel (tread and flange)";
+    else r.failure = "the rigid position solve (height and roll for zero gap on both wheels) did not converge";
     return r;
   }
   r.ok = true;
@@ -174,7 +205,7 @@ ContactGeometryRow ContactGeometryTable::row(double y, double yaw, const LoadCas
   ContactGeometry gl[2], gr[2];
   detectBoth(y, yaw, z, roll, gl, gr);
   WheelState wl, wr;
-  place(y, yaw, z, roll, load, wl, wr);
+  place(y, yaw, z, roll, 0.0, 0.0, wl, wr);
   for (int k = 0; k < 2; ++k) {
     const ContactGeometry* g = k == 0 ? gl : gr;
     ContactGeometryWheel& w = k == 0 ? r.left : r.right;
@@ -188,39 +219,48 @@ ContactGeometryRow ContactGeometryTable::row(double y, double yaw, const LoadCas
     w.z_wheel = c.wheel_z;
     w.y_rail = c.rail_y;
     w.z_rail = c.rail_z;
+    w.y_rail_from_top = c.rail_y - rail_top_yz_.x();
     w.rolling_radius = c.wheel_radius;
     const Eigen::Vector3d axle = (k == 0 ? wl : wr).R_wheelset_to_world.col(1);
     w.contact_angle = std::asin(std::clamp(c.n_in_world.dot((k == 0 ? -1.0 : 1.0) * axle), -1.0, 1.0));
   }
   r.delta_r = r.left.rolling_radius - r.right.rolling_radius;
   if (load.wheel_load > 0.0 && load.speed >= 0.0) {
-    double zl = z, rl = roll;
-    if (solveLoaded(y, yaw, load, zl, rl)) {
-      WheelState sl, sr;
-      place(y, yaw, zl, rl, load, sl, sr);
-      for (int k = 0; k < 2; ++k) {
-        WheelContactResult res;
-        model_->evaluate(k == 0 ? sl : sr, k == 0 ? RailSide::kLeft : RailSide::kRight, *track_,
-                         RigidRailDeformation(), work_[k], res);
-        ContactGeometryWheel& w = k == 0 ? r.left : r.right;
-        const int kind = w.kind >= 0 ? w.kind : 0;
-        const ContactPointResult& c = res.contact[res.contact[kind].active ? kind : 1 - kind];
-        w.N = c.N;
-        w.a = c.a;
-        w.b = c.b;
-        w.nu_x = c.nu_x;
-        w.nu_y = c.nu_y;
-        w.phi = c.phi;
-        w.F_long = c.F_long;
-        w.F_lat = c.F_lat;
-      }
+    double zl = z, rl = roll, omega = 0.0;
+    if (!solveLoaded(y, yaw, load, zl, rl, omega)) {
+      r.ok = false;
+      r.failure = load.free_rolling
+                      ? "the loaded solve (height, roll and free-rolling pitch rate for the wheel load) did not converge"
+                      : "the loaded solve (height and roll for the wheel load) did not converge";
+      return r;
+    }
+    r.z_loaded = zl;
+    r.roll_loaded = rl;
+    r.pitch_rate = omega;
+    WheelState sl, sr;
+    place(y, yaw, zl, rl, load.speed, omega, sl, sr);
+    for (int k = 0; k < 2; ++k) {
+      WheelContactResult res;
+      model_->evaluate(k == 0 ? sl : sr, k == 0 ? RailSide::kLeft : RailSide::kRight, *track_,
+                       RigidRailDeformation(), work_[k], res);
+      ContactGeometryWheel& w = k == 0 ? r.left : r.right;
+      const int kind = w.kind >= 0 ? w.kind : 0;
+      const ContactPointResult& c = res.contact[res.contact[kind].active ? kind : 1 - kind];
+      w.N = c.N;
+      w.a = c.a;
+      w.b = c.b;
+      w.nu_x = c.nu_x;
+      w.nu_y = c.nu_y;
+      w.phi = c.phi;
+      w.F_long = c.F_long;
+      w.F_lat = c.F_lat;
     }
   }
   return r;
 }
 
 std::vector<ContactGeometryRow> ContactGeometryTable::table(double y_min, double y_max, double dy, double yaw,
-                                                            const LoadCase& load) {
+                                                            const LoadCase& load, double yaw_per_y) {
   if (!(dy > 0.0) || !(y_max >= y_min)) {
     std::ostringstream m;
     m << "ContactGeometryTable::table: need dy > 0 and y_max >= y_min (dy = " << dy << ", y_min = " << y_min
@@ -229,18 +269,20 @@ std::vector<ContactGeometryRow> ContactGeometryTable::table(double y_min, double
   }
   std::vector<ContactGeometryRow> rows;
   const int n = static_cast<int>(std::floor((y_max - y_min) / dy + 1e-9)) + 1;
+  auto yaw_at = [&](double y) { return yaw + yaw_per_y * y; };
   // Continuation from the centre outwards keeps the solver on the physical branch.
   rows.resize(n);
   const int i0 = std::clamp(static_cast<int>(std::lround(-y_min / dy)), 0, n - 1);
   for (int pass = 0; pass < 2; ++pass) {
     z_guess_ = model_->detector().nominalRadius();
     roll_guess_ = 0.0;
-    const double zt = row(y_min + i0 * dy, yaw).z;  // re-centre the guess
+    const double y0 = y_min + i0 * dy;
+    const double zt = row(y0, yaw_at(y0)).z;  // re-centre the guess
     if (std::isfinite(zt)) z_guess_ = zt;
     if (pass == 0)
-      for (int i = i0; i < n; ++i) rows[i] = row(y_min + i * dy, yaw, load);
+      for (int i = i0; i < n; ++i) rows[i] = row(y_min + i * dy, yaw_at(y_min + i * dy), load);
     else
-      for (int i = i0 - 1; i >= 0; --i) rows[i] = row(y_min + i * dy, yaw, load);
+      for (int i = i0 - 1; i >= 0; --i) rows[i] = row(y_min + i * dy, yaw_at(y_min + i * dy), load);
   }
   return rows;
 }
@@ -305,27 +347,32 @@ double equivalentConicity(const std::vector<double>& y_table, const std::vector<
   return kNaN;
 }
 
-void writeContactGeometryCsv(const std::string& path, const std::vector<ContactGeometryRow>& rows) {
+int writeContactGeometryCsv(const std::string& path, const std::vector<ContactGeometryRow>& rows) {
   std::ofstream f(path);
   if (!f) throw std::runtime_error(path + ": cannot open for writing");
-  f << "y_m,yaw_rad,z_m,roll_rad,delta_r_m";
+  f << "y_m,yaw_rad,z_m,roll_rad,delta_r_m,z_loaded_m,roll_loaded_rad,pitch_rate_rad_s";
   for (const char* s : {"left", "right"})
     f << ',' << s << "_kind," << s << "_y_wheel_m," << s << "_z_wheel_m," << s << "_y_rail_m," << s << "_z_rail_m,"
-      << s << "_contact_angle_rad," << s << "_rolling_radius_m," << s << "_flange_gap_m," << s << "_N_N," << s
+      << s << "_y_rail_from_top_m," << s << "_contact_angle_rad," << s << "_rolling_radius_m," << s << "_flange_gap_m," << s << "_N_N," << s
       << "_a_m," << s << "_b_m," << s << "_nu_x," << s << "_nu_y," << s << "_phi_1pm," << s << "_F_long_N," << s
       << "_F_lat_N";
   f << '\n' << std::setprecision(10);
+  int written = 0;
   for (const ContactGeometryRow& r : rows) {
     if (!r.ok) continue;
-    f << r.y << ',' << r.yaw << ',' << r.z << ',' << r.roll << ',' << r.delta_r;
+    ++written;
+    f << r.y << ',' << r.yaw << ',' << r.z << ',' << r.roll << ',' << r.delta_r << ',' << r.z_loaded << ','
+      << r.roll_loaded << ',' << r.pitch_rate;
     for (const ContactGeometryWheel* w : {&r.left, &r.right})
       f << ',' << (w->kind == 0 ? "tread" : w->kind == 1 ? "flange" : "none") << ',' << w->y_wheel << ','
-        << w->z_wheel << ',' << w->y_rail << ',' << w->z_rail << ',' << w->contact_angle << ',' << w->rolling_radius
+        << w->z_wheel << ',' << w->y_rail << ',' << w->z_rail << ',' << w->y_rail_from_top << ',' << w->contact_angle << ',' << w->rolling_radius
         << ',' << w->flange_gap << ',' << w->N << ',' << w->a << ',' << w->b << ',' << w->nu_x << ',' << w->nu_y
         << ',' << w->phi << ',' << w->F_long << ',' << w->F_lat;
     f << '\n';
   }
+  f.close();
   if (!f) throw std::runtime_error(path + ": write failed");
+  return written;
 }
 
 }  // namespace contact

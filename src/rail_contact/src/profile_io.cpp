@@ -368,19 +368,18 @@ ProfilePoints readProfilePoints(const std::string& path, const ProfileFileOption
   return readPlainProfile(path, options);
 }
 
-namespace {
 ProfilePoints orderByIncreasingY(ProfilePoints pts) {
-  if (pts.back().x() < pts.front().x()) std::reverse(pts.begin(), pts.end());
+  if (!pts.empty() && pts.back().x() < pts.front().x()) std::reverse(pts.begin(), pts.end());
   return pts;
 }
-}  // namespace
 
 // A curve that cannot be built from a file's points is reported against the file as a whole (line 0).
 ProfileCurve loadRailProfile(const std::string& path, const ProfileFileOptions& options,
-                             const ProfileCurveOptions& curve_options) {
+                             const ProfileCurveOptions& curve_options, double inclination) {
   const ProfilePoints points = orderByIncreasingY(readProfilePoints(path, options));
   try {
-    return ProfileCurve(points, SolidSide::Right, curve_options);
+    return ProfileCurve(inclination == 0.0 ? points : tiltProfile(points, inclination), SolidSide::Right,
+                        curve_options);
   } catch (const std::exception& e) {
     throw ProfileFileError(path, 0, std::string("rail profile: ") + e.what());
   }

@@ -72,6 +72,7 @@ TEST(ContactGeometryTable, LoadedColumnsCarryTheWheelLoad) {
   rc::LoadCase load;
   load.wheel_load = 80e3;
   load.speed = 30.0;
+  load.free_rolling = false;
   const rc::ContactGeometryRow r = t.row(0.002, 0.0, load);
   ASSERT_TRUE(r.ok);
   for (const rc::ContactGeometryWheel* w : {&r.left, &r.right}) {
@@ -87,6 +88,18 @@ TEST(ContactGeometryTable, LoadedColumnsCarryTheWheelLoad) {
   EXPECT_LT(r.left.nu_x, 0.0);
   EXPECT_GT(r.right.nu_x, 0.0);
   EXPECT_NEAR(r.left.nu_x, (0.46 - r.left.rolling_radius) / 0.46, 2e-4);
+  EXPECT_NEAR(r.pitch_rate, 30.0 / 0.46, 1e-12);
+
+  // Free rolling: the pitch rate lies between V / r_L and V / r_R and the longitudinal creep forces of
+  // the two wheels cancel about the axle (no torque), where fixed spin leaves kilonewtons on each wheel.
+  load.free_rolling = true;
+  const rc::ContactGeometryRow f = t.row(0.002, 0.0, load);
+  ASSERT_TRUE(f.ok) << f.failure;
+  EXPECT_GT(f.pitch_rate, 30.0 / f.left.rolling_radius);
+  EXPECT_LT(f.pitch_rate, 30.0 / f.right.rolling_radius);
+  const double torque = f.left.F_long * f.left.rolling_radius + f.right.F_long * f.right.rolling_radius;
+  EXPECT_LT(std::abs(torque), 1e-3 * load.wheel_load * 0.46);
+  EXPECT_GT(std::abs(r.left.F_long), 1e3);
 }
 
 TEST(ContactGeometryTable, CsvHasNamedColumnsWithUnitsAndErrorsNameThePath) {
@@ -94,11 +107,15 @@ TEST(ContactGeometryTable, CsvHasNamedColumnsWithUnitsAndErrorsNameThePath) {
   const std::vector<rc::ContactGeometryRow> rows = t.table(-0.002, 0.002, 1e-3);
   ASSERT_EQ(rows.size(), 5u);
   const std::string path = ::testing::TempDir() + "contact_geometry_test.csv";
-  rc::writeContactGeometryCsv(path, rows);
+  EXPECT_EQ(rc::writeContactGeometryCsv(path, rows), 5);
   std::ifstream f(path);
   std::string header, line;
   std::getline(f, header);
-  EXPECT_EQ(header.rfind("y_m,yaw_rad,z_m,roll_rad,delta_r_m,left_kind,left_y_wheel_m", 0), 0u);
+  EXPECT_EQ(header.rfind("y_m,yaw_rad,z_m,roll_rad,delta_r_m,z_loaded_m,roll_loaded_rad,pitch_rate_rad_s,"
+                         "left_kind,left_y_wheel_m",
+                         0),
+            0u);
+  EXPECT_NE(header.find("right_y_rail_from_top_m"), std::string::npos);
   int n = 0;
   while (std::getline(f, line)) ++n;
   EXPECT_EQ(n, 5);
@@ -108,7 +125,7 @@ TEST(ContactGeometryTable, CsvHasNamedColumnsWithUnitsAndErrorsNameThePath) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent_dir/x.csv"), std::string::npos);
   }
-  EXPECT_THROW(rc::ContactGeometryTable(rc::makeS1002(), rc::makeUic60Rail(1.0 / 40.0),
-                                        rc::WheelsetTrackSpec{1.435, 0.014, 1.6, 0.46}),
-               std::runtime_error);
+  rc::WheelsetTrackSpec wide;
+  wide.back_to_back = 1.6;  // wider than the gauge
+  EXPECT_THROW(rc::ContactGeometryTable(rc::makeS1002(), rc::makeUic60Rail(1.0 / 40.0), wide), std::runtime_error);
 }

@@ -26,15 +26,20 @@ struct WheelsetTrackSpec {
   double track_gauge = 1.435;     ///< m, between the gauge points (gauge_depth below the rail tops)
   double gauge_depth = 0.014;     ///< m, EN 13848-1 measuring depth
   double back_to_back = 1.360;    ///< m, distance between the flange back faces
+  /// m, flange back face to taping line (the wheel profile frame's origin), whatever the profile's extent
+  double taping_line_from_flange_back = kTapingLineFromFlangeBack;
   double nominal_radius = 0.46;   ///< m, r0 at the taping line
   /// Rail section centre in the rail profile frame (only for rail wrenches), m.
   Eigen::Vector2d rail_section_centre_yz = Eigen::Vector2d(0.0, -uic60::kCentroidDepth);
 };
 
-/// Optional load case (all > 0 to enable).
+/// Optional load case (wheel_load > 0 to enable). The wheelset's height and roll are solved so that each
+/// wheel carries wheel_load vertically, and with free_rolling its pitch rate so that the contact forces
+/// have no net moment about the axle (a wheelset without traction or braking torque).
 struct LoadCase {
   double wheel_load = 0.0;  ///< vertical load Q per wheel, N
-  double speed = 0.0;       ///< forward speed, m/s (pure rolling at V / r0)
+  double speed = 0.0;       ///< forward speed, m/s
+  bool free_rolling = true; ///< false: pitch rate fixed at V / r0 (pure rolling of the nominal circle)
 };
 
 /// One wheel's contact in a row. kind: 0 tread, 1 flange, -1 none found.
@@ -42,6 +47,7 @@ struct ContactGeometryWheel {
   int kind = -1;
   double y_wheel = 0.0, z_wheel = 0.0;  ///< contact point, wheel profile frame, m
   double y_rail = 0.0, z_rail = 0.0;    ///< contact point, rail profile frame, m
+  double y_rail_from_top = 0.0;         ///< contact point from the rail's highest point, toward the gauge side, m
   double contact_angle = 0.0;           ///< rad, normal's inclination toward the track centre
   double rolling_radius = 0.0;          ///< m
   double flange_gap = 0.0;              ///< gap between flange and rail along the flange normal, m (< 0: contact)
@@ -53,12 +59,16 @@ struct ContactGeometryWheel {
 
 /// One row of the table.
 struct ContactGeometryRow {
-  bool ok = false;          ///< both wheels in contact and the position solved
+  bool ok = false;          ///< both wheels in contact and the position solved (and the load case, if any)
+  std::string failure;      ///< why the row is not ok: which solve, which wheel
   double y = 0.0;           ///< lateral displacement of the wheelset, m
   double yaw = 0.0;         ///< rad
   double z = 0.0;           ///< height of the wheelset centre (rigid solution), m
   double roll = 0.0;        ///< roll angle (rigid solution), rad
   double delta_r = 0.0;     ///< r_left - r_right, m
+  double z_loaded = 0.0;    ///< height of the wheelset centre under the load case, m
+  double roll_loaded = 0.0; ///< roll angle under the load case, rad
+  double pitch_rate = 0.0;  ///< wheelset angular velocity about its axle under the load case, rad/s
   ContactGeometryWheel left, right;
 };
 
@@ -72,9 +82,9 @@ class ContactGeometryTable {
 
   /// Row at lateral displacement y (m) and yaw (rad); with a load case, the loaded columns too.
   ContactGeometryRow row(double y, double yaw = 0.0, const LoadCase& load = {});
-  /// Rows for y = y_min, y_min + dy, ..., y_max.
+  /// Rows for y = y_min, y_min + dy, ..., y_max, at yaw + yaw_per_y * y (rad, rad/m).
   std::vector<ContactGeometryRow> table(double y_min, double y_max, double dy, double yaw = 0.0,
-                                        const LoadCase& load = {});
+                                        const LoadCase& load = {}, double yaw_per_y = 0.0);
 
   /// Half the lateral distance between the two wheels' contact points at y = 0, m (EN 15302's e0).
   double contactHalfDistance();
@@ -88,8 +98,8 @@ class ContactGeometryTable {
 
  private:
   bool solveRigid(double y, double yaw, double& z, double& roll);
-  bool solveLoaded(double y, double yaw, const LoadCase& load, double& z, double& roll);
-  void place(double y, double yaw, double z, double roll, const LoadCase& load, WheelState& left,
+  bool solveLoaded(double y, double yaw, const LoadCase& load, double& z, double& roll, double& omega);
+  void place(double y, double yaw, double z, double roll, double speed, double omega, WheelState& left,
              WheelState& right) const;
   double wheelGap(const ContactGeometry* g, int& kind) const;
   void detectBoth(double y, double yaw, double z, double roll, ContactGeometry (&left)[2],
@@ -99,6 +109,7 @@ class ContactGeometryTable {
   std::unique_ptr<TrackGeometry> track_;
   std::unique_ptr<WheelContactModel> model_;
   double e_wheel_ = 0.0, h_rail_ = 0.0, x0_ = 0.0, z_guess_ = 0.0, roll_guess_ = 0.0;
+  Eigen::Vector2d rail_top_yz_ = Eigen::Vector2d::Zero();  // highest point of the rail, profile frame
   WheelContactWork work_[2];
 };
 
@@ -111,9 +122,10 @@ class ContactGeometryTable {
 double equivalentConicity(const std::vector<double>& y_table, const std::vector<double>& delta_r_table,
                           double amplitude, double e0, double r0, double* wavelength_out = nullptr);
 
-/// Writes rows as CSV with a header of named columns with units; throws std::runtime_error if the file
-/// cannot be written.
-void writeContactGeometryCsv(const std::string& path, const std::vector<ContactGeometryRow>& rows);
+/// Writes the solved rows (ok) as CSV with a header of named columns with units and returns how many it
+/// wrote; rows that are not ok are left out (the caller reports them). Throws std::runtime_error if the
+/// file cannot be written.
+int writeContactGeometryCsv(const std::string& path, const std::vector<ContactGeometryRow>& rows);
 
 }  // namespace contact
 }  // namespace rail

@@ -181,8 +181,12 @@ WheelProfile makeS1002(double split_angle = kDefaultSplitAngle, const ProfileCur
 double tapingLineZ(const WheelProfile& wheel);
 /// Flange height: radial distance from the taping-line circle to the flange tip, m (S1002: 28 mm).
 double flangeHeight(const WheelProfile& wheel);
-/// Flange back face position: largest y of the flange surface, m (S1002: 70 mm).
+/// Flange back face position: largest y of the flange surface, m (S1002: 70 mm). A measured profile
+/// may stop short of the back face: place the wheel with kTapingLineFromFlangeBack, not with this.
 double flangeBackY(const WheelProfile& wheel);
+/// Distance of the taping line (the wheel profile frame's origin) from the flange back face, m: 70 mm
+/// by definition of the frame (EN 13715), whatever lateral extent the profile's points have.
+constexpr double kTapingLineFromFlangeBack = 0.070;
 /// Flange thickness: lateral distance from the flange back face to the flange's gauge-side face,
 /// measured height above the taping-line circle (EN 15313: 10 mm), m (S1002: 32.5 mm).
 double flangeThickness(const WheelProfile& wheel, double height = 0.010);
@@ -229,12 +233,17 @@ ProfilePoints readMiniProfProfile(const std::string& path, const ProfileFileOpti
 ProfilePoints readSimpackProfile(const std::string& path, const ProfileFileOptions& options = {},
                                  int* type_out = nullptr);
 
+/// Points reordered so that y increases (field side -> gauge side for a rail, field side -> flange for a
+/// wheel), the order ProfileCurve's SolidSide assumes; a file may list them either way.
+ProfilePoints orderByIncreasingY(ProfilePoints points_yz);
+
 /// Dispatches on the extension: .ban/.whl MiniProf, .prr/.prw SIMPACK, anything else plain text.
 ProfilePoints readProfilePoints(const std::string& path, const ProfileFileOptions& options = {});
 
-/// Reads a rail profile and builds its curve (points reordered field -> gauge if needed).
+/// Reads a rail profile and builds its curve (points reordered field -> gauge if needed), tilted by
+/// inclination (tan of the cant angle; 0 for a file whose profile is inclined already).
 ProfileCurve loadRailProfile(const std::string& path, const ProfileFileOptions& options = {},
-                             const ProfileCurveOptions& curve_options = {});
+                             const ProfileCurveOptions& curve_options = {}, double inclination = 0.0);
 /// Reads a wheel profile and splits it (points reordered field -> flange if needed).
 WheelProfile loadWheelProfile(const std::string& path, const ProfileFileOptions& options = {},
                               double split_angle = kDefaultSplitAngle,

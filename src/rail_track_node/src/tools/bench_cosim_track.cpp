@@ -47,7 +47,7 @@ static std::string configDir() {
 static void fillFrame(const rail::core::Scene& scene, const rc::TrackGeometry& geo, double s_front0, int k,
                       cc::WheelStateFrame& frame) {
   const double V = scene.vehicle.speed, r0 = scene.vehicle.nominal_radius, h = scene.solver.track_step;
-  const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::flangeBackY(rc::makeS1002());
+  const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::kTapingLineFromFlangeBack;
   const double offsets[4] = {0.0, 2.7, 19.0, 21.7};  // paper coach (Table 3) wheelsets behind the leading one, m
   frame.count = 8;
   frame.step = static_cast<std::uint64_t>(k);

@@ -282,7 +282,7 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
                              " wheelsets (bodies with two wheel centres), the scene says vehicle.wheelsets: " +
                              std::to_string(scene.vehicle.wheelsets));
   }
-  const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::flangeBackY(wheel_profile_);
+  const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::kTapingLineFromFlangeBack;
   std::vector<WheelDefinition> wheels;
   for (std::size_t w = 0; w < wheelset_bodies_.size(); ++w) {
     const int body = wheelset_bodies_[w];
