@@ -45,7 +45,9 @@ ContactGeometryTable::ContactGeometryTable(const WheelProfile& wheel, const Prof
   gs.table_step = 0.5;
   track_ = std::make_unique<TrackGeometry>(gs);
   x0_ = 10.0;
-  model_ = std::make_unique<WheelContactModel>(wheel, spec.nominal_radius, rail, spec.rail_section_centre_yz, options);
+  const Eigen::Vector2d centre =
+      spec.rail_section_centre_yz.allFinite() ? spec.rail_section_centre_yz : railSectionCentre(rail);
+  model_ = std::make_unique<WheelContactModel>(wheel, spec.nominal_radius, rail, centre, options);
   rail_top_yz_ = railTopPoint(rail);
   z_guess_ = spec.nominal_radius + rail_top_yz_.y();
   roll_guess_ = 0.0;

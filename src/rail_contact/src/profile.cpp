@@ -346,6 +346,24 @@ Eigen::Vector2d gaugePoint(const ProfileCurve& rail, double depth) {
   return rail.position(u);
 }
 
+Eigen::Vector2d railSectionCentre(const ProfileCurve& rail, double depth_below_top, double head_depth) {
+  if (!(head_depth > 0.0) || !(depth_below_top > 0.0))
+    throw std::invalid_argument("railSectionCentre: depths must be positive");
+  const double u_top = extremumParameter(rail, 1, +1.0);
+  const Eigen::Vector2d top = rail.position(u_top);
+  const bool gauge_at_end = rail.position(rail.uMax()).x() > rail.position(rail.uMin()).x();
+  double u_gauge = 0.0, u_field = 0.0;
+  const double z_level = top.y() - head_depth;
+  if (!rail.findCoordinate(1, z_level, u_top, gauge_at_end ? rail.uMax() : rail.uMin(), u_gauge) ||
+      !rail.findCoordinate(1, z_level, u_top, gauge_at_end ? rail.uMin() : rail.uMax(), u_field)) {
+    std::ostringstream msg;
+    msg << "railSectionCentre: rail profile does not reach " << head_depth * 1e3
+        << " mm below its top on both sides of the head";
+    throw std::runtime_error(msg.str());
+  }
+  return Eigen::Vector2d(0.5 * (rail.position(u_gauge).x() + rail.position(u_field).x()), top.y() - depth_below_top);
+}
+
 // ----------------------------------------------------------------------------------------------------
 // Wheel helpers
 

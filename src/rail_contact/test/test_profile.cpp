@@ -569,3 +569,22 @@ TEST(ProfileFiles, ExampleConfigProfilesLoad) {
     EXPECT_LT((rc::gaugePoint(r) - rc::gaugePoint(rc::makeUic60Rail())).norm(), 1e-5) << name;
   }
 }
+
+TEST(RailSectionCentre, FollowsTheProfileWhateverItsOrigin) {
+  // Symmetric untilted UIC60 with its origin on the axis at the top: the centroid on the axis, 91.1 mm down.
+  const rc::ProfileCurve rail = rc::makeUic60Rail(0.0);
+  const Eigen::Vector2d c = rc::railSectionCentre(rail);
+  EXPECT_NEAR(c.x(), 0.0, 1e-6);
+  EXPECT_NEAR(c.y(), -rc::uic60::kCentroidDepth, 1e-9);
+  // The same rail with its origin moved (7 mm toward the gauge side, 3 mm up): the centre moves with it.
+  rc::ProfilePoints pts = rc::uic60HeadPoints();
+  for (Eigen::Vector2d& p : pts) p += Eigen::Vector2d(-0.007, -0.003);
+  const Eigen::Vector2d c2 = rc::railSectionCentre(rc::ProfileCurve(pts, rc::SolidSide::Right));
+  EXPECT_NEAR(c2.x(), -0.007, 1e-6);
+  EXPECT_NEAR(c2.y(), -0.003 - rc::uic60::kCentroidDepth, 1e-9);
+  // The Manchester benchmark's rail (1:40 built in, origin at the highest point, which lies R300 / 40 =
+  // 7.5 mm field side of the axis): the head centre 7.5 mm toward the gauge side, within the 1:40 lean of
+  // the head over 14 mm (0.35 mm) and the file's own shape (0.04 mm from the standard, test above).
+  const rc::ProfileCurve mb = rc::loadRailProfile(RAILSIM_CONFIG_DIR "/profiles/manchester_a22/MBench_UIC60_v3.prr");
+  EXPECT_NEAR(rc::railSectionCentre(mb).x(), 0.0075, 0.5e-3);
+}

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,8 +30,9 @@ struct WheelsetTrackSpec {
   /// m, flange back face to taping line (the wheel profile frame's origin), whatever the profile's extent
   double taping_line_from_flange_back = kTapingLineFromFlangeBack;
   double nominal_radius = 0.46;   ///< m, r0 at the taping line
-  /// Rail section centre in the rail profile frame (only for rail wrenches), m.
-  Eigen::Vector2d rail_section_centre_yz = Eigen::Vector2d(0.0, -uic60::kCentroidDepth);
+  /// Rail section centre in the rail profile frame (only for rail wrenches), m; NaN: railSectionCentre
+  /// of the rail at the UIC60 centroid depth.
+  Eigen::Vector2d rail_section_centre_yz = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 /// Optional load case (wheel_load > 0 to enable). The wheelset's height and roll are solved so that each

@@ -145,6 +145,14 @@ Eigen::Vector2d railTopPoint(const ProfileCurve& rail);
 /// curve does not reach that depth on the gauge side.
 Eigen::Vector2d gaugePoint(const ProfileCurve& rail, double depth = uic60::kGaugeDepth);
 
+/// Rail section centre (beam axis) in the profile frame the curve is given in, whatever its origin:
+/// laterally midway between the head's two faces at head_depth below the highest point, vertically
+/// depth_below_top below that point. For a profile whose origin is not on the rail's axis (e.g. the
+/// highest point of an inclined rail, as the Manchester benchmark's file has it). An inclination built
+/// into the file is not undone: at 1:40 the centre is then about 2 mm off at 91 mm depth.
+Eigen::Vector2d railSectionCentre(const ProfileCurve& rail, double depth_below_top = uic60::kCentroidDepth,
+                                  double head_depth = uic60::kGaugeDepth);
+
 // ----------------------------------------------------------------------------------------------------
 // Wheel: S1002 (EN 13715)
 

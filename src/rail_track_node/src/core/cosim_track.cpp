@@ -189,7 +189,8 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   contact.damping.restitution = scene.contact.restitution;
   contact.damping.impact_velocity_floor = scene.contact.impact_velocity_floor;
   contact_model_ = std::make_unique<rc::WheelContactModel>(wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
-                                                           Eigen::Vector2d(0.0, -section_depth), contact);
+                                                           rc::railSectionCentre(rail_profile_, section_depth),
+                                                           contact);
   work_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactWork());
   result_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactResult());
   seen_.assign(static_cast<std::size_t>(n_wheels), 0);

@@ -315,7 +315,7 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   nominal_height_ = scene.vehicle.nominal_radius;
   contact_model_ = std::make_unique<WheelRailContactModel>(
       *track_, wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
-      Eigen::Vector2d(0.0, -rc::uic60::kCentroidDepth), options, std::move(wheels));
+      rc::railSectionCentre(rail_profile_), options, std::move(wheels));
   contact_data_ = std::make_unique<WheelRailContactData>(*contact_model_);
   model_.AddForceElement(std::make_unique<WheelRailContactElement>(contact_model_.get(), contact_data_.get()));
   if (settings.wheel_wrench_source != nullptr) {
