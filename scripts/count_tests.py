@@ -16,6 +16,12 @@ import xml.etree.ElementTree as ET
 
 
 def main(argv):
+    if any(a in ("-h", "--help") for a in argv[1:]):
+        print(__doc__)
+        return 0
+    if len(argv) < 3:
+        print("usage: count_tests.py <dir> <log> [--extra NAME 0|1 ...] (--help for more)", file=sys.stderr)
+        return 2
     results_dir, log = argv[1], argv[2]
     extras = []
     rest = argv[3:]

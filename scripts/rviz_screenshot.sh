@@ -6,6 +6,10 @@
 set -euo pipefail
 export PATH=/usr/bin:/bin:$PATH
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+case "${1:-}" in
+  -h|--help) sed -n '2,5p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+  -*) echo "rviz_screenshot.sh: unknown option $1 (--help for usage)" >&2; exit 2 ;;
+esac
 out="$(realpath -m "${1:?usage: rviz_screenshot.sh out.png [scene] [track_model] [wait_s]}")"
 scene="$(realpath "${2:-$ROOT/config/scenes/paper_demo.yaml}")"
 model="${3:-flexible}"

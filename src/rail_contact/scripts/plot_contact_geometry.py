@@ -20,6 +20,13 @@ def load(path):
 
 
 def main(argv):
+    if any(a in ("-h", "--help") for a in argv[1:]):
+        print(__doc__)
+        return 0
+    unknown = [a for a in argv[1:] if a.startswith("-") and a != "--out"]
+    if unknown:
+        print("plot_contact_geometry.py: unknown option %s (--help for usage)" % unknown[0], file=sys.stderr)
+        return 2
     args = [a for a in argv[1:] if not a.startswith("--")]
     prefix = "contact_geometry"
     if "--out" in argv:

@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include "rail_contact/contact_geometry_table.hpp"
+#include "rail_contact/tool_args.hpp"
 
 namespace rc = rail::contact;
 
@@ -86,7 +87,14 @@ void run(bool flange, bool spin) {
 }
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+  const char* const usage =
+      "usage: bench_contact\n"
+      "Per-wheel contact evaluation on straight rigid track (S1002 / UIC60 1:40, 4 mm lateral oscillation):\n"
+      "time per wheel for detection alone and with forces, tread + flange, then flange and spin off.\n";
+  if (rail::tools::helpRequested(argc, argv, usage)) return 0;
+  rail::tools::refuseOptions(argc, argv, usage);
+  rail::tools::atMostArguments(argc, argv, 0, usage);
   run(true, true);
   run(false, false);
   return 0;

@@ -352,16 +352,18 @@ Eigen::Vector2d railSectionCentre(const ProfileCurve& rail, double depth_below_t
   const double u_top = extremumParameter(rail, 1, +1.0);
   const Eigen::Vector2d top = rail.position(u_top);
   const bool gauge_at_end = rail.position(rail.uMax()).x() > rail.position(rail.uMin()).x();
+  // A profile cut short on one side (a measurement of the running surface and the gauge face only) is
+  // measured where both sides reach; below 3 mm the crown alone says nothing: the highest point is used.
+  const double u_gauge_end = gauge_at_end ? rail.uMax() : rail.uMin();
+  const double u_field_end = gauge_at_end ? rail.uMin() : rail.uMax();
+  const double depth = std::min({head_depth, top.y() - rail.position(u_gauge_end).y(),
+                                 top.y() - rail.position(u_field_end).y()});
+  double y_centre = top.x();
   double u_gauge = 0.0, u_field = 0.0;
-  const double z_level = top.y() - head_depth;
-  if (!rail.findCoordinate(1, z_level, u_top, gauge_at_end ? rail.uMax() : rail.uMin(), u_gauge) ||
-      !rail.findCoordinate(1, z_level, u_top, gauge_at_end ? rail.uMin() : rail.uMax(), u_field)) {
-    std::ostringstream msg;
-    msg << "railSectionCentre: rail profile does not reach " << head_depth * 1e3
-        << " mm below its top on both sides of the head";
-    throw std::runtime_error(msg.str());
-  }
-  return Eigen::Vector2d(0.5 * (rail.position(u_gauge).x() + rail.position(u_field).x()), top.y() - depth_below_top);
+  if (depth >= 3e-3 && rail.findCoordinate(1, top.y() - depth, u_top, u_gauge_end, u_gauge) &&
+      rail.findCoordinate(1, top.y() - depth, u_top, u_field_end, u_field))
+    y_centre = 0.5 * (rail.position(u_gauge).x() + rail.position(u_field).x());
+  return Eigen::Vector2d(y_centre, top.y() - depth_below_top);
 }
 
 // ----------------------------------------------------------------------------------------------------

@@ -149,7 +149,9 @@ Eigen::Vector2d gaugePoint(const ProfileCurve& rail, double depth = uic60::kGaug
 /// laterally midway between the head's two faces at head_depth below the highest point, vertically
 /// depth_below_top below that point. For a profile whose origin is not on the rail's axis (e.g. the
 /// highest point of an inclined rail, as the Manchester benchmark's file has it). An inclination built
-/// into the file is not undone: at 1:40 the centre is then about 2 mm off at 91 mm depth.
+/// into the file is not undone: at 1:40 the centre is then about 2 mm off at 91 mm depth. A head whose
+/// faces do not both reach head_depth is measured at the depth both reach (the highest point's y below
+/// 3 mm).
 Eigen::Vector2d railSectionCentre(const ProfileCurve& rail, double depth_below_top = uic60::kCentroidDepth,
                                   double head_depth = uic60::kGaugeDepth);
 

@@ -17,6 +17,7 @@
 #include "rail_core/coupling/loopback_transport.hpp"
 #include "rail_core/coupling/protocol.hpp"
 #include "rail_core/coupling/shm_transport.hpp"
+#include "rail_contact/tool_args.hpp"
 
 using namespace rail::core::coupling;
 
@@ -127,12 +128,18 @@ bool bench_loopback(long warmup, long steps) {
 
 }  // namespace
 
+namespace {
+const char* const kUsage =
+    "usage: railsim_bench_shm [exchanges]\n"
+    "Round-trip time of one co-simulation exchange (8 wheel states, 8 wrenches) over shared memory between\n"
+    "two processes (spin then futex; futex only) and in-process between two threads. Default 100000.\n";
+}  // namespace
+
 int main(int argc, char** argv) {
-  const long steps = argc > 1 ? std::atol(argv[1]) : 100000;
-  if (steps <= 0) {
-    std::fprintf(stderr, "usage: bench_shm [exchanges > 0]\n");
-    return 2;
-  }
+  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
+  rail::tools::refuseOptions(argc, argv, kUsage);
+  rail::tools::atMostArguments(argc, argv, 1, kUsage);
+  const long steps = static_cast<long>(rail::tools::positionalNumber(argc, argv, 1, 100000, 1, kUsage));
   const long warmup = std::min(steps / 10, 10000L);
   std::printf("round trip of one exchange, %d wheels, %u hardware threads\n", kWheels,
               std::thread::hardware_concurrency());

@@ -22,6 +22,7 @@
 
 #include <ros/ros.h>
 
+#include "rail_contact/tool_args.hpp"
 #include "rail_core/coupling/protocol.hpp"
 #include "rail_core/coupling/shm_transport.hpp"
 #include "rail_core/ros/service_transport.hpp"
@@ -148,10 +149,23 @@ ros::M_string remappings(int argc, char** argv, std::vector<std::string>& rest) 
 
 }  // namespace
 
+namespace {
+const char* const kUsage =
+    "usage: railsim_bench_transports [exchanges] [service,topic,shm]\n"
+    "Round-trip time of one co-simulation exchange over each ROS transport and shared memory, between two\n"
+    "processes (needs a ROS master). Defaults: 20000 exchanges, all three transports.\n";
+}  // namespace
+
 int main(int argc, char** argv) {
+  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
   std::vector<std::string> args;
   const ros::M_string remap = remappings(argc, argv, args);
-  const long steps = !args.empty() ? std::atol(args[0].c_str()) : 20000;
+  char* end = nullptr;
+  const long steps = !args.empty() ? std::strtol(args[0].c_str(), &end, 10) : 20000;
+  if (!args.empty() && *end != '\0') {
+    std::fprintf(stderr, "railsim_bench_transports: '%s' is not a number of exchanges\n%s", args[0].c_str(), kUsage);
+    return 2;
+  }
   std::vector<std::string> kinds = {"service", "topic", "shm"};
   if (args.size() > 1) {
     kinds.clear();

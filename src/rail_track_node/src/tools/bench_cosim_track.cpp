@@ -28,6 +28,7 @@
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_track_node/cosim_track.hpp"
+#include "rail_contact/tool_args.hpp"
 
 namespace rt = rail::track;
 namespace rc = rail::contact;
@@ -160,10 +161,21 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
                 static_cast<double>(track.newtonIterations()) / steps);
 }
 
+namespace {
+const char* const kUsage =
+    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1]\n"
+    "Wall time of one co-simulation track step with the paper coach's 8 wheels on the paper scene: rigid_fe,\n"
+    "flexible (semi-implicit and explicit coupling), and the moving track window (straight and curve runs\n"
+    "of window_steps each). Defaults: 500, 20000, 0 (cost clock off).\n";
+}  // namespace
+
 int main(int argc, char** argv) {
-  const int steps = argc > 1 ? std::max(10, std::atoi(argv[1])) : 500;
-  const int window_steps = argc > 2 ? std::max(0, std::atoi(argv[2])) : 20000;
-  g_cost = argc > 3 && std::atoi(argv[3]) != 0;
+  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
+  rail::tools::refuseOptions(argc, argv, kUsage);
+  rail::tools::atMostArguments(argc, argv, 3, kUsage);
+  const int steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 1, 500, 10, kUsage));
+  const int window_steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20000, 0, kUsage));
+  g_cost = rail::tools::positionalNumber(argc, argv, 3, 0, 0, kUsage) != 0;
   std::printf("cost clock %s\n", g_cost ? "on" : "off");
   const rail::core::Scene scene = rail::core::load_scene_file(configDir() + "/scenes/paper_demo.yaml");
   run(scene, rail::core::TrackModel::kRigidFe, rt::CosimCoupling::kExplicit, steps);

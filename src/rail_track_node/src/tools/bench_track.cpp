@@ -14,6 +14,7 @@
 
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
+#include "rail_contact/tool_args.hpp"
 
 namespace rt = rail::track;
 using Clock = std::chrono::steady_clock;
@@ -34,10 +35,21 @@ double sparseBytes(const Eigen::SparseMatrix<double>& A) {
 
 }  // namespace
 
+namespace {
+const char* const kUsage =
+    "usage: bench_track [steps_100m] [steps_500m] [steps_2km]\n"
+    "Standalone flexible track on straights of 100 m, 500 m and 2 km: DOFs, matrix and factor memory, build\n"
+    "and factorisation times, median Newmark step with two moving 100 kN loads. Defaults 2000, 500, 100.\n";
+}  // namespace
+
 int main(int argc, char** argv) {
+  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
+  rail::tools::refuseOptions(argc, argv, kUsage);
+  rail::tools::atMostArguments(argc, argv, 3, kUsage);
   const double lengths[3] = {100.0, 500.0, 2000.0};
   int steps[3] = {2000, 500, 100};
-  for (int i = 0; i < 3 && i + 1 < argc; ++i) steps[i] = std::max(3, std::atoi(argv[i + 1]));
+  for (int i = 0; i < 3; ++i)
+    steps[i] = static_cast<int>(rail::tools::positionalNumber(argc, argv, i + 1, steps[i], 3, kUsage));
   const double dt = 2e-5;
   std::printf("straight tracks, paper track data, damping and absorbing ends on, dt = %g s, 2 wheel loads of "
               "100 kN at 30 m/s\n", dt);

@@ -18,6 +18,7 @@
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
 #include "rail_track_node/track_window.hpp"
+#include "rail_contact/tool_args.hpp"
 
 namespace rt = rail::track;
 using Clock = std::chrono::steady_clock;
@@ -114,9 +115,19 @@ void benchWindow(const rail::core::Scene& scene, const rt::TrackWindowSettings& 
 
 }  // namespace
 
+namespace {
+const char* const kUsage =
+    "usage: bench_track_window [steps] [full_5km_steps]\n"
+    "Moving track window against the full-length FE track on the paper scene and a 5 km straight: build\n"
+    "time, median step, median window move. Defaults 300 and 20.\n";
+}  // namespace
+
 int main(int argc, char** argv) {
-  const int steps = argc > 1 ? std::max(10, std::atoi(argv[1])) : 300;
-  const int full_long_steps = argc > 2 ? std::max(0, std::atoi(argv[2])) : 20;
+  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
+  rail::tools::refuseOptions(argc, argv, kUsage);
+  rail::tools::atMostArguments(argc, argv, 2, kUsage);
+  const int steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 1, 300, 10, kUsage));
+  const int full_long_steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20, 0, kUsage));
   rt::TrackWindowSettings set;
   set.vehicle_length = kOffsets[3];
 

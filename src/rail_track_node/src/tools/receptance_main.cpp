@@ -35,10 +35,16 @@ std::string defaultTrackFile() {
   return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config/track/paper_track.yaml";
 }
 
+const char* const kUsage =
+    "usage: track_receptance [--track FILE] [--length M] [--gauge M] [--points N] [--f-min HZ] [--f-max HZ]\n"
+    "                        [--no-damping] [--rail-beta S] [--no-absorbing-ends] [--csv FILE]\n"
+    "Point receptance of a straight FE track, vertical and lateral, above a sleeper and at mid-span, as CSV.\n"
+    "Defaults: config/track/paper_track.yaml, 80 m, gauge 1.668 m, 160 points, 10 Hz - 3 kHz, damping and\n"
+    "absorbing ends on, receptance.csv. --rail-beta replaces the rail's stiffness-proportional Rayleigh\n"
+    "coefficient (s).\n";
+
 [[noreturn]] void usage(const std::string& what) {
-  std::cerr << "track_receptance: " << what
-            << "\nusage: track_receptance [--track FILE] [--length M] [--gauge M] [--points N] [--f-min HZ] "
-               "[--f-max HZ] [--no-damping] [--rail-beta S] [--no-absorbing-ends] [--csv FILE]\n";
+  std::cerr << "track_receptance: " << what << "\n" << kUsage;
   std::exit(2);
 }
 
@@ -59,6 +65,10 @@ int main(int argc, char** argv) {
   double rail_beta = -1.0;  // < 0: the data file's
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      return 0;
+    }
     auto next = [&]() -> const char* {
       if (i + 1 >= argc) usage(a + " needs a value");
       return argv[++i];

@@ -10,6 +10,7 @@
 
 #include "rail_vehicle_node/multibody_dynamics.hpp"
 #include "rail_vehicle_node/vehicle_loader.hpp"
+#include "rail_contact/tool_args.hpp"
 
 #ifndef RAIL_VEHICLE_CONFIG_DIR
 #define RAIL_VEHICLE_CONFIG_DIR "config/vehicle"
@@ -47,9 +48,19 @@ double MedianRhsMicroseconds(const std::string& path, rail::vehicle::KktSolver s
 
 }  // namespace
 
+namespace {
+const char* const kUsage =
+    "usage: bench_vehicle_rhs [vehicle.yaml] [evaluations]\n"
+    "Median wall time of one right-hand side of the full vehicle model, for both solvers of the augmented\n"
+    "system. Defaults: config/vehicle/paper_coach.yaml, 20000 evaluations.\n";
+}  // namespace
+
 int main(int argc, char** argv) {
+  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
+  rail::tools::refuseOptions(argc, argv, kUsage);
+  rail::tools::atMostArguments(argc, argv, 2, kUsage);
   const std::string path = argc > 1 ? argv[1] : std::string(RAIL_VEHICLE_CONFIG_DIR) + "/paper_coach.yaml";
-  const int evaluations = argc > 2 ? std::max(1, std::atoi(argv[2])) : 20000;
+  const int evaluations = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20000, 1, kUsage));
   try {
     const double range = MedianRhsMicroseconds(path, rail::vehicle::KktSolver::kRangeSpace, evaluations);
     std::printf("median RHS evaluation, range-space solve: %.2f us over %d evaluations\n", range, evaluations);

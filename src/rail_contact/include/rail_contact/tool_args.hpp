@@ -1,0 +1,62 @@
+// Command-line helpers shared by the project's tools and benchmark programs: -h / --help prints the
+// usage and exits 0; a positional argument that is not a number is refused (exit 2) instead of being
+// read as 0 by atoi.
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+namespace rail {
+namespace tools {
+
+/// True, after printing usage to stdout, when any argument is -h or --help.
+inline bool helpRequested(int argc, char** argv, const char* usage) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::fputs(usage, stdout);
+      return true;
+    }
+  }
+  return false;
+}
+
+/// Refuses any argument that looks like an option ("-x", "--x"; not a negative number): exit 2 naming it.
+/// For the programs that take positional arguments only.
+inline void refuseOptions(int argc, char** argv, const char* usage) {
+  for (int i = 1; i < argc; ++i) {
+    const char* a = argv[i];
+    if (a[0] == '-' && a[1] != '\0' && !(a[1] >= '0' && a[1] <= '9') && a[1] != '.') {
+      std::fprintf(stderr, "%s: unknown option %s\n%s", argv[0], a, usage);
+      std::exit(2);
+    }
+  }
+}
+
+/// Positional argument i (1-based) as a number, fallback when absent; a value that is not a finite
+/// number, or below min_value, exits 2 with the program's name, the argument and the usage.
+inline double positionalNumber(int argc, char** argv, int i, double fallback, double min_value,
+                               const char* usage) {
+  if (i >= argc) return fallback;
+  const char* text = argv[i];
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(v) || v < min_value) {
+    std::fprintf(stderr, "%s: argument %d: '%s' is not a number >= %g\n%s", argv[0], i, text, min_value, usage);
+    std::exit(2);
+  }
+  return v;
+}
+
+/// Refuses more than max_positional arguments (exit 2).
+inline void atMostArguments(int argc, char** argv, int max_positional, const char* usage) {
+  if (argc - 1 > max_positional) {
+    std::fprintf(stderr, "%s: unexpected argument '%s'\n%s", argv[0], argv[max_positional + 1], usage);
+    std::exit(2);
+  }
+}
+
+}  // namespace tools
+}  // namespace rail
