@@ -120,6 +120,7 @@ def write_kinematics(bag):
 def _point(wheel_id, kind, active, values, s):
     p = ContactPoint()
     p.wheel_id, p.side, p.kind, p.active = wheel_id, wheel_id % 2, kind, active
+    p.contact_angle = 0.04 if kind == ContactPoint.KIND_TREAD else 1.2  # tread; flange flank (70 deg)
     p.arc_length = s
     p.normal_force = 50e3 if active else 0.0
     p.creep_force_longitudinal, p.creepage_longitudinal, p.creep_force_lateral, p.creepage_lateral = values

@@ -180,6 +180,8 @@ def write_points(bag, name):
                     p = ContactPoint()
                     p.wheel_id, p.side, p.kind = 2 * w + side, side, kind
                     p.arc_length = s[i, w]
+                    # Contact angles as on S1002 / UIC60: tread a few hundredths of a radian, flange flank 70 deg.
+                    p.contact_angle = 0.04 if kind == ContactPoint.KIND_TREAD else 1.2
                     if kind == ContactPoint.KIND_TREAD:
                         p.active, p.normal_force = True, 70e3
                     elif side == 1:

@@ -188,6 +188,45 @@ class SyntheticRuns(unittest.TestCase):
         self.assertEqual(analysis.check_flange_outer_only(runs, DISCARD).status, analysis.DISAGREES)
 
 
+class FlangeContactDefinition(unittest.TestCase):
+    """Flange contact is counted by the contact angle, whichever wheel surface reported the point: a patch on
+    the flange root that the tread surface reports (it continues past the split) is flange contact; the
+    report says so."""
+
+    def points(self, angles, kinds, forces):
+        n = len(angles)
+        return {"t": np.arange(n, dtype=float), "wheel_id": np.full((n, 1), 1), "side": np.ones((n, 1), dtype=int),
+                "kind": np.array(kinds).reshape(n, 1), "active": np.ones((n, 1), dtype=bool),
+                "normal_force": np.array(forces, dtype=float).reshape(n, 1),
+                "contact_angle": np.array(angles, dtype=float).reshape(n, 1)}
+
+    def test_a_flange_root_contact_reported_by_the_tread_is_flange_contact(self):
+        # Flange flank (flange surface), flange root past the split (tread surface), tread, and the same
+        # flange-root contact a sample later: the flange force stays continuous across the change of surface.
+        p = self.points([1.15, 0.70, 0.05, 0.69], [loading.KIND_FLANGE, loading.KIND_TREAD, loading.KIND_TREAD,
+                                                 loading.KIND_TREAD], [95e3, 94e3, 70e3, 93e3])
+        f = loading.flange_normal_force(p, 1)
+        np.testing.assert_allclose(f, [95e3, 94e3, 0.0, 93e3])
+
+    def test_bags_without_contact_angles_fall_back_on_the_reporting_surface(self):
+        p = self.points([np.nan] * 2, [loading.KIND_FLANGE, loading.KIND_TREAD], [95e3, 94e3])
+        np.testing.assert_allclose(loading.flange_normal_force(p, 1), [95e3, 0.0])
+
+    def test_the_report_states_the_definition(self):
+        work = tempfile.mkdtemp(prefix="rail_analysis_flange_")
+        try:
+            syn.write_all(work)
+            out = os.path.join(work, "report")
+            proc = run_tool([work, "--out", out])
+            self.assertEqual(proc.returncode, 0, proc.stderr)
+            with open(os.path.join(out, "report.md")) as f:
+                text = f.read()
+            self.assertIn("flange contact: a contact whose normal leans more than 0.35 rad (20 deg) toward the "
+                          "track centre (flange root and flank)", text)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+
+
 class Refusals(unittest.TestCase):
     def setUp(self):
         self.work = tempfile.mkdtemp(prefix="rail_analysis_bad_")

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from . import loading
 from .loading import SIDE_LEFT, SIDE_RIGHT, flange_normal_force
 
 # The paper's figures for its three runs (section 6.2): largest absolute deviations between the
@@ -212,7 +213,8 @@ def check_flange_outer_only(runs, t_discard):
                      "(%s) %.2f kN" % (name, outer, peak_out / 1e3, 100 * share_out, inner, peak_in / 1e3))
     if not any_run:
         return Check(title, paper, "no run reaches the curve (after the discard)", NOT_AVAILABLE)
-    return Check(title, paper, "; ".join(parts), AGREES if ok_all else DISAGREES)
+    return Check(title, paper, "; ".join(parts) + " (%s)" % loading.FLANGE_CONTACT_DEFINITION,
+                 AGREES if ok_all else DISAGREES)
 
 
 def check_flange_peaks_lower_flexible(runs, t_discard):

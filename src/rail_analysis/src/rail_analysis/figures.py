@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from . import analysis  # noqa: E402
+from . import analysis, loading  # noqa: E402
 
 STYLE = {  # label, colour, line style, width, drawing order
     "standalone": ("rigid track, vehicle alone", "black", "-", 1.6, 1),
@@ -155,7 +155,8 @@ def fig_flange_forces(runs, scene, t_discard, out_dir):
     """Flange contact normal forces on the leading wheelset's left and right wheels (paper Fig. 19)."""
     def series(r):
         return analysis.leading_flange_forces(r) if r.points is not None else None
-    return _two_wheels(runs, scene, t_discard, out_dir, series, "flange normal force [kN]",
+    return _two_wheels(runs, scene, t_discard, out_dir, series,
+                       "flange normal force [kN] (contact angle > %.0f deg)" % np.degrees(loading.FLANGE_CONTACT_ANGLE),
                        "Leading wheelset: flange contact normal force (paper Fig. 19)", "fig19_flange_forces.png")
 
 
@@ -272,7 +273,8 @@ def all_figures(runs, scene, t_discard, out_dir):
     out = [("Leading wheelset lateral displacement", fig_lateral(runs, scene, t_discard, out_dir)),
            ("Leading wheelset angle of attack", fig_angle_of_attack(runs, scene, t_discard, out_dir)),
            ("Leading wheelset vertical displacement", fig_vertical(runs, scene, t_discard, out_dir)),
-           ("Flange contact normal forces, leading wheelset", fig_flange_forces(runs, scene, t_discard, out_dir)),
+           ("Flange contact normal forces, leading wheelset (%s)" % loading.FLANGE_CONTACT_DEFINITION,
+            fig_flange_forces(runs, scene, t_discard, out_dir)),
            ("Lateral contact forces, leading wheels", fig_lateral_forces(runs, scene, t_discard, out_dir)),
            ("Vertical contact forces, leading wheels", fig_vertical_forces(runs, scene, t_discard, out_dir))]
     sections = scene.deflection_sections if scene is not None else []

@@ -23,6 +23,25 @@ KIND_FLANGE = 1
 SIDE_LEFT = 0
 SIDE_RIGHT = 1
 
+# Flange contact, as the report counts it: an active contact whose normal leans more than this toward the
+# track centre (ContactPoint.contact_angle, to the wheelset's axle): the flange root and the flank, whichever
+# of the wheel's two surfaces reported the point. The tread of a new S1002 on UIC60 stays below 0.15 rad;
+# the flange root rises from about 0.3 rad to the flank's 1.22 rad (70 deg). Bags recorded before the
+# message carried the angle fall back on the reporting surface (ContactPoint.kind).
+FLANGE_CONTACT_ANGLE = 0.35  # rad (20 deg)
+FLANGE_CONTACT_DEFINITION = ("flange contact: a contact whose normal leans more than %.2f rad (%.0f deg) toward "
+                             "the track centre (flange root and flank)" % (FLANGE_CONTACT_ANGLE,
+                                                                           np.degrees(FLANGE_CONTACT_ANGLE)))
+
+
+def flange_contact_mask(points):
+    """(N, P) bool: the active contacts that are flange contacts (FLANGE_CONTACT_ANGLE), or, for a bag
+    without contact angles, those the flange surface reported."""
+    angle = points.get("contact_angle")
+    if angle is not None and np.isfinite(angle).any():
+        return points["active"] & (angle >= FLANGE_CONTACT_ANGLE)
+    return points["active"] & (points["kind"] == KIND_FLANGE)
+
 
 class AnalysisInputError(RuntimeError):
     """A run's files cannot be used (missing, malformed, or a bag without a needed topic)."""
@@ -128,6 +147,7 @@ def load_contact_points(path):
         out[k] = np.full((n, p), fill, dtype=int)
     for k in floats:
         out[k] = np.zeros((n, p))
+    out["contact_angle"] = np.full((n, p), np.nan)  # NaN: recorded before the message carried it
     out["active"] = np.zeros((n, p), dtype=bool)
     for i, m in enumerate(msgs):
         for j, c in enumerate(m.points):
@@ -137,13 +157,14 @@ def load_contact_points(path):
             out["active"][i, j] = c.active
             for k in floats:
                 out[k][i, j] = getattr(c, k)
+            out["contact_angle"][i, j] = getattr(c, "contact_angle", np.nan)
     order = np.argsort(t, kind="stable")
     return {k: v[order] for k, v in out.items()}
 
 
 def flange_normal_force(points, wheel_id):
-    """Sum of the normal forces [N] of the active flange contacts of one wheel, per sample (N,)."""
-    sel = points["active"] & (points["kind"] == KIND_FLANGE) & (points["wheel_id"] == wheel_id)
+    """Sum of the normal forces [N] of the flange contacts (flange_contact_mask) of one wheel, per sample (N,)."""
+    sel = flange_contact_mask(points) & (points["wheel_id"] == wheel_id)
     return np.where(sel, points["normal_force"], 0.0).sum(axis=1)
 
 

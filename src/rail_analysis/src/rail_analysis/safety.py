@@ -199,6 +199,7 @@ def load_contacts(path):
               "creepage_lateral", "creepage_spin", "arc_length")
     for k in floats:
         out[k] = np.zeros((n, p))
+    out["contact_angle"] = np.full((n, p), np.nan)  # NaN: recorded before the message carried it
     out["active"] = np.zeros((n, p), dtype=bool)
     for i, m in enumerate(msgs):
         for j, c in enumerate(m.points):
@@ -206,6 +207,7 @@ def load_contacts(path):
             out["active"][i, j] = c.active
             for k in floats:
                 out[k][i, j] = getattr(c, k)
+            out["contact_angle"][i, j] = getattr(c, "contact_angle", np.nan)
     order = np.argsort(out["t"], kind="stable")
     return {k: v[order] for k, v in out.items()}
 
@@ -595,8 +597,9 @@ def tgamma_series(contacts, kin, wheelsets, t_discard=0.0):
     for k in range(2 * wheelsets):
         sel = c["wheel_id"] == k
         val[:, k] = np.where(sel, per_point, 0.0).sum(axis=1)
-        tread[:, k] = np.where(sel & (c["kind"] == loading.KIND_TREAD), per_point, 0.0).sum(axis=1)
-        flange[:, k] = np.where(sel & (c["kind"] == loading.KIND_FLANGE), per_point, 0.0).sum(axis=1)
+        on_flange = loading.flange_contact_mask(c)
+        tread[:, k] = np.where(sel & ~on_flange, per_point, 0.0).sum(axis=1)
+        flange[:, k] = np.where(sel & on_flange, per_point, 0.0).sum(axis=1)
         sw = kin["arc_length"][:, k // 2]
         ok = np.isfinite(sw)
         if ok.sum() >= 2:

@@ -88,7 +88,8 @@ struct ContactPointResult {
   double penetration = 0.0;        ///< delta, m (> 0 in contact; finite gap otherwise)
   double penetration_rate = 0.0;   ///< d delta / dt, m/s (> 0 approaching)
   double rolling_radius = 0.0;     ///< wheel radius at the contact, m
-  double contact_angle = 0.0;      ///< angle of the normal to the rail's up axis in the cross-section, rad
+  double contact_angle = 0.0;      ///< normal's inclination to the plane normal to the axle, toward the track centre, rad
+                                   ///< (to the track plane: add the wheelset's roll toward this wheel)
   Eigen::Vector3d force_on_wheel_in_world = Eigen::Vector3d::Zero();  ///< eq. 12, N
   RailWrench rail_wrench;          ///< eq. 15 for this contact alone, about its own section centre at s_r
   Eigen::Vector3d p_section_centre_in_world = Eigen::Vector3d::Zero();  ///< rail section centre at s_r, m

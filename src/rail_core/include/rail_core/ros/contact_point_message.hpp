@@ -32,6 +32,7 @@ inline void to_message(const rail::contact::ContactPointResult& c, int wheel_id,
   p.semi_axis_a = c.a;
   p.semi_axis_b = c.b;
   p.penetration = c.penetration;
+  p.contact_angle = c.contact_angle;
 }
 
 }  // namespace rail::core::ros_glue
