@@ -45,7 +45,9 @@ const char* const kUsage =
     "  --friction MU         friction coefficient (default 0.3)\n"
     "  -h, --help            this text\n"
     "\n"
-    "exit status: 0 table written with every row solved or the unsolved rows listed on stderr;\n"
+    "Rows that cannot be solved are left out and listed on stderr with the reason; a row whose loaded\n"
+    "solve fails keeps its geometry with the loaded columns empty (NaN), listed the same way.\n"
+    "exit status: 0 table written (every row left out or incomplete listed on stderr);\n"
     "1 no row solved or bad data; 2 bad option.\n";
 
 [[noreturn]] void usageError(const std::string& what) {
@@ -118,9 +120,15 @@ int main(int argc, char** argv) {
     lc.speed = speed;
     lc.free_rolling = !fixed_spin;
     const std::vector<rc::ContactGeometryRow> rows = table.table(y_min, y_max, dy, yaw, lc, yaw_per_y);
-    int failed = 0;
+    int failed = 0, unloaded = 0;
     for (const rc::ContactGeometryRow& r : rows) {
-      if (r.ok) continue;
+      if (r.ok && (load <= 0.0 || r.loaded_ok)) continue;
+      if (r.ok) {
+        ++unloaded;
+        std::fprintf(stderr, "contact_geometry: row y = %.6g m, yaw = %.6g rad: loaded columns left empty: %s\n", r.y,
+                     r.yaw, r.failure.c_str());
+        continue;
+      }
       ++failed;
       std::fprintf(stderr, "contact_geometry: row y = %.6g m, yaw = %.6g rad not solved: %s\n", r.y, r.yaw,
                    r.failure.c_str());
@@ -133,11 +141,10 @@ int main(int argc, char** argv) {
       return 1;
     }
     const int written = rc::writeContactGeometryCsv(out, rows);
-    if (failed > 0)
-      std::printf("wrote %s (%d rows; %d of %zu rows not solved, listed above)\n", out.c_str(), written, failed,
-                  rows.size());
-    else
-      std::printf("wrote %s (%d rows)\n", out.c_str(), written);
+    std::string note;
+    if (failed > 0) note += "; " + std::to_string(failed) + " of " + std::to_string(rows.size()) + " rows not solved";
+    if (unloaded > 0) note += "; " + std::to_string(unloaded) + " with the loaded columns empty";
+    std::printf("wrote %s (%d rows%s%s)\n", out.c_str(), written, note.c_str(), note.empty() ? "" : ", listed above");
     if (!conicity_out.empty()) {
       std::vector<double> y, dr;
       for (const rc::ContactGeometryRow& r : rows)

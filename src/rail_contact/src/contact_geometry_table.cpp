@@ -135,7 +135,7 @@ bool ContactGeometryTable::solveRigid(double y, double yaw, double& z, double& r
 }
 
 bool ContactGeometryTable::solveLoaded(double y, double yaw, const LoadCase& load, double& z, double& roll,
-                                       double& omega) {
+                                       double& omega, std::string* why) {
   // Residuals (N): each wheel's vertical force minus Q and, free rolling, the net moment of the contact
   // forces about the axle divided by r0 (zero: no traction or braking torque).
   const double omega_scale = load.speed / spec_.nominal_radius;
@@ -155,30 +155,115 @@ bool ContactGeometryTable::solveLoaded(double y, double yaw, const LoadCase& loa
   const bool solve_omega = load.free_rolling && omega_scale > 0.0;
   omega = omega_scale;
   z -= 5e-5;  // start inside the rails: the Hertz force has zero slope at zero penetration
-  for (int it = 0; it < 80; ++it) {
-    Eigen::Vector3d f = residual(z, roll, omega);
+  auto value = [&](double zz, double rr, double ww) {
+    Eigen::Vector3d f = residual(zz, rr, ww);
     if (!solve_omega) f[2] = 0.0;
-    if (!f.allFinite()) return false;
+    return f;
+  };
+  const double z0 = z, roll0 = roll;
+  for (int it = 0; it < 80; ++it) {
+    const Eigen::Vector3d f = value(z, roll, omega);
+    if (!f.allFinite()) break;
     if (f.cwiseAbs().maxCoeff() < 1e-6 * load.wheel_load) return true;
     const double hz = 1e-8, hw = 1e-7 * omega_scale;
     Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
-    J.col(0) = (residual(z + hz, roll, omega) - f) / hz;
-    J.col(1) = (residual(z, roll + hz, omega) - f) / hz;
+    J.col(0) = (value(z + hz, roll, omega) - f) / hz;
+    J.col(1) = (value(z, roll + hz, omega) - f) / hz;
     if (solve_omega) {
-      J.col(2) = (residual(z, roll, omega + hw) - f) / hw;
+      J.col(2) = (value(z, roll, omega + hw) - f) / hw;
     } else {
       J.row(2).setZero();
       J.col(2).setZero();
       J(2, 2) = 1.0;
-      J(0, 2) = J(1, 2) = 0.0;
     }
     const Eigen::Vector3d dx = J.fullPivLu().solve(-f);
-    if (!dx.allFinite()) return false;
+    if (!dx.allFinite()) break;
     z += std::clamp(dx[0], -2e-5, 2e-5);
     roll += std::clamp(dx[1], -2e-5, 2e-5);
     if (solve_omega) omega += std::clamp(dx[2], -2e-3 * omega_scale, 2e-3 * omega_scale);
   }
-  return false;
+
+  // Fallback where Newton stalls (a wheel's load passing between tread and flange puts a kink in the
+  // forces): nested bracketing on functions monotonic in their own unknown. Outer: roll, for the left
+  // wheel's share of the load; middle: height, for the total load; inner: pitch rate, for no torque. The
+  // brackets (roll +-2 mrad, height -1.5..+3 mm of the rigid solution, pitch rate +-3 %) keep every
+  // penetration below the detection's 5 mm limit.
+  // jump_out: where the bracket closes on a jump of g instead of a root, the jump's size.
+  auto solve1d = [](auto&& g, double lo, double hi, double tol, double& x, double* jump_out = nullptr) {
+    double g_lo = g(lo), g_hi = g(hi);
+    if (!std::isfinite(g_lo) || !std::isfinite(g_hi) || g_lo * g_hi > 0.0) return false;
+    int side = 0;
+    for (int k = 0; k < 200; ++k) {
+      x = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);  // Illinois variant of regula falsi
+      if (!(x > std::min(lo, hi) && x < std::max(lo, hi))) x = 0.5 * (lo + hi);
+      const double gx = g(x);
+      if (!std::isfinite(gx)) return false;
+      if (std::abs(gx) < tol) return true;
+      if (std::abs(hi - lo) < 1e-12 * std::max(1.0, std::abs(x))) {
+        if (jump_out) *jump_out = std::max(*jump_out, std::abs(gx));
+        return false;
+      }
+      if (gx * g_hi > 0.0) {
+        hi = x;
+        g_hi = gx;
+        if (side == -1) g_lo *= 0.5;
+        side = -1;
+      } else {
+        lo = x;
+        g_lo = gx;
+        if (side == 1) g_hi *= 0.5;
+        side = 1;
+      }
+    }
+    return false;
+  };
+  const double tol = 1e-6 * load.wheel_load;
+  double w_sol = omega_scale, z_sol = z0, jump = 0.0;
+  auto omega_for = [&](double zz, double rr) {
+    if (!solve_omega) return omega_scale;
+    double w = omega_scale;
+    const bool ok = solve1d([&](double ww) { return residual(zz, rr, ww)[2]; }, 0.97 * omega_scale,
+                            1.03 * omega_scale, tol, w, &jump);
+    return ok ? w : std::numeric_limits<double>::quiet_NaN();
+  };
+  auto z_for = [&](double rr) {
+    double zz = z0;
+    const bool ok = solve1d(
+        [&](double zt) {
+          w_sol = omega_for(zt, rr);
+          if (!std::isfinite(w_sol)) return std::numeric_limits<double>::quiet_NaN();
+          const Eigen::Vector3d f = residual(zt, rr, w_sol);
+          return f[0] + f[1];
+        },
+        z0 - 1.5e-3, z0 + 3e-3, tol, zz, &jump);
+    return ok ? zz : std::numeric_limits<double>::quiet_NaN();
+  };
+  double roll_sol = roll0;
+  const bool ok = solve1d(
+      [&](double rr) {
+        z_sol = z_for(rr);
+        if (!std::isfinite(z_sol) || !std::isfinite(w_sol)) return std::numeric_limits<double>::quiet_NaN();
+        const Eigen::Vector3d f = residual(z_sol, rr, w_sol);
+        return f[0] - f[1];
+      },
+      roll0 - 2e-3, roll0 + 2e-3, tol, roll_sol, &jump);
+  if (!ok) {
+    if (jump > 0.0 && why) {
+      std::ostringstream m;
+      m << "the wheel loads have no balance at this shift: a contact force jumps by at least "
+        << std::lround(jump / 1e3) << " kN where its contact point jumps between two places on the profiles "
+        << "(the flange onset: two-point contact, which one point per wheel surface cannot share)";
+      *why = m.str();
+    }
+    return false;
+  }
+  z_sol = z_for(roll_sol);
+  const Eigen::Vector3d f = value(z_sol, roll_sol, w_sol);
+  if (!(f.allFinite() && f.cwiseAbs().maxCoeff() < 1e-5 * load.wheel_load)) return false;
+  z = z_sol;
+  roll = roll_sol;
+  omega = w_sol;
+  return true;
 }
 
 ContactGeometryRow ContactGeometryTable::row(double y, double yaw, const LoadCase& load) {
@@ -229,13 +314,17 @@ ContactGeometryRow ContactGeometryTable::row(double y, double yaw, const LoadCas
   r.delta_r = r.left.rolling_radius - r.right.rolling_radius;
   if (load.wheel_load > 0.0 && load.speed >= 0.0) {
     double zl = z, rl = roll, omega = 0.0;
-    if (!solveLoaded(y, yaw, load, zl, rl, omega)) {
-      r.ok = false;
-      r.failure = load.free_rolling
+    std::string why;
+    if (!solveLoaded(y, yaw, load, zl, rl, omega, &why)) {
+      for (ContactGeometryWheel* w : {&r.left, &r.right})
+        w->N = w->a = w->b = w->nu_x = w->nu_y = w->phi = w->F_long = w->F_lat = kNaN;
+      r.failure = !why.empty() ? why
+                  : load.free_rolling
                       ? "the loaded solve (height, roll and free-rolling pitch rate for the wheel load) did not converge"
                       : "the loaded solve (height and roll for the wheel load) did not converge";
       return r;
     }
+    r.loaded_ok = true;
     r.z_loaded = zl;
     r.roll_loaded = rl;
     r.pitch_rate = omega;

@@ -61,8 +61,9 @@ struct ContactGeometryWheel {
 
 /// One row of the table.
 struct ContactGeometryRow {
-  bool ok = false;          ///< both wheels in contact and the position solved (and the load case, if any)
-  std::string failure;      ///< why the row is not ok: which solve, which wheel
+  bool ok = false;          ///< both wheels in contact and the position solved
+  bool loaded_ok = false;   ///< the load case (if any) solved too; else its columns are NaN
+  std::string failure;      ///< why the row is not ok or its loaded columns are empty: which solve, which wheel
   double y = 0.0;           ///< lateral displacement of the wheelset, m
   double yaw = 0.0;         ///< rad
   double z = 0.0;           ///< height of the wheelset centre (rigid solution), m
@@ -100,7 +101,8 @@ class ContactGeometryTable {
 
  private:
   bool solveRigid(double y, double yaw, double& z, double& roll);
-  bool solveLoaded(double y, double yaw, const LoadCase& load, double& z, double& roll, double& omega);
+  bool solveLoaded(double y, double yaw, const LoadCase& load, double& z, double& roll, double& omega,
+                   std::string* why);
   void place(double y, double yaw, double z, double roll, double speed, double omega, WheelState& left,
              WheelState& right) const;
   double wheelGap(const ContactGeometry* g, int& kind) const;
