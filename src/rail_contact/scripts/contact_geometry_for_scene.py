@@ -80,6 +80,10 @@ def main(argv=None):
         value = str(where.get(key, builtin))
         if value != builtin:
             cmd += [opt, os.path.normpath(os.path.join(here, value))]
+    if not a.no_load and not float(vehicle["speed"]) > 0.0:
+        sys.stderr.write("%s: vehicle.speed is 0: the loaded columns (creepages, creep forces) need a rolling "
+                         "speed; tabulating the geometry only\n" % a.scene)
+        a.no_load = True
     if not a.no_load:
         q0 = static_wheel_load(os.path.normpath(os.path.join(here, vehicle["data"])), int(vehicle["wheelsets"]))
         cmd += ["--load", repr(q0), "--speed", repr(float(vehicle["speed"])),

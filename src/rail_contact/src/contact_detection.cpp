@@ -21,6 +21,17 @@ const char* toString(DetectionStatus status) noexcept {
   return "unknown";
 }
 
+std::string describe(const DetectionCounts& c) {
+  std::ostringstream m;
+  m << c.calls << " contact detections, " << (c.calls > 0 ? static_cast<double>(c.newton_iterations) / c.calls : 0.0)
+    << " Newton iterations each, " << c.searches << " robust searches (" << c.fallbacks
+    << " after a failed warm start), " << c.approximations << " approximate";
+  if (c.approximations > 0)
+    m << " (Newton did not converge after the search: the search grid's point pair, within half a grid cell "
+         "of the contact, was used)";
+  return m.str();
+}
+
 namespace {
 
 using Eigen::Vector2d;

@@ -512,3 +512,25 @@ TEST(ContactDetection, ContactLossAndRecontactAndFarOffWheel) {
   EXPECT_EQ(g.status, rc::DetectionStatus::kInvalidInput);
   EXPECT_FALSE(g.in_contact);
 }
+
+TEST(DetectionCounts, SumAndDescribeSayWhatApproximateMeans) {
+  rc::DetectionWork a, b;
+  a.calls = 10;
+  a.newton_iterations = 30;
+  a.searches = 2;
+  a.fallbacks = 1;
+  b.calls = 10;
+  b.newton_iterations = 10;
+  b.approximations = 1;
+  rc::DetectionCounts c;
+  c.add(a);
+  c.add(b);
+  EXPECT_EQ(c.calls, 20);
+  EXPECT_EQ(c.approximations, 1);
+  const std::string s = rc::describe(c);
+  EXPECT_NE(s.find("20 contact detections, 2 Newton iterations each, 2 robust searches (1 after a failed warm start), "
+                   "1 approximate (Newton did not converge"),
+            std::string::npos)
+      << s;
+  EXPECT_EQ(rc::describe(rc::DetectionCounts()).find("(Newton"), std::string::npos);
+}

@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "rail_contact/profile.hpp"
@@ -78,6 +79,21 @@ struct DetectionWork {
   long long approximations = 0;     ///< results returned as kApproximate
   void reset() { *this = DetectionWork(); }
 };
+
+/// Counters of several DetectionWork summed (every wheel, both surfaces) for a run's closing summary.
+struct DetectionCounts {
+  long long calls = 0, newton_iterations = 0, searches = 0, fallbacks = 0, approximations = 0;
+  void add(const DetectionWork& w) {
+    calls += w.calls;
+    newton_iterations += w.newton_iterations;
+    searches += w.searches;
+    fallbacks += w.fallbacks;
+    approximations += w.approximations;
+  }
+};
+/// One line for a run's log: "N detections, I Newton iterations each, S searches (F after a failed warm
+/// start), A approximate"; with A > 0 what approximate means. Not for a time step.
+std::string describe(const DetectionCounts& counts);
 
 /// Wheel pose for the detection (world frame).
 struct WheelPose {
