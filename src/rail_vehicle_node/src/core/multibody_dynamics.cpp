@@ -19,7 +19,10 @@ void ComputeKinematics(const VehicleModel& model, const Eigen::Ref<const Eigen::
   }
 }
 
-void ComputeAppliedForces(const VehicleModel& model, VehicleData& data) {
+namespace {
+
+// Gravity, gyroscopic terms and the external wrenches at the load points.
+void ComputeBodyForces(const VehicleModel& model, VehicleData& data) {
   const int n = model.n_bodies();
   const auto& bodies = model.bodies();
   for (int b = 0; b < n; ++b) {
@@ -36,7 +39,21 @@ void ComputeAppliedForces(const VehicleModel& model, VehicleData& data) {
     ForceElement::ApplyForceAt(data, lp.body, data.external[p].force_in_world, p_in_world, data.g);
     ForceElement::ApplyMoment(data, lp.body, data.external[p].moment_in_world, data.g);
   }
+}
+
+}  // namespace
+
+void ComputeAppliedForces(const VehicleModel& model, VehicleData& data) {
+  ComputeBodyForces(model, data);
   for (const auto& element : model.force_elements()) element->AddForces(data, data.g);
+}
+
+void ComputeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g) {
+  const auto& elements = model.force_elements();
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    element_g.col(static_cast<Eigen::Index>(e)).setZero();
+    elements[e]->AddForces(data, element_g.col(static_cast<Eigen::Index>(e)));
+  }
 }
 
 void ComputeConstraints(const VehicleModel& model, VehicleData& data) {
@@ -84,26 +101,44 @@ void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
     mu = data.kkt_sol.tail(m);
     return;
   }
-  // Range space: (Phi_v M^-1 Phi_v^T) mu = Phi_v M^-1 top - bottom; x = M^-1 (top - Phi_v^T mu).
+  // Range space, one joint cluster at a time (S is block diagonal over them): for cluster K,
+  // (Phi_K M_K^-1 Phi_K^T) mu_K = Phi_K M_K^-1 top_K - bottom_K; x = M^-1 (top - Phi_v^T mu).
   const auto& bodies = model.bodies();
-  for (int b = 0; b < model.n_bodies(); ++b) {
-    data.w.middleCols<3>(6 * b) = data.phi_v.middleCols<3>(6 * b) / bodies[static_cast<std::size_t>(b)].mass;
-    data.w.middleCols<3>(6 * b + 3).noalias() = data.phi_v.middleCols<3>(6 * b + 3) * model.inverse_inertia(b);
-  }
-  data.s.noalias() = data.w * data.phi_v.transpose();
-  data.s_ldlt.compute(data.s);
-  data.s_rhs.noalias() = data.w * top;
-  data.s_rhs -= bottom;
-  mu = data.s_ldlt.solve(data.s_rhs);
+  const auto& clusters = model.constraint_clusters();
   data.tmp6n = top;
-  data.tmp6n.noalias() -= data.phi_v.transpose() * mu;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const ConstraintCluster& cluster = clusters[c];
+    ClusterWork& cw = data.clusters[c];
+    const int n_rows = static_cast<int>(cluster.rows.size());
+    for (std::size_t k = 0; k < cluster.bodies.size(); ++k) {
+      const int b = cluster.bodies[k];
+      const int col = 6 * static_cast<int>(k);
+      for (int i = 0; i < n_rows; ++i) {
+        cw.phi_v.block<1, 6>(i, col) = data.phi_v.block<1, 6>(cluster.rows[static_cast<std::size_t>(i)], 6 * b);
+      }
+      cw.w.middleCols<3>(col) = cw.phi_v.middleCols<3>(col) / bodies[static_cast<std::size_t>(b)].mass;
+      cw.w.middleCols<3>(col + 3).noalias() = cw.phi_v.middleCols<3>(col + 3) * model.inverse_inertia(b);
+      cw.top.segment<6>(col) = top.segment<6>(6 * b);
+    }
+    cw.s.noalias() = cw.w * cw.phi_v.transpose();
+    cw.ldlt.compute(cw.s);
+    cw.rhs.noalias() = cw.w * cw.top;
+    for (int i = 0; i < n_rows; ++i) cw.rhs[i] -= bottom[cluster.rows[static_cast<std::size_t>(i)]];
+    cw.mu = cw.ldlt.solve(cw.rhs);
+    for (int i = 0; i < n_rows; ++i) mu[cluster.rows[static_cast<std::size_t>(i)]] = cw.mu[i];
+    cw.top.noalias() -= cw.phi_v.transpose() * cw.mu;
+    for (std::size_t k = 0; k < cluster.bodies.size(); ++k) {
+      data.tmp6n.segment<6>(6 * cluster.bodies[k]) = cw.top.segment<6>(6 * static_cast<int>(k));
+    }
+  }
   ApplyInverseMass(model, data.tmp6n, x);
 }
 
-void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                        Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
-  data.time = t;
-  ComputeKinematics(model, y, data);
+namespace {
+
+// q_dot from v (p_dot = 1/2 p (x) (0, omega')), after the kinematics.
+void PositionDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+                         Eigen::Ref<Eigen::VectorXd> y_dot, const VehicleData& data) {
   const int n = model.n_bodies();
   for (int b = 0; b < n; ++b) {
     const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
@@ -115,7 +150,11 @@ void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<co
     p_dot.tail<3>() = 0.5 * (p[0] * k.omega_body + p.tail<3>().cross(k.omega_body));
     y_dot.segment<4>(VehicleModel::EulerOffset(b)) = p_dot;
   }
-  ComputeAppliedForces(model, data);
+}
+
+// v_dot and lambda from the Baumgarte-stabilised augmented system, after data.g.
+void VelocityDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+                         Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
   const int m = model.n_constraints();
   if (m > 0) {
     ComputeConstraints(model, data);
@@ -126,6 +165,35 @@ void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<co
   }
   SolveAugmented(model, data, data.g, data.rhs_c, data.v_dot, data.lambda);
   y_dot.tail(model.n_velocities()) = data.v_dot;
+}
+
+}  // namespace
+
+void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
+  data.time = t;
+  ComputeKinematics(model, y, data);
+  PositionDerivatives(model, y, y_dot, data);
+  ComputeAppliedForces(model, data);
+  VelocityDerivatives(model, y, y_dot, data);
+}
+
+void ComputeDerivativesPartial(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                               Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data, const std::vector<char>& live,
+                               const Eigen::Ref<const Eigen::MatrixXd>& element_g) {
+  data.time = t;
+  ComputeKinematics(model, y, data);
+  PositionDerivatives(model, y, y_dot, data);
+  ComputeBodyForces(model, data);
+  const auto& elements = model.force_elements();
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    if (live[e] != 0) {
+      elements[e]->AddForces(data, data.g);
+    } else {
+      data.g += element_g.col(static_cast<Eigen::Index>(e));
+    }
+  }
+  VelocityDerivatives(model, y, y_dot, data);
 }
 
 ConstraintViolation EvaluateViolation(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,

@@ -413,10 +413,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     sim = sim_alone.get();
   }
   ROS_INFO("%s: vehicle settled on the rails (lowered %.4f mm, wheel loads %.1f N of %.1f N); integrating with "
-           "%s, rtol %g, atol %g, max step %g s%s", node.c_str(), -sim->settle_lift() * 1e3,
+           "%s, rtol %g, atol %g, max step %g s (0: none)%s", node.c_str(), -sim->settle_lift() * 1e3,
            sim->settled_wheel_load_sum(), sim->static_load(),
            sim->method() == rv::IntegrationMethod::kBdf ? "BDF" : "Adams", scene.solver.vehicle_rtol,
-           scene.solver.vehicle_atol, scene.solver.vehicle_max_step,
+           scene.solver.vehicle_atol, sim->max_step(),
            cosim ? (std::string("; co-simulation with the track over ") + to_string(scene.solver.transport) +
                     ", track step " + std::to_string(scene.solver.track_step) + " s").c_str() : "");
 
