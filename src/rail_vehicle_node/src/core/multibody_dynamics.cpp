@@ -69,6 +69,21 @@ void ComputeConstraints(const VehicleModel& model, VehicleData& data) {
 
 namespace {
 
+// phi_dot = Phi_v v from the joints' own blocks (a joint's rows are zero outside its two bodies' columns).
+void ConstraintVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& v, VehicleData& data) {
+  const auto& joints = model.joints();
+  const auto& rows = model.joint_rows();
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    const int bi = joints[j]->body_i(), bj = joints[j]->body_j();
+    for (int r = rows[j]; r < rows[j] + joints[j]->size(); ++r) {
+      double sum = 0.0;
+      if (bi != kGround) sum += data.phi_v.block<1, 6>(r, 6 * bi).dot(v.segment<6>(6 * bi).transpose());
+      if (bj != kGround) sum += data.phi_v.block<1, 6>(r, 6 * bj).dot(v.segment<6>(6 * bj).transpose());
+      data.phi_dot[r] = sum;
+    }
+  }
+}
+
 // x = M^-1 rhs with M = diag(m I, J') per body.
 void ApplyInverseMass(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& rhs,
                       Eigen::Ref<Eigen::VectorXd> x) {
@@ -120,13 +135,14 @@ void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
       cw.w.middleCols<3>(col + 3).noalias() = cw.phi_v.middleCols<3>(col + 3) * model.inverse_inertia(b);
       cw.top.segment<6>(col) = top.segment<6>(6 * b);
     }
-    cw.s.noalias() = cw.w * cw.phi_v.transpose();
+    // Blocks of ~10 x 18: coefficient-wise (lazy) products, not the general matrix-product kernel.
+    cw.s.noalias() = cw.w.lazyProduct(cw.phi_v.transpose());
     cw.ldlt.compute(cw.s);
-    cw.rhs.noalias() = cw.w * cw.top;
+    cw.rhs.noalias() = cw.w.lazyProduct(cw.top);
     for (int i = 0; i < n_rows; ++i) cw.rhs[i] -= bottom[cluster.rows[static_cast<std::size_t>(i)]];
     cw.mu = cw.ldlt.solve(cw.rhs);
     for (int i = 0; i < n_rows; ++i) mu[cluster.rows[static_cast<std::size_t>(i)]] = cw.mu[i];
-    cw.top.noalias() -= cw.phi_v.transpose() * cw.mu;
+    cw.top.noalias() -= cw.phi_v.transpose().lazyProduct(cw.mu);
     for (std::size_t k = 0; k < cluster.bodies.size(); ++k) {
       data.tmp6n.segment<6>(6 * cluster.bodies[k]) = cw.top.segment<6>(6 * static_cast<int>(k));
     }
@@ -158,7 +174,7 @@ void VelocityDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen
   const int m = model.n_constraints();
   if (m > 0) {
     ComputeConstraints(model, data);
-    data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+    ConstraintVelocity(model, y.tail(model.n_velocities()), data);
     const double alpha = model.baumgarte_alpha();
     const double beta = model.baumgarte_beta();
     data.rhs_c = data.gamma - 2.0 * alpha * data.phi_dot - (beta * beta) * data.phi;
@@ -205,7 +221,7 @@ ConstraintViolation EvaluateViolation(const VehicleModel& model, const Eigen::Re
   if (model.n_constraints() == 0) return v;
   ComputeKinematics(model, y, data);
   ComputeConstraints(model, data);
-  data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+  ConstraintVelocity(model, y.tail(model.n_velocities()), data);
   v.position = data.phi.lpNorm<Eigen::Infinity>();
   v.velocity = data.phi_dot.lpNorm<Eigen::Infinity>();
   return v;
@@ -239,7 +255,7 @@ int ProjectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, Vehic
     ++iterations;
   }
   // Velocities: v <- v + dv with [M Phi_v^T; Phi_v 0][dv; mu] = [0; -Phi_v v] (kinetic-energy metric).
-  data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+  ConstraintVelocity(model, y.tail(model.n_velocities()), data);
   data.rhs_c = -data.phi_dot;
   SolveAugmented(model, data, data.zero6n, data.rhs_c, data.dx, data.lambda);
   y.tail(model.n_velocities()) += data.dx;
