@@ -39,6 +39,11 @@ struct IntegratorSettings {
   IntegrationMethod method = IntegrationMethod::kBdf;
   JacobianKind jacobian = JacobianKind::kColoured;             // BDF only
   LinearSolverKind linear_solver = LinearSolverKind::kSparseKlu;  // BDF with kColoured only
+  // BDF only: when CVODE gives up within an AdvanceTo (repeated error-test or convergence failures, as at
+  // some flange onsets with tolerances below 1e-6), Adams integrates the rest of that interval from the
+  // last successful step and BDF restarts after it (counted in IntegratorCounters::adams_fallbacks).
+  bool adams_fallback = true;
+  double fallback_max_step = 0.0;       // the fallback's step cap [s]; 0 = max_step
   int max_order = 5;                    // BDF <= 5, Adams <= 12
   long max_steps_per_call = 100000;     // internal steps allowed within one AdvanceTo
   double projection_position_threshold = 1e-6;  // max |Phi| that triggers a projection [m]
@@ -62,6 +67,7 @@ struct IntegratorCounters {
   long nonlinear_iterations = 0;
   long nonlinear_convergence_failures = 0;
   long projections = 0;         // constraint projections (each followed by a re-initialisation)
+  long adams_fallbacks = 0;     // intervals that BDF gave up and Adams finished (adams_fallback)
   int last_order = 0;
   double last_step = 0.0;       // [s]
 };

@@ -62,14 +62,16 @@ int main(int argc, char** argv) {
     const vehicle::IntegratorCounters c = sim.Counters();
     std::printf("%s: %s, max_step %g, jacobian %s, linear solver %s, flange %d, spin %d: %.3f s simulated in %.2f s "
                 "wall (%.3f s per simulated s, real-time factor %.2f; build %.2f s); steps %ld, RHS %ld + %ld for %ld "
-                "Jacobians, error-test failures %ld, nonlinear failures %ld, projections %ld, contact evaluations %lld; "
+                "Jacobians, error-test failures %ld, nonlinear failures %ld, projections %ld, Adams fallbacks %ld, contact "
+                "evaluations %lld; "
                 "cost clock %s; status %s %s\n",
                 scene.name.c_str(), sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.max_step(),
                 settings.jacobian == vehicle::JacobianKind::kColoured ? "coloured" : "dense-dq",
                 settings.linear_solver == vehicle::LinearSolverKind::kSparseKlu ? "klu" : "dense",
                 scene.effects.flange_contact, scene.effects.spin_creepage, sim.time(), wall, wall / sim.time(),
                 sim.time() / wall, build, c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
-                c.error_test_failures, c.nonlinear_convergence_failures, c.projections, sim.contact_data().evaluations,
+                c.error_test_failures, c.nonlinear_convergence_failures, c.projections, c.adams_fallbacks,
+                sim.contact_data().evaluations,
                 with_cost ? "on" : "off", status == vehicle::RunStatus::kFinished ? "finished" : "stopped",
                 sim.message().c_str());
     std::fflush(stdout);

@@ -46,6 +46,8 @@ struct VehicleIntegrator::Impl {
   std::unique_ptr<JacobianPattern> pattern;  // coloured Jacobian (BDF)
   std::unique_ptr<JacobianWork> jacobian_work;
   long coloured_jacobian_rhs = 0;      // evaluations of the coloured Jacobians since construction
+  void* adams = nullptr;               // BDF's fallback (IntegratorSettings::adams_fallback), made at first use
+  SUNNonlinearSolver adams_solver = nullptr;
   IntegratorCounters base;             // counters accumulated before the last re-initialisation
   std::array<char, 512> last_error{};  // CVODE's last message (fixed buffer: no allocation)
 
@@ -53,6 +55,8 @@ struct VehicleIntegrator::Impl {
 
   ~Impl() {
     if (cvode != nullptr) CVodeFree(&cvode);
+    if (adams != nullptr) CVodeFree(&adams);
+    if (adams_solver != nullptr) SUNNonlinSolFree(adams_solver);
     if (nonlinear_solver != nullptr) SUNNonlinSolFree(nonlinear_solver);
     if (linear_solver != nullptr) SUNLinSolFree(linear_solver);
     if (jacobian != nullptr) SUNMatDestroy(jacobian);
@@ -197,6 +201,40 @@ struct VehicleIntegrator::Impl {
     return true;
   }
 
+  // Integrates from (t, y) to t_out with Adams (fixed point; same tolerances, fallback_max_step) into y, adds its work
+  // to the counters and re-initialises BDF at t_out. Allocates the Adams instance at its first use.
+  void FallBackToAdams(double t_out) {
+    if (adams == nullptr) {
+      adams = CVodeCreate(CV_ADAMS, context);
+      adams_solver = adams != nullptr ? SUNNonlinSol_FixedPoint(y, 0, context) : nullptr;
+      if (adams_solver == nullptr) throw std::runtime_error("vehicle integrator: Adams fallback creation failed");
+      Check(CVodeSetErrHandlerFn(adams, &Impl::ErrorHandler, this), "CVodeSetErrHandlerFn");
+      Check(CVodeInit(adams, &Impl::Rhs, t, y), "CVodeInit");
+      Check(CVodeSetUserData(adams, this), "CVodeSetUserData");
+      Check(CVodeSStolerances(adams, settings.rtol, settings.atol), "CVodeSStolerances");
+      Check(CVodeSetMaxOrd(adams, 12), "CVodeSetMaxOrd");
+      Check(CVodeSetMaxNumSteps(adams, settings.max_steps_per_call), "CVodeSetMaxNumSteps");
+      const double cap = settings.fallback_max_step > 0.0 ? settings.fallback_max_step : settings.max_step;
+      if (cap > 0.0) Check(CVodeSetMaxStep(adams, cap), "CVodeSetMaxStep");
+      Check(CVodeSetNonlinearSolver(adams, adams_solver), "CVodeSetNonlinearSolver");
+    } else {
+      Check(CVodeReInit(adams, t, y), "CVodeReInit");
+    }
+    last_error[0] = '\0';
+    realtype t_reached = t;
+    const int flag = CVode(adams, t_out, y, &t_reached, CV_NORMAL);
+    long v = 0;
+    if (CVodeGetNumSteps(adams, &v) == CV_SUCCESS) base.steps += v;
+    if (CVodeGetNumRhsEvals(adams, &v) == CV_SUCCESS) base.rhs_evals += v;
+    if (CVodeGetNumErrTestFails(adams, &v) == CV_SUCCESS) base.error_test_failures += v;
+    if (CVodeGetNumNonlinSolvIters(adams, &v) == CV_SUCCESS) base.nonlinear_iterations += v;
+    if (CVodeGetNumNonlinSolvConvFails(adams, &v) == CV_SUCCESS) base.nonlinear_convergence_failures += v;
+    ++base.adams_fallbacks;
+    t = t_reached;
+    if (flag < 0) Fail("CVode (Adams fallback)", flag);
+    ReInit();
+  }
+
   void ReInit() {
     AccumulateCounters();
     Check(CVodeReInit(cvode, t, y), "CVodeReInit");
@@ -292,10 +330,17 @@ void VehicleIntegrator::AdvanceTo(double t) {
   s.last_error[0] = '\0';
   realtype t_reached = s.t;
   const int flag = CVode(s.cvode, t, s.y, &t_reached, CV_NORMAL);
-  if (flag < 0) s.Fail("CVode", flag);
-  s.ls_counters_stale = false;
-  s.t = t_reached;
-  s.stepped_since_init = true;
+  const bool bdf_failed = flag == CV_ERR_FAILURE || flag == CV_CONV_FAILURE;
+  if (bdf_failed && s.settings.method == IntegrationMethod::kBdf && s.settings.adams_fallback) {
+    // y holds the last successful step at t_reached: Adams takes the rest of the interval, BDF restarts at t.
+    s.t = t_reached;
+    s.FallBackToAdams(t);
+  } else {
+    if (flag < 0) s.Fail("CVode", flag);
+    s.ls_counters_stale = false;
+    s.t = t_reached;
+    s.stepped_since_init = true;
+  }
   if (s.ProjectIfNeeded()) s.ReInit();
 }
 
@@ -364,6 +409,7 @@ IntegratorCounters VehicleIntegrator::Counters() const {
   c.nonlinear_iterations += now.nonlinear_iterations;
   c.nonlinear_convergence_failures += now.nonlinear_convergence_failures;
   c.rhs_evals_jacobian += s.coloured_jacobian_rhs;
+  c.adams_fallbacks = s.base.adams_fallbacks;
   c.last_order = now.last_order;
   c.last_step = now.last_step;
   return c;

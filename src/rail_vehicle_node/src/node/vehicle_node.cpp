@@ -614,10 +614,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     ROS_INFO_STREAM(cost.to_text(node, wall, sim->time(), &clock));
     WriteCost(bag_path, ".cost.yaml", cost.to_yaml(node, scene, wall, sim->time(), &clock), node);
     ROS_INFO("%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
-             "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections", node.c_str(),
+             "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections, %ld Adams fallbacks", node.c_str(),
              rc == kExitOk ? "finished" : "stopped", sim->time(), sim->leading_arc_length(), wall,
              wall / std::max(sim->time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
-             c.projections);
+             c.projections, c.adams_fallbacks);
   } catch (const std::exception& e) {
     ROS_FATAL("%s: internal error at t = %.4f s: %s", node.c_str(), sim->time(), e.what());
     rc = kExitInternal;
