@@ -1,12 +1,16 @@
 #!/usr/bin/env python3
 """Benchmark of the accuracy-cost issue's targets on this machine (prints its figures; not a test): the
 paper's scene over the same simulated time run alone on the rigid track, co-simulated on the rigid FE track
-and on the flexible track (the latter at the track steps the accuracy-cost map shows), and the flexible run
-on the 5 km version of the scene. Each case runs --repeat times, one at a time (run nothing else meanwhile);
-the figure is the median of the slower node's loop wall time (set-up excluded, from the cost profiles),
-per simulated second, and its ratio to the run alone.
+and on the flexible track (the latter at the track steps the accuracy-cost map shows), the flexible run
+on the 5 km version of the scene, and the vehicle alone over the whole scene (15.5 s; target: real-time
+factor >= 1). Each case runs --repeat times, one at a time (run nothing else meanwhile); the figure is the
+median of the slower node's loop wall time (set-up excluded, from the cost profiles), per simulated second,
+and its ratio to the run alone. Then the vehicle alone's accuracy against a reference run of the whole
+scene (Adams capped at 5e-6 s, cached in --out as accuracy_reference.csv; its first run takes ~6 min):
+bench_vehicle_accuracy's table for the default run and for Adams at the former 2e-5 s cap.
 
   scripts/bench_targets.py [--repeat 3] [--end 1.5] [--out DIR] [--workspace WS] [--only TEXT ...]
+                           [--no-accuracy]
 
 --only keeps the cases whose name contains TEXT (the standalone run, the reference of the ratios, always
 runs).
@@ -14,6 +18,7 @@ runs).
 import argparse
 import os
 import statistics
+import subprocess
 import sys
 
 REPO = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
@@ -30,6 +35,9 @@ CASES = [  # name, scene, overrides
     ("flexible, track step 4e-5 s", PAPER, {"solver.track_step": 4e-5, "solver.vehicle_max_step": 4e-5}),
     ("flexible, track step 8e-5 s", PAPER, {"solver.track_step": 8e-5, "solver.vehicle_max_step": 8e-5}),
     ("flexible, 5 km line, 2e-5 s", PAPER_5KM, {}),
+    # The scene's own end (the leading wheelset at 499 m, 15.5 s): no solver.end override.
+    ("standalone, whole scene", PAPER, {"effects.track_model": "rigid", "effects.rail_deflection_output": False,
+                                        "solver.end": None}),
 ]
 
 
@@ -40,14 +48,18 @@ def main(argv=None):
     ap.add_argument("--out", default=os.path.join(REPO, "output", "bench_targets"))
     ap.add_argument("--workspace", default=REPO)
     ap.add_argument("--only", action="append", default=[], metavar="TEXT")
+    ap.add_argument("--no-accuracy", action="store_true", help="skip the accuracy comparison")
     a = ap.parse_args(argv)
     rows = []
     for name, scene, ov in CASES:
         if a.only and name != "standalone" and not any(t in name for t in a.only):
             continue
-        overrides = dict(ov)
-        overrides.update({"solver.end": {"time": a.end}, "output.topics": TOPICS, "output.bag": "run.bag"})
-        loops, walls = [], []
+        overrides = {"solver.end": {"time": a.end}}
+        overrides.update(ov)
+        if overrides["solver.end"] is None:
+            del overrides["solver.end"]
+        overrides.update({"output.topics": TOPICS, "output.bag": "run.bag"})
+        loops, walls, simulated = [], [], []
         for i in range(a.repeat):
             case_dir = os.path.join(a.out, name.replace(" ", "_").replace(",", ""), str(i))
             spec = {"case_dir": case_dir, "name": name, "case_id": name, "settings_hash": "", "scene": scene,
@@ -59,21 +71,34 @@ def main(argv=None):
                 return 1
             cost = costmap.read_cost(case_dir)
             loops.append(max(p["loop_wall_time"] for p in cost.values()))
+            simulated.append(min(p["simulated_time"] for p in cost.values()))
             walls.append(rec["wall_time"])
             print("%-30s run %d: loop %.2f s, launch to exit %.2f s" % (name, i, loops[-1], walls[-1]), flush=True)
-        rows.append((name, statistics.median(loops), statistics.median(walls)))
-    base = rows[0][1]
-    print("\n| run (%.2f s simulated, median of %d) | loop wall [s] | per simulated s | x standalone | launch to exit [s] |"
-          % (a.end, a.repeat))
-    print("|---|---|---|---|---|")
-    for name, loop, wall in rows:
-        print("| %s | %.2f | %.2f | %.2f | %.1f |" % (name, loop, loop / a.end, loop / base, wall))
+        rows.append((name, statistics.median(loops), statistics.median(walls), statistics.median(simulated)))
+    base = rows[0][1] / rows[0][3]
+    print("\n| run (%.2f s simulated unless said, median of %d) | simulated [s] | loop wall [s] | per simulated s | "
+          "real-time factor | x standalone | launch to exit [s] |" % (a.end, a.repeat))
+    print("|---|---|---|---|---|---|---|")
+    for name, loop, wall, sim in rows:
+        print("| %s | %.2f | %.2f | %.3f | %.2f | %.2f | %.1f |" % (name, sim, loop, loop / sim, sim / loop,
+                                                              loop / sim / base, wall))
     flex = [r for r in rows if r[0] == "flexible, track step 2e-5 s"]
     five = [r for r in rows if r[0].startswith("flexible, 5 km")]
     if flex and five:
         print("\n5 km against 500 m (flexible, 2e-5 s): loop %+.1f %%, launch to exit %+.1f %%" % (
             100 * (five[0][1] / flex[0][1] - 1), 100 * (five[0][2] / flex[0][2] - 1)))
+    if not a.no_accuracy:
+        accuracy(a)
     return 0
+
+
+def accuracy(a):
+    """The vehicle alone against the reference run (bench_vehicle_accuracy; its table printed as is)."""
+    exe = os.path.join(a.workspace, "devel", "lib", "rail_vehicle_node", "bench_vehicle_accuracy")
+    os.makedirs(a.out, exist_ok=True)
+    reference = os.path.join(a.out, "accuracy_reference.csv")
+    print("\nAccuracy of the vehicle alone, whole scene, against Adams capped at 5e-6 s (%s):" % reference, flush=True)
+    subprocess.run([exe, PAPER, reference, "auto", "0", "0", "0", "adams", "2e-5", "0", "0"], check=False)
 
 
 if __name__ == "__main__":

@@ -236,6 +236,10 @@ TEST(VehicleLoader, RejectsAbsurdMagnitudes) {
   - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445], inertia: [900, 1e300, 900]}
 )");
   EXPECT_EQ(LoadError(inertia), inertia + ": bodies[0].inertia[1]: magnitude must be <= 1e+08 kg m^2, got 1e300 (line 2)");
+  const std::string tiny = WriteTemp("tiny_inertia.yaml", R"(bodies:
+  - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 1e-300]}
+)");
+  EXPECT_EQ(LoadError(tiny), tiny + ": bodies[0].inertia[2]: moment of inertia must be >= 1e-06 kg m^2, got 1e-300 (line 2)");
   const std::string preload = WriteTemp("preload.yaml", std::string(kTwoBodies) + R"(forces:
   - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], preload: [-1e300, 0, 0]}
 )");

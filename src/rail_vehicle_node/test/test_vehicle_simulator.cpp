@@ -266,7 +266,9 @@ struct CurveRun {
   double flange_force = 0.0;
   IntegratorCounters counters;
 };
-CurveRun RunTightCurve(double t_end, double split_overlap, double rtol, double atol) {
+// Both tests below compare two runs of the same step sequence: Adams at the paper's 2e-5 s cap (the vehicle
+// alone is otherwise uncapped and BDF's step choice would differ between the runs by more than the effect).
+CurveRun RunTightCurve(double t_end, double split_overlap, double rtol, double atol, double max_step = 2e-5) {
   core::Scene scene = core::load_scene_file(kScenes + "tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;
   scene.solver.end.kind = core::EndKind::kTime;
@@ -275,6 +277,7 @@ CurveRun RunTightCurve(double t_end, double split_overlap, double rtol, double a
   scene.solver.vehicle_atol = atol;
   SimulatorSettings settings;
   settings.contact.detection.split_overlap = split_overlap;
+  settings.standalone_max_step = max_step;
   VehicleSimulator sim(scene, settings);
   RunStatus status = RunStatus::kRunning;
   for (int i = 1; status == RunStatus::kRunning; ++i) status = sim.AdvanceTo(std::min(t_end, 0.01 * i));
@@ -322,6 +325,24 @@ TEST(VehicleSimulator, TightCurveWithFlangeContactConvergesWithTheTolerance) {
   EXPECT_GT(run.flange_force, 0.0);
   EXPECT_NEAR(run.flange_force, fine.flange_force, 0.02 * fine.flange_force);
   EXPECT_LT(static_cast<double>(run.counters.rhs_evals), 1.3 * static_cast<double>(run.counters.steps));
+}
+
+TEST(VehicleSimulator, UncappedBdfAtTightTolerancesFinishesTheFlangeOnsetsWithTheAdamsFallback) {
+  // The vehicle alone uncapped (BDF) at rtol 1e-8 / atol 1e-10 in the tight curve: at the flange onsets
+  // (from ~45 ms) CVODE's BDF gives up (error test failing down to h ~ 1e-11 s); Adams at the scene's 2e-5 s
+  // cap finishes those output intervals. The run must end and agree with the Adams run at the cap and the
+  // same tolerances within the 20 um the test above allows between tolerances 100 times apart.
+  const CurveRun bdf = RunTightCurve(0.2, 5e-3, 1e-8, 1e-10, 0.0);
+  const CurveRun adams = RunTightCurve(0.2, 5e-3, 1e-8, 1e-10, 2e-5);
+  ASSERT_EQ(bdf.lateral.size(), 4u);
+  std::printf("tight curve 0.2 s, rtol 1e-8: BDF uncapped %ld steps, %ld Adams fallbacks\n", bdf.counters.steps,
+              bdf.counters.adams_fallbacks);
+  EXPECT_GT(bdf.counters.adams_fallbacks, 0);
+  for (std::size_t w = 0; w < 4; ++w) {
+    std::printf("  wheelset %zu lateral %.4f mm (Adams at the cap %.4f mm)\n", w + 1, bdf.lateral[w] * 1e3,
+                adams.lateral[w] * 1e3);
+    EXPECT_NEAR(bdf.lateral[w], adams.lateral[w], 20e-6) << "wheelset " << w + 1;
+  }
 }
 
 // Velocity in the world of a body point s' (body frame) from the state: r_dot + A (omega' x s').
@@ -505,10 +526,11 @@ struct CostRun {
   long long irregularity_stations_run = 0;    // ... during the run
 };
 
-CostRun RunWithClock(const core::Scene& scene, double t_end = 0.02) {
+CostRun RunWithClock(const core::Scene& scene, double t_end = 0.02, double standalone_max_step = 0.0) {
   CostRun r;
   SimulatorSettings settings;
   settings.cost = &r.clock;
+  settings.standalone_max_step = standalone_max_step;
   const long long s0 = rc::Irregularities::stationsEvaluated();
   VehicleSimulator sim(scene, settings);
   const long long s1 = rc::Irregularities::stationsEvaluated();
@@ -519,7 +541,7 @@ CostRun RunWithClock(const core::Scene& scene, double t_end = 0.02) {
 }
 
 TEST(VehicleSimulatorCost, TheBuildIsNotTimedAndTheRunIs) {
-  const CostRun r = RunWithClock(StraightScene(30.5556, 0.02));
+  const CostRun r = RunWithClock(StraightScene(30.5556, 0.02), 0.02, 2e-5);
   // Adams (max step 2e-5 s): right-hand sides, no Jacobian.
   EXPECT_GT(r.clock.calls[core::CostClock::kVehicleRhs], 0);
   EXPECT_GT(r.clock.seconds[core::CostClock::kVehicleRhs], 0.0);
@@ -537,10 +559,13 @@ TEST(VehicleSimulatorCost, TheBuildIsNotTimedAndTheRunIs) {
   EXPECT_EQ(r.clock.calls[core::CostClock::kTrackSolve], 0);
 }
 
+// The vehicle alone runs BDF here (no step cap): the runs include the coloured Jacobian's evaluations, so an
+// effect that is off is checked to be out of the Jacobian as well.
 TEST(VehicleSimulatorCost, FlangeContactOffSearchesNoFlange) {
   core::Scene scene = StraightScene(30.5556, 0.02);
   scene.effects.flange_contact = false;
   const CostRun off = RunWithClock(scene);
+  EXPECT_GT(off.clock.calls[core::CostClock::kVehicleJacobian], 0);
   EXPECT_EQ(off.clock.contact.flange_searches, 0);
   EXPECT_EQ(off.clock.contact.flange_detection_seconds, 0.0);
   EXPECT_GT(off.clock.contact.evaluations, 0);  // the tread was searched
@@ -555,6 +580,7 @@ TEST(VehicleSimulatorCost, SpinCreepageOffEvaluatesNoSpinTerm) {
   core::Scene scene = StraightScene(30.5556, 0.02);
   scene.effects.spin_creepage = false;
   const CostRun off = RunWithClock(scene);
+  EXPECT_GT(off.clock.calls[core::CostClock::kVehicleJacobian], 0);
   EXPECT_GT(off.clock.contact.creep_evaluations, 0);
   EXPECT_EQ(off.clock.contact.spin_evaluations, 0);
   scene.effects.spin_creepage = true;
@@ -614,7 +640,7 @@ TEST(VehicleSimulatorCost, BdfJacobianRightHandSidesAreTimedAsJacobianWithoutCha
   EXPECT_EQ(a.AdvanceTo(t_end), RunStatus::kFinished) << a.message();
   EXPECT_EQ(b.AdvanceTo(t_end), RunStatus::kFinished) << b.message();
   const IntegratorCounters ca = a.Counters(), cb = b.Counters();
-  // The wrapper calls CVODE's own difference quotients: the same run to the last bit and the same counts.
+  // The clock only reads time around the same evaluations: the same run to the last bit and the same counts.
   EXPECT_EQ(ca.steps, cb.steps);
   EXPECT_EQ(ca.rhs_evals_jacobian, cb.rhs_evals_jacobian);
   EXPECT_EQ(ca.jacobian_evals, cb.jacobian_evals);

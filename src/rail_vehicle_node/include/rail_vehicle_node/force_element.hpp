@@ -31,6 +31,16 @@ class ForceElement {
   // Stored elastic energy [J] (0 for purely dissipative elements).
   virtual double PotentialEnergy(const VehicleData& data) const = 0;
 
+  // Groups of bodies (ground left out) such that the forces on a group's bodies depend on the states of
+  // that group only; appended to `groups` (building time, for the Jacobian's sparsity). Default: one group
+  // {body_i, body_j}.
+  virtual void CouplingGroups(std::vector<std::vector<int>>& groups) const;
+  // Work state kept between evaluations (warm starts, memories), saved before and restored after the
+  // perturbed evaluations of a difference-quotient Jacobian so that it leaves the run unchanged. No
+  // allocation. Default: none.
+  virtual void SaveWorkState() const {}
+  virtual void RestoreWorkState() const {}
+
   // Adds force f (world) acting at the world point p to body b (nothing for the ground).
   static void ApplyForceAt(const VehicleData& data, int body, const Vector3& f_in_world, const Vector3& p_in_world,
                            Eigen::Ref<Eigen::VectorXd> g);

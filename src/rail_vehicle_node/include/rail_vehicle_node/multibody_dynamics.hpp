@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <vector>
 
 #include "rail_vehicle_node/vehicle_data.hpp"
 #include "rail_vehicle_node/vehicle_model.hpp"
@@ -31,6 +32,16 @@ void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
 // Baumgarte-stabilised augmented system. Leaves data.v_dot, data.lambda, data.phi, ... filled in.
 void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                         Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data);
+
+// Each force element's contribution to g at the current kinematics, one column of element_g (6n x
+// elements) per element (for the Jacobian's partial evaluations, vehicle_jacobian.hpp).
+void ComputeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g);
+
+// ComputeDerivatives with the force elements whose live[e] is 0 taken from element_g's column e instead of
+// evaluated (the others are evaluated at y as usual).
+void ComputeDerivativesPartial(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                               Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data, const std::vector<char>& live,
+                               const Eigen::Ref<const Eigen::MatrixXd>& element_g);
 
 // Constraint violation of a state (infinity norms).
 struct ConstraintViolation {

@@ -30,6 +30,22 @@ struct ExternalWrench {
   Vector3 moment_in_world = Vector3::Zero();  // [N m], about the load point
 };
 
+// Range-space scratch of one constraint cluster (VehicleModel::constraint_clusters): its rows of Phi_v
+// restricted to its bodies' columns, W = Phi_K M_K^-1, S_K = W Phi_K^T and its factorisation.
+struct ClusterWork {
+  explicit ClusterWork(int rows, int n_bodies)
+      : phi_v(Eigen::MatrixXd::Zero(rows, 6 * n_bodies)),
+        w(Eigen::MatrixXd::Zero(rows, 6 * n_bodies)),
+        s(Eigen::MatrixXd::Zero(rows, rows)),
+        rhs(Eigen::VectorXd::Zero(rows)),
+        mu(Eigen::VectorXd::Zero(rows)),
+        top(Eigen::VectorXd::Zero(6 * n_bodies)),
+        ldlt(rows) {}
+  Eigen::MatrixXd phi_v, w, s;
+  Eigen::VectorXd rhs, mu, top;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;
+};
+
 class VehicleData {
  public:
   explicit VehicleData(const VehicleModel& model);
@@ -62,6 +78,7 @@ class VehicleData {
   Eigen::VectorXd s_rhs;      // (m)
   Eigen::VectorXd tmp6n;      // (6n)
   Eigen::LDLT<Eigen::MatrixXd> s_ldlt;
+  std::vector<ClusterWork> clusters;  // per constraint cluster (the range-space solve works on these)
 
   // Scratch for the projection.
   Eigen::VectorXd dx;         // (6n)

@@ -47,6 +47,14 @@ struct MeasurementPoint {
 // equivalent range-space form (Schur complement Phi_v M^-1 Phi_v^T with LDLT; M^-1 is block diagonal).
 enum class KktSolver { kAugmentedLu, kRangeSpace };
 
+// Bodies linked by joints (a connected component of the joint graph, the ground excluded) and the
+// constraint rows of their joints. The range-space matrix Phi_v M^-1 Phi_v^T is block diagonal over the
+// clusters, so each is factorised on its own (a wheelset and its two axleboxes: 10 rows, not 40).
+struct ConstraintCluster {
+  std::vector<int> bodies;  // ascending
+  std::vector<int> rows;    // constraint rows, ascending
+};
+
 class VehicleModel {
  public:
   VehicleModel() = default;
@@ -96,6 +104,9 @@ class VehicleModel {
   const std::vector<std::unique_ptr<Joint>>& joints() const { return joints_; }
   const std::vector<std::unique_ptr<ForceElement>>& force_elements() const { return forces_; }
   const std::vector<int>& joint_rows() const { return joint_rows_; }  // first constraint row per joint
+  const std::vector<ConstraintCluster>& constraint_clusters() const { return clusters_; }
+  // Cluster index of each body, -1 for a body without joints.
+  const std::vector<int>& cluster_of_body() const { return cluster_of_body_; }
   const Vector3& gravity() const { return gravity_; }
   double baumgarte_alpha() const { return alpha_; }
   double baumgarte_beta() const { return beta_; }
@@ -131,6 +142,8 @@ class VehicleModel {
   std::vector<std::unique_ptr<Joint>> joints_;
   std::vector<std::unique_ptr<ForceElement>> forces_;
   std::vector<int> joint_rows_;
+  std::vector<ConstraintCluster> clusters_;
+  std::vector<int> cluster_of_body_;
   std::vector<Matrix3> inverse_inertia_;
   Vector3 gravity_ = Vector3(0.0, 0.0, -9.81);
   double alpha_ = 10.0;

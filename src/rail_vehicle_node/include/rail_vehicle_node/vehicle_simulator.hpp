@@ -61,6 +61,14 @@ struct SimulatorSettings {
   // switched off and every right-hand side takes the wheel-centre wrenches from this source instead
   // (contacts() then keeps the settling evaluation). Must outlive the simulator.
   const WheelWrenchSource* wheel_wrench_source = nullptr;
+  // Maximum step of the vehicle's integrator when it runs alone (no wheel_wrench_source) [s]; 0 = none:
+  // CVODE's error control alone chooses the step. The scene's solver.vehicle_max_step is the
+  // co-simulation cap (the vehicle step never above the track step) and applies with a wheel_wrench_source
+  // only; tying the vehicle alone to it made it take ~50 000 steps per simulated second.
+  double standalone_max_step = 0.0;
+  // BDF's Jacobian and linear solver (vehicle_integrator.hpp).
+  JacobianKind jacobian = JacobianKind::kColoured;
+  LinearSolverKind linear_solver = LinearSolverKind::kSparseKlu;
   // Optional cost clock (must outlive the simulator): from the end of the build on, right-hand sides
   // (vehicle_rhs / vehicle_jacobian, including the one of each UpdateOutputs), the contact evaluations in
   // them (contact_detection / contact_forces, flange searches, spin evaluations) and floor accelerations.
@@ -185,6 +193,9 @@ class VehicleSimulator {
   const std::vector<int>& wheelset_bodies() const { return wheelset_bodies_; }
   IntegratorCounters Counters() const { return integrator_->Counters(); }
   IntegrationMethod method() const { return method_; }
+  // The integrator's maximum step [s] (0 = none): SimulatorSettings::standalone_max_step when the vehicle
+  // runs alone, the scene's solver.vehicle_max_step in co-simulation.
+  double max_step() const { return max_step_; }
   // Settled lowering of the vehicle onto the rails (static vertical solve) [m], < 0 downward.
   double settle_lift() const { return lift_; }
   // Total vertical load the rails carry at rest [N] and the sum of the wheel loads after settling [N].
@@ -208,6 +219,7 @@ class VehicleSimulator {
   std::unique_ptr<VehicleData> data_;
   std::unique_ptr<VehicleIntegrator> integrator_;
   IntegrationMethod method_ = IntegrationMethod::kBdf;
+  double max_step_ = 0.0;
   std::vector<int> wheelset_bodies_;     // body index per wheelset, leading first
   std::vector<double> rolling_radius_;   // per wheelset, at the settled centred position [m]
   std::vector<double> wheelset_s_;       // arc length per wheelset (projection warm start) [m]
@@ -231,9 +243,9 @@ class VehicleSimulator {
   core::CostClock* cost_ = nullptr;      // settings.cost once built
 };
 
-// "bdf" / "adams" choice for solver.vehicle_method auto: Adams (fixed-point, no Jacobian) when the step
-// is capped at max_step <= 5e-5 s (the contact's fastest modes are then resolved explicitly and a
-// difference-quotient Jacobian costs 13 n RHS), BDF otherwise. See doc/simulator.md for the measurements.
+// "bdf" / "adams" choice for solver.vehicle_method auto, given the step cap the run uses (solver.vehicle_max_step:
+// the simulator passes its max_step(), 0 for the vehicle alone): Adams (fixed-point, no Jacobian) when the step
+// is capped at max_step <= 5e-5 s (the contact's fastest modes are then resolved explicitly), BDF otherwise. See doc/simulator.md for the measurements.
 // Below kStiffCreepSpeed with the built-in contact (not external wrenches) BDF: there the creep forces act
 // as a viscous law in the slip velocity whose time constant m V_ref / (G a b C11) (wheelset 900 kg, G a b
 // C11 ~ 1e7 N, V_ref >= v_eps = 0.1 m/s) falls to ~1e-5 s, stiff for Adams at the 2e-5 s cap (at standstill:

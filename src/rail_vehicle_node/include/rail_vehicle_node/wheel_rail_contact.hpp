@@ -61,6 +61,11 @@ struct WheelRailContactData {
   std::vector<double> s_hint;                       // track arc length near each wheel [m]
   std::vector<Vector3> force_in_world;              // on the wheel, at its load point [N]
   std::vector<Vector3> moment_in_world;             // about the load point [N m]
+  // Copies of the above taken by WheelRailContactElement::SaveWorkState (sized once).
+  std::vector<contact::WheelContactWork> saved_work;
+  std::vector<contact::WheelContactResult> saved_result;
+  std::vector<double> saved_s_hint;
+  std::vector<Vector3> saved_force_in_world, saved_moment_in_world;
   bool enabled = true;                              // false: no contact forces (set-up only)
   long long evaluations = 0;                        // wheel evaluations since construction
   contact::ContactCost* cost = nullptr;             // optional timing of the evaluations (not owned)
@@ -78,6 +83,11 @@ class WheelRailContactElement : public ForceElement {
   WheelRailContactElement(const WheelRailContactModel* model, WheelRailContactData* contact_data);
   void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
   double PotentialEnergy(const VehicleData& data) const override;  // not tracked: 0
+  // Each wheel's wrench depends on its own wheelset's state only: one group per wheelset body.
+  void CouplingGroups(std::vector<std::vector<int>>& groups) const override;
+  // Warm starts, impact memories, hints and the last results.
+  void SaveWorkState() const override;
+  void RestoreWorkState() const override;
 
  private:
   const WheelRailContactModel* model_;

@@ -24,6 +24,13 @@ void ForceElement::ApplyMoment(const VehicleData& data, int body, const Vector3&
   g.segment<3>(6 * body + 3) += b.A.transpose() * n_in_world;
 }
 
+void ForceElement::CouplingGroups(std::vector<std::vector<int>>& groups) const {
+  std::vector<int> group;
+  if (body_i_ != kGround) group.push_back(body_i_);
+  if (body_j_ != kGround && body_j_ != body_i_) group.push_back(body_j_);
+  if (!group.empty()) groups.push_back(group);
+}
+
 void ForceElement::PointState(const VehicleData& data, int body, const Vector3& s_in_body, Vector3& p_in_world,
                               Vector3& v_in_world) {
   if (body == kGround) {

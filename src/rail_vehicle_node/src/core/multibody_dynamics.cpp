@@ -19,7 +19,10 @@ void ComputeKinematics(const VehicleModel& model, const Eigen::Ref<const Eigen::
   }
 }
 
-void ComputeAppliedForces(const VehicleModel& model, VehicleData& data) {
+namespace {
+
+// Gravity, gyroscopic terms and the external wrenches at the load points.
+void ComputeBodyForces(const VehicleModel& model, VehicleData& data) {
   const int n = model.n_bodies();
   const auto& bodies = model.bodies();
   for (int b = 0; b < n; ++b) {
@@ -36,7 +39,21 @@ void ComputeAppliedForces(const VehicleModel& model, VehicleData& data) {
     ForceElement::ApplyForceAt(data, lp.body, data.external[p].force_in_world, p_in_world, data.g);
     ForceElement::ApplyMoment(data, lp.body, data.external[p].moment_in_world, data.g);
   }
+}
+
+}  // namespace
+
+void ComputeAppliedForces(const VehicleModel& model, VehicleData& data) {
+  ComputeBodyForces(model, data);
   for (const auto& element : model.force_elements()) element->AddForces(data, data.g);
+}
+
+void ComputeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g) {
+  const auto& elements = model.force_elements();
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    element_g.col(static_cast<Eigen::Index>(e)).setZero();
+    elements[e]->AddForces(data, element_g.col(static_cast<Eigen::Index>(e)));
+  }
 }
 
 void ComputeConstraints(const VehicleModel& model, VehicleData& data) {
@@ -51,6 +68,21 @@ void ComputeConstraints(const VehicleModel& model, VehicleData& data) {
 }
 
 namespace {
+
+// phi_dot = Phi_v v from the joints' own blocks (a joint's rows are zero outside its two bodies' columns).
+void ConstraintVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& v, VehicleData& data) {
+  const auto& joints = model.joints();
+  const auto& rows = model.joint_rows();
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    const int bi = joints[j]->body_i(), bj = joints[j]->body_j();
+    for (int r = rows[j]; r < rows[j] + joints[j]->size(); ++r) {
+      double sum = 0.0;
+      if (bi != kGround) sum += data.phi_v.block<1, 6>(r, 6 * bi).dot(v.segment<6>(6 * bi).transpose());
+      if (bj != kGround) sum += data.phi_v.block<1, 6>(r, 6 * bj).dot(v.segment<6>(6 * bj).transpose());
+      data.phi_dot[r] = sum;
+    }
+  }
+}
 
 // x = M^-1 rhs with M = diag(m I, J') per body.
 void ApplyInverseMass(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& rhs,
@@ -84,26 +116,45 @@ void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
     mu = data.kkt_sol.tail(m);
     return;
   }
-  // Range space: (Phi_v M^-1 Phi_v^T) mu = Phi_v M^-1 top - bottom; x = M^-1 (top - Phi_v^T mu).
+  // Range space, one joint cluster at a time (S is block diagonal over them): for cluster K,
+  // (Phi_K M_K^-1 Phi_K^T) mu_K = Phi_K M_K^-1 top_K - bottom_K; x = M^-1 (top - Phi_v^T mu).
   const auto& bodies = model.bodies();
-  for (int b = 0; b < model.n_bodies(); ++b) {
-    data.w.middleCols<3>(6 * b) = data.phi_v.middleCols<3>(6 * b) / bodies[static_cast<std::size_t>(b)].mass;
-    data.w.middleCols<3>(6 * b + 3).noalias() = data.phi_v.middleCols<3>(6 * b + 3) * model.inverse_inertia(b);
-  }
-  data.s.noalias() = data.w * data.phi_v.transpose();
-  data.s_ldlt.compute(data.s);
-  data.s_rhs.noalias() = data.w * top;
-  data.s_rhs -= bottom;
-  mu = data.s_ldlt.solve(data.s_rhs);
+  const auto& clusters = model.constraint_clusters();
   data.tmp6n = top;
-  data.tmp6n.noalias() -= data.phi_v.transpose() * mu;
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const ConstraintCluster& cluster = clusters[c];
+    ClusterWork& cw = data.clusters[c];
+    const int n_rows = static_cast<int>(cluster.rows.size());
+    for (std::size_t k = 0; k < cluster.bodies.size(); ++k) {
+      const int b = cluster.bodies[k];
+      const int col = 6 * static_cast<int>(k);
+      for (int i = 0; i < n_rows; ++i) {
+        cw.phi_v.block<1, 6>(i, col) = data.phi_v.block<1, 6>(cluster.rows[static_cast<std::size_t>(i)], 6 * b);
+      }
+      cw.w.middleCols<3>(col) = cw.phi_v.middleCols<3>(col) / bodies[static_cast<std::size_t>(b)].mass;
+      cw.w.middleCols<3>(col + 3).noalias() = cw.phi_v.middleCols<3>(col + 3) * model.inverse_inertia(b);
+      cw.top.segment<6>(col) = top.segment<6>(6 * b);
+    }
+    // Blocks of ~10 x 18: coefficient-wise (lazy) products, not the general matrix-product kernel.
+    cw.s.noalias() = cw.w.lazyProduct(cw.phi_v.transpose());
+    cw.ldlt.compute(cw.s);
+    cw.rhs.noalias() = cw.w.lazyProduct(cw.top);
+    for (int i = 0; i < n_rows; ++i) cw.rhs[i] -= bottom[cluster.rows[static_cast<std::size_t>(i)]];
+    cw.mu = cw.ldlt.solve(cw.rhs);
+    for (int i = 0; i < n_rows; ++i) mu[cluster.rows[static_cast<std::size_t>(i)]] = cw.mu[i];
+    cw.top.noalias() -= cw.phi_v.transpose().lazyProduct(cw.mu);
+    for (std::size_t k = 0; k < cluster.bodies.size(); ++k) {
+      data.tmp6n.segment<6>(6 * cluster.bodies[k]) = cw.top.segment<6>(6 * static_cast<int>(k));
+    }
+  }
   ApplyInverseMass(model, data.tmp6n, x);
 }
 
-void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
-                        Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
-  data.time = t;
-  ComputeKinematics(model, y, data);
+namespace {
+
+// q_dot from v (p_dot = 1/2 p (x) (0, omega')), after the kinematics.
+void PositionDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+                         Eigen::Ref<Eigen::VectorXd> y_dot, const VehicleData& data) {
   const int n = model.n_bodies();
   for (int b = 0; b < n; ++b) {
     const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
@@ -115,17 +166,50 @@ void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<co
     p_dot.tail<3>() = 0.5 * (p[0] * k.omega_body + p.tail<3>().cross(k.omega_body));
     y_dot.segment<4>(VehicleModel::EulerOffset(b)) = p_dot;
   }
-  ComputeAppliedForces(model, data);
+}
+
+// v_dot and lambda from the Baumgarte-stabilised augmented system, after data.g.
+void VelocityDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+                         Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
   const int m = model.n_constraints();
   if (m > 0) {
     ComputeConstraints(model, data);
-    data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+    ConstraintVelocity(model, y.tail(model.n_velocities()), data);
     const double alpha = model.baumgarte_alpha();
     const double beta = model.baumgarte_beta();
     data.rhs_c = data.gamma - 2.0 * alpha * data.phi_dot - (beta * beta) * data.phi;
   }
   SolveAugmented(model, data, data.g, data.rhs_c, data.v_dot, data.lambda);
   y_dot.tail(model.n_velocities()) = data.v_dot;
+}
+
+}  // namespace
+
+void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                        Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
+  data.time = t;
+  ComputeKinematics(model, y, data);
+  PositionDerivatives(model, y, y_dot, data);
+  ComputeAppliedForces(model, data);
+  VelocityDerivatives(model, y, y_dot, data);
+}
+
+void ComputeDerivativesPartial(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+                               Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data, const std::vector<char>& live,
+                               const Eigen::Ref<const Eigen::MatrixXd>& element_g) {
+  data.time = t;
+  ComputeKinematics(model, y, data);
+  PositionDerivatives(model, y, y_dot, data);
+  ComputeBodyForces(model, data);
+  const auto& elements = model.force_elements();
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    if (live[e] != 0) {
+      elements[e]->AddForces(data, data.g);
+    } else {
+      data.g += element_g.col(static_cast<Eigen::Index>(e));
+    }
+  }
+  VelocityDerivatives(model, y, y_dot, data);
 }
 
 ConstraintViolation EvaluateViolation(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
@@ -137,7 +221,7 @@ ConstraintViolation EvaluateViolation(const VehicleModel& model, const Eigen::Re
   if (model.n_constraints() == 0) return v;
   ComputeKinematics(model, y, data);
   ComputeConstraints(model, data);
-  data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+  ConstraintVelocity(model, y.tail(model.n_velocities()), data);
   v.position = data.phi.lpNorm<Eigen::Infinity>();
   v.velocity = data.phi_dot.lpNorm<Eigen::Infinity>();
   return v;
@@ -171,7 +255,7 @@ int ProjectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, Vehic
     ++iterations;
   }
   // Velocities: v <- v + dv with [M Phi_v^T; Phi_v 0][dv; mu] = [0; -Phi_v v] (kinetic-energy metric).
-  data.phi_dot.noalias() = data.phi_v * y.tail(model.n_velocities());
+  ConstraintVelocity(model, y.tail(model.n_velocities()), data);
   data.rhs_c = -data.phi_dot;
   SolveAugmented(model, data, data.zero6n, data.rhs_c, data.dx, data.lambda);
   y.tail(model.n_velocities()) += data.dx;

@@ -40,6 +40,10 @@ VehicleData::VehicleData(const VehicleModel& model)
   s = Eigen::MatrixXd::Zero(m, m);
   s_rhs = Eigen::VectorXd::Zero(m);
   tmp6n = Eigen::VectorXd::Zero(nv);
+  clusters.reserve(model.constraint_clusters().size());
+  for (const ConstraintCluster& c : model.constraint_clusters()) {
+    clusters.emplace_back(static_cast<int>(c.rows.size()), static_cast<int>(c.bodies.size()));
+  }
 
   dx = Eigen::VectorXd::Zero(nv);
   zero6n = Eigen::VectorXd::Zero(nv);

@@ -4,15 +4,20 @@
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
 #include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+
+#include "rail_vehicle_node/vehicle_jacobian.hpp"
 
 // CVODE's own dense difference-quotient Jacobian (cvode_ls.c; exported by libsundials_cvode 6.x, not in its
 // installed headers). Wrapped when a cost clock is attached so that the right-hand sides it calls are
@@ -29,6 +34,7 @@ struct VehicleIntegrator::Impl {
   SUNContext context = nullptr;
   N_Vector y = nullptr;
   N_Vector dky = nullptr;
+  N_Vector error_weights = nullptr;    // coloured Jacobian: CVODE's error weights
   SUNMatrix jacobian = nullptr;
   SUNLinearSolver linear_solver = nullptr;
   SUNNonlinearSolver nonlinear_solver = nullptr;
@@ -36,7 +42,12 @@ struct VehicleIntegrator::Impl {
   double t = 0.0;
   bool stepped_since_init = false;     // false right after (re-)initialisation
   bool ls_counters_stale = false;
-  bool in_jacobian = false;            // inside the DQ Jacobian (cost clock attached): RHS timed as Jacobian      // linear-solver counters are reset only at the first step after ReInit
+  bool in_jacobian = false;            // inside the DQ Jacobian (cost clock attached): RHS timed as Jacobian
+  std::unique_ptr<JacobianPattern> pattern;  // coloured Jacobian (BDF)
+  std::unique_ptr<JacobianWork> jacobian_work;
+  long coloured_jacobian_rhs = 0;      // evaluations of the coloured Jacobians since construction
+  void* adams = nullptr;               // BDF's fallback (IntegratorSettings::adams_fallback), made at first use
+  SUNNonlinearSolver adams_solver = nullptr;
   IntegratorCounters base;             // counters accumulated before the last re-initialisation
   std::array<char, 512> last_error{};  // CVODE's last message (fixed buffer: no allocation)
 
@@ -44,10 +55,13 @@ struct VehicleIntegrator::Impl {
 
   ~Impl() {
     if (cvode != nullptr) CVodeFree(&cvode);
+    if (adams != nullptr) CVodeFree(&adams);
+    if (adams_solver != nullptr) SUNNonlinSolFree(adams_solver);
     if (nonlinear_solver != nullptr) SUNNonlinSolFree(nonlinear_solver);
     if (linear_solver != nullptr) SUNLinSolFree(linear_solver);
     if (jacobian != nullptr) SUNMatDestroy(jacobian);
     if (dky != nullptr) N_VDestroy(dky);
+    if (error_weights != nullptr) N_VDestroy(error_weights);
     if (y != nullptr) N_VDestroy(y);
     if (context != nullptr) SUNContext_Free(&context);
   }
@@ -89,6 +103,53 @@ struct VehicleIntegrator::Impl {
     const int flag = cvLsDQJac(t, y, fy, J, self->cvode, tmp1, tmp2, tmp3);
     self->in_jacobian = false;
     return flag;
+  }
+
+  // The coloured difference quotient (vehicle_jacobian.hpp) into the sparse (KLU) or dense matrix J, with
+  // CVODE's increments: max(sqrt(eps) |y_j|, 1000 |h| eps n ||f||_wrms / w_j).
+  static int ColouredJacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector /*tmp1*/,
+                              N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
+    auto* self = static_cast<Impl*>(user_data);
+    const int n = self->model.state_size();
+    if (CVodeGetErrWeights(self->cvode, self->error_weights) != CV_SUCCESS) return -1;
+    realtype h = 0.0;
+    CVodeGetCurrentStep(self->cvode, &h);
+    const double f_norm = N_VWrmsNorm(fy, self->error_weights);
+    const double uround = std::numeric_limits<double>::epsilon();
+    const double min_increment = f_norm != 0.0 ? 1000.0 * std::abs(h) * uround * n * f_norm : 1.0;
+    const Eigen::Map<const Eigen::VectorXd> y_map(N_VGetArrayPointer(y), n);
+    const Eigen::Map<const Eigen::VectorXd> w_map(N_VGetArrayPointer(self->error_weights), n);
+    JacobianWork& work = *self->jacobian_work;
+    try {
+      self->coloured_jacobian_rhs += EvaluateJacobian(self->model, *self->pattern, t, y_map, w_map, min_increment,
+                                                      self->data, work, self->settings.cost);
+    } catch (...) {
+      return -1;
+    }
+    const auto& col_start = self->pattern->col_start();
+    const auto& row_index = self->pattern->row_index();
+    bool finite = true;
+    if (SUNMatGetID(J) == SUNMATRIX_SPARSE) {
+      sunindextype* pointers = SUNSparseMatrix_IndexPointers(J);
+      sunindextype* indices = SUNSparseMatrix_IndexValues(J);
+      realtype* values = SUNSparseMatrix_Data(J);
+      for (int j = 0; j <= n; ++j) pointers[j] = col_start[static_cast<std::size_t>(j)];
+      for (std::size_t k = 0; k < row_index.size(); ++k) {
+        indices[k] = row_index[k];
+        values[k] = work.values[k];
+        finite = finite && std::isfinite(values[k]);
+      }
+    } else {
+      SUNMatZero(J);
+      for (int j = 0; j < n; ++j) {
+        realtype* column = SUNDenseMatrix_Column(J, j);
+        for (int k = col_start[static_cast<std::size_t>(j)]; k < col_start[static_cast<std::size_t>(j + 1)]; ++k) {
+          column[row_index[static_cast<std::size_t>(k)]] = work.values[static_cast<std::size_t>(k)];
+          finite = finite && std::isfinite(work.values[static_cast<std::size_t>(k)]);
+        }
+      }
+    }
+    return finite ? 0 : 1;  // non-finite: recoverable
   }
 
   static void ErrorHandler(int /*error_code*/, const char* module, const char* function, char* msg, void* user) {
@@ -138,6 +199,40 @@ struct VehicleIntegrator::Impl {
     ProjectState(model, state, data, settings.projection_tolerance, settings.projection_max_iterations);
     ++base.projections;
     return true;
+  }
+
+  // Integrates from (t, y) to t_out with Adams (fixed point; same tolerances, fallback_max_step) into y, adds its work
+  // to the counters and re-initialises BDF at t_out. Allocates the Adams instance at its first use.
+  void FallBackToAdams(double t_out) {
+    if (adams == nullptr) {
+      adams = CVodeCreate(CV_ADAMS, context);
+      adams_solver = adams != nullptr ? SUNNonlinSol_FixedPoint(y, 0, context) : nullptr;
+      if (adams_solver == nullptr) throw std::runtime_error("vehicle integrator: Adams fallback creation failed");
+      Check(CVodeSetErrHandlerFn(adams, &Impl::ErrorHandler, this), "CVodeSetErrHandlerFn");
+      Check(CVodeInit(adams, &Impl::Rhs, t, y), "CVodeInit");
+      Check(CVodeSetUserData(adams, this), "CVodeSetUserData");
+      Check(CVodeSStolerances(adams, settings.rtol, settings.atol), "CVodeSStolerances");
+      Check(CVodeSetMaxOrd(adams, 12), "CVodeSetMaxOrd");
+      Check(CVodeSetMaxNumSteps(adams, settings.max_steps_per_call), "CVodeSetMaxNumSteps");
+      const double cap = settings.fallback_max_step > 0.0 ? settings.fallback_max_step : settings.max_step;
+      if (cap > 0.0) Check(CVodeSetMaxStep(adams, cap), "CVodeSetMaxStep");
+      Check(CVodeSetNonlinearSolver(adams, adams_solver), "CVodeSetNonlinearSolver");
+    } else {
+      Check(CVodeReInit(adams, t, y), "CVodeReInit");
+    }
+    last_error[0] = '\0';
+    realtype t_reached = t;
+    const int flag = CVode(adams, t_out, y, &t_reached, CV_NORMAL);
+    long v = 0;
+    if (CVodeGetNumSteps(adams, &v) == CV_SUCCESS) base.steps += v;
+    if (CVodeGetNumRhsEvals(adams, &v) == CV_SUCCESS) base.rhs_evals += v;
+    if (CVodeGetNumErrTestFails(adams, &v) == CV_SUCCESS) base.error_test_failures += v;
+    if (CVodeGetNumNonlinSolvIters(adams, &v) == CV_SUCCESS) base.nonlinear_iterations += v;
+    if (CVodeGetNumNonlinSolvConvFails(adams, &v) == CV_SUCCESS) base.nonlinear_convergence_failures += v;
+    ++base.adams_fallbacks;
+    t = t_reached;
+    if (flag < 0) Fail("CVode (Adams fallback)", flag);
+    ReInit();
   }
 
   void ReInit() {
@@ -191,7 +286,23 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
   s.Check(CVodeSetMaxNumSteps(s.cvode, settings.max_steps_per_call), "CVodeSetMaxNumSteps");
   if (settings.max_step > 0.0) s.Check(CVodeSetMaxStep(s.cvode, settings.max_step), "CVodeSetMaxStep");
   if (settings.initial_step > 0.0) s.Check(CVodeSetInitStep(s.cvode, settings.initial_step), "CVodeSetInitStep");
-  if (settings.method == IntegrationMethod::kBdf) {
+  if (settings.method == IntegrationMethod::kBdf && settings.jacobian == JacobianKind::kColoured) {
+    s.pattern = std::make_unique<JacobianPattern>(model);
+    s.jacobian_work = std::make_unique<JacobianWork>(model, *s.pattern);
+    s.error_weights = N_VNew_Serial(n, s.context);
+    if (settings.linear_solver == LinearSolverKind::kSparseKlu) {
+      s.jacobian = SUNSparseMatrix(n, n, s.pattern->nonzeros(), CSC_MAT, s.context);
+      s.linear_solver = s.jacobian != nullptr ? SUNLinSol_KLU(s.y, s.jacobian, s.context) : nullptr;
+    } else {
+      s.jacobian = SUNDenseMatrix(n, n, s.context);
+      s.linear_solver = s.jacobian != nullptr ? SUNLinSol_Dense(s.y, s.jacobian, s.context) : nullptr;
+    }
+    if (s.error_weights == nullptr || s.jacobian == nullptr || s.linear_solver == nullptr) {
+      throw std::runtime_error("vehicle integrator: matrix / linear solver creation failed");
+    }
+    s.Check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
+    s.Check(CVodeSetJacFn(s.cvode, &Impl::ColouredJacobian), "CVodeSetJacFn");
+  } else if (settings.method == IntegrationMethod::kBdf) {
     s.jacobian = SUNDenseMatrix(n, n, s.context);
     s.linear_solver = SUNLinSol_Dense(s.y, s.jacobian, s.context);
     if (s.jacobian == nullptr || s.linear_solver == nullptr) {
@@ -219,10 +330,17 @@ void VehicleIntegrator::AdvanceTo(double t) {
   s.last_error[0] = '\0';
   realtype t_reached = s.t;
   const int flag = CVode(s.cvode, t, s.y, &t_reached, CV_NORMAL);
-  if (flag < 0) s.Fail("CVode", flag);
-  s.ls_counters_stale = false;
-  s.t = t_reached;
-  s.stepped_since_init = true;
+  const bool bdf_failed = flag == CV_ERR_FAILURE || flag == CV_CONV_FAILURE;
+  if (bdf_failed && s.settings.method == IntegrationMethod::kBdf && s.settings.adams_fallback) {
+    // y holds the last successful step at t_reached: Adams takes the rest of the interval, BDF restarts at t.
+    s.t = t_reached;
+    s.FallBackToAdams(t);
+  } else {
+    if (flag < 0) s.Fail("CVode", flag);
+    s.ls_counters_stale = false;
+    s.t = t_reached;
+    s.stepped_since_init = true;
+  }
   if (s.ProjectIfNeeded()) s.ReInit();
 }
 
@@ -290,6 +408,8 @@ IntegratorCounters VehicleIntegrator::Counters() const {
   c.error_test_failures += now.error_test_failures;
   c.nonlinear_iterations += now.nonlinear_iterations;
   c.nonlinear_convergence_failures += now.nonlinear_convergence_failures;
+  c.rhs_evals_jacobian += s.coloured_jacobian_rhs;
+  c.adams_fallbacks = s.base.adams_fallbacks;
   c.last_order = now.last_order;
   c.last_step = now.last_step;
   return c;

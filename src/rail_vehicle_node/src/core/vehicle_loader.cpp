@@ -31,6 +31,9 @@ constexpr double kMaxStiffness = 1e12;      // N/m or N m/rad
 constexpr double kMaxDamping = 1e12;        // N s/m or N m s/rad
 constexpr double kMaxMass = 1e6;            // kg (a loaded coach: 6e4 kg)
 constexpr double kMaxInertia = 1e8;         // kg m^2, |principal moment| or |product| (a carbody: 3e6)
+// kg m^2, principal moment: 1 g at 1 mm from the axis. Below it the body's angular accelerations dwarf every
+// other rate of the model (an axlebox: 10 kg m^2) and no integrator step resolves them.
+constexpr double kMinInertia = 1e-6;
 constexpr double kMaxGravity = 1e3;         // m/s^2, |component| of the gravity vector
 constexpr double kMaxAxisComponent = 1e6;   // dimensionless, |component| of a direction before normalising
 
@@ -231,6 +234,11 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
       if (!(principal[i] > 0.0)) {
         reader.Fail(node["inertia"][static_cast<std::size_t>(i)], Join(where, "inertia") + "[" + std::to_string(i) + "]",
                     "moment of inertia must be > 0 kg m^2", Describe(node["inertia"][static_cast<std::size_t>(i)]));
+      }
+      if (!(principal[i] >= kMinInertia)) {
+        reader.Fail(node["inertia"][static_cast<std::size_t>(i)], Join(where, "inertia") + "[" + std::to_string(i) + "]",
+                    "moment of inertia must be >= " + Format(kMinInertia) + " kg m^2",
+                    Describe(node["inertia"][static_cast<std::size_t>(i)]));
       }
     }
     const Vector3 products = reader.OptionalVec3(node, where, "products_of_inertia", kMaxInertia, "kg m^2");

@@ -192,6 +192,36 @@ void VehicleModel::Finalize() {
     joint_rows_.push_back(n_constraints_);
     n_constraints_ += j->size();
   }
+  // Joint clusters: connected components of the bodies over the joints (union-find).
+  const int n = n_bodies();
+  std::vector<int> parent(static_cast<std::size_t>(n));
+  for (int b = 0; b < n; ++b) parent[static_cast<std::size_t>(b)] = b;
+  const auto root = [&parent](int b) {
+    while (parent[static_cast<std::size_t>(b)] != b) b = parent[static_cast<std::size_t>(b)];
+    return b;
+  };
+  for (const auto& j : joints_) {
+    if (j->body_i() != kGround && j->body_j() != kGround) parent[static_cast<std::size_t>(root(j->body_i()))] = root(j->body_j());
+  }
+  clusters_.clear();
+  cluster_of_body_.assign(static_cast<std::size_t>(n), -1);
+  std::vector<int> cluster_of_root(static_cast<std::size_t>(n), -1);
+  for (std::size_t k = 0; k < joints_.size(); ++k) {
+    const int b = joints_[k]->body_i() != kGround ? joints_[k]->body_i() : joints_[k]->body_j();
+    if (b == kGround) continue;
+    int& c = cluster_of_root[static_cast<std::size_t>(root(b))];
+    if (c < 0) {
+      c = static_cast<int>(clusters_.size());
+      clusters_.emplace_back();
+    }
+    for (int r = 0; r < joints_[k]->size(); ++r) clusters_[static_cast<std::size_t>(c)].rows.push_back(joint_rows_[k] + r);
+  }
+  for (int b = 0; b < n; ++b) {
+    const int c = cluster_of_root[static_cast<std::size_t>(root(b))];
+    if (c < 0) continue;
+    cluster_of_body_[static_cast<std::size_t>(b)] = c;
+    clusters_[static_cast<std::size_t>(c)].bodies.push_back(b);
+  }
   finalized_ = true;
 }
 

@@ -413,10 +413,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     sim = sim_alone.get();
   }
   ROS_INFO("%s: vehicle settled on the rails (lowered %.4f mm, wheel loads %.1f N of %.1f N); integrating with "
-           "%s, rtol %g, atol %g, max step %g s%s", node.c_str(), -sim->settle_lift() * 1e3,
+           "%s, rtol %g, atol %g, max step %g s (0: none)%s", node.c_str(), -sim->settle_lift() * 1e3,
            sim->settled_wheel_load_sum(), sim->static_load(),
            sim->method() == rv::IntegrationMethod::kBdf ? "BDF" : "Adams", scene.solver.vehicle_rtol,
-           scene.solver.vehicle_atol, scene.solver.vehicle_max_step,
+           scene.solver.vehicle_atol, sim->max_step(),
            cosim ? (std::string("; co-simulation with the track over ") + to_string(scene.solver.transport) +
                     ", track step " + std::to_string(scene.solver.track_step) + " s").c_str() : "");
 
@@ -614,10 +614,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     ROS_INFO_STREAM(cost.to_text(node, wall, sim->time(), &clock));
     WriteCost(bag_path, ".cost.yaml", cost.to_yaml(node, scene, wall, sim->time(), &clock), node);
     ROS_INFO("%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
-             "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections", node.c_str(),
+             "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections, %ld Adams fallbacks", node.c_str(),
              rc == kExitOk ? "finished" : "stopped", sim->time(), sim->leading_arc_length(), wall,
              wall / std::max(sim->time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
-             c.projections);
+             c.projections, c.adams_fallbacks);
   } catch (const std::exception& e) {
     ROS_FATAL("%s: internal error at t = %.4f s: %s", node.c_str(), sim->time(), e.what());
     rc = kExitInternal;

@@ -1,0 +1,75 @@
+// Sparse Jacobian df/dy of the vehicle's right-hand side (multibody_dynamics.hpp) by a coloured
+// difference quotient over the sparsity that the model's topology implies.
+//
+// Sparsity, body by body: the velocity rows of body r depend on the state of body b when b's joint
+// cluster (VehicleModel::constraint_clusters; the range-space solve couples a cluster's bodies) contains r,
+// or when a force element couples b with a body of r's cluster (ForceElement::CouplingGroups; the contact
+// couples each wheelset with itself only). Position rows: r_dot from v, p_dot from p and omega'. Every
+// diagonal entry is kept (CVODE forms I - gamma J in place).
+// Colouring: bodies whose row sets are disjoint share a colour (greedy); column l of every body of one
+// colour is perturbed together, so a Jacobian costs 13 x (body colours) evaluations instead of 13 n (the
+// paper coach: 6 body colours, 78 instead of 195). An evaluation re-evaluates only the force elements that
+// touch a perturbed body, the others keep their contribution at the unperturbed state: the contact is
+// evaluated in 13 of them. The elements' work states (the contact's warm starts and impact memories) are
+// saved before and restored after, so a Jacobian leaves the run unchanged.
+//
+// Model/Data split: JacobianPattern is built once from a finalised model; JacobianWork is the caller's
+// preallocated scratch. No allocation in EvaluateJacobian.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include <rail_core/cost_profile.hpp>
+
+#include "rail_vehicle_node/vehicle_data.hpp"
+#include "rail_vehicle_node/vehicle_model.hpp"
+
+namespace rail::vehicle {
+
+class JacobianPattern {
+ public:
+  explicit JacobianPattern(const VehicleModel& model);
+
+  int size() const { return n_; }                  // state size 13 n
+  int nonzeros() const { return static_cast<int>(row_index_.size()); }
+  // Compressed sparse columns: rows of column j are row_index()[col_start()[j] .. col_start()[j + 1]).
+  const std::vector<int>& col_start() const { return col_start_; }
+  const std::vector<int>& row_index() const { return row_index_; }
+  int n_body_colours() const { return n_body_colours_; }
+  int n_colours() const { return 13 * n_body_colours_; }
+  const std::vector<int>& body_colour() const { return body_colour_; }
+  // Bodies of body colour c.
+  const std::vector<int>& colour_bodies(int c) const { return colour_bodies_[static_cast<std::size_t>(c)]; }
+  // Force elements re-evaluated when body colour c is perturbed (1) or kept (0), per element.
+  const std::vector<char>& live_elements(int c) const { return live_elements_[static_cast<std::size_t>(c)]; }
+  // State column of local coordinate l (0..12: r, p, r_dot, omega') of body b.
+  int Column(const VehicleModel& model, int b, int l) const;
+
+ private:
+  int n_ = 0;
+  int n_body_colours_ = 0;
+  std::vector<int> col_start_, row_index_;
+  std::vector<int> body_colour_;
+  std::vector<std::vector<int>> colour_bodies_;
+  std::vector<std::vector<char>> live_elements_;
+};
+
+struct JacobianWork {
+  JacobianWork(const VehicleModel& model, const JacobianPattern& pattern);
+  Eigen::VectorXd y_perturbed, f0, f, increment;
+  Eigen::MatrixXd element_g;  // 6n x elements: each force element's contribution at the unperturbed state
+  std::vector<char> all_live, none_live;
+  std::vector<double> values;  // nonzeros in the pattern's order
+};
+
+// Fills work.values with the forward difference quotient of f at (t, y), column j perturbed by
+// inc_j = max(sqrt(eps) |y_j|, min_increment / weight_j) (CVODE's rule for its banded and dense quotients;
+// weight = CVODE's error weights, 1/(rtol |y| + atol)). Leaves data and the elements' work states as they
+// were before the call. cost: each evaluation timed as kVehicleJacobian (null: no timing).
+// Returns the number of right-hand-side evaluations (partial ones included).
+int EvaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, double t,
+                     const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& weight,
+                     double min_increment, VehicleData& data, JacobianWork& work, core::CostClock* cost = nullptr);
+
+}  // namespace rail::vehicle

@@ -1,0 +1,197 @@
+// Accuracy of the vehicle alone against a reference run (prints its figures; not a test):
+//   bench_vehicle_accuracy <scene.yaml> <reference.csv> [method max_step rtol atol] ...
+// The reference is the scene run with Adams capped at 5e-6 s (written to reference.csv on the first call,
+// read back afterwards); each candidate (default: the scene's own settings, the vehicle alone uncapped) runs
+// the whole scene. Both are sampled every 1 ms (the node's output rate). Printed per candidate: wall time
+// per simulated second, and against the reference the largest difference of the leading wheelset's
+// lateral and vertical displacement and attack angle on the straights and in the steady curve, and the
+// count, peak and mean of its flange-force bursts (runs of samples with flange contact) in the transitions.
+// method: bdf | adams | auto; max_step 0 = none; rtol/atol 0 = the scene's.
+#include <rail_core/scene_loader.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "rail_vehicle_node/vehicle_simulator.hpp"
+
+namespace {
+
+using namespace rail;
+
+struct Sample {
+  double t = 0.0, s = 0.0, lateral = 0.0, vertical = 0.0, attack = 0.0;
+  double flange_left = 0.0, flange_right = 0.0;  // leading wheelset's flange normal forces [N]
+};
+
+struct Candidate {
+  std::string method = "auto";
+  double max_step = 0.0, rtol = 0.0, atol = 0.0;
+};
+
+std::vector<Sample> Run(const core::Scene& base, const Candidate& c, double& wall_per_s) {
+  core::Scene scene = base;
+  scene.effects.track_model = core::TrackModel::kRigid;
+  scene.solver.vehicle_method = c.method == "bdf" ? core::VehicleMethod::kBdf
+                                : c.method == "adams" ? core::VehicleMethod::kAdams : core::VehicleMethod::kAuto;
+  if (c.rtol > 0.0) scene.solver.vehicle_rtol = c.rtol;
+  if (c.atol > 0.0) scene.solver.vehicle_atol = c.atol;
+  vehicle::SimulatorSettings settings;
+  settings.standalone_max_step = c.max_step;
+  vehicle::VehicleSimulator sim(scene, settings);
+  std::vector<Sample> out;
+  const auto t0 = std::chrono::steady_clock::now();
+  vehicle::RunStatus status = vehicle::RunStatus::kRunning;
+  for (int i = 1; status == vehicle::RunStatus::kRunning; ++i) {
+    status = sim.AdvanceTo(1e-3 * i);
+    const vehicle::WheelsetTrackOutput& w = sim.wheelsets().front();
+    Sample x;
+    x.t = sim.time();
+    x.s = w.arc_length;
+    x.lateral = w.lateral;
+    x.vertical = w.vertical;
+    x.attack = w.angle_of_attack;
+    x.flange_left = sim.contacts()[0].contact[contact::kFlange].N;
+    x.flange_right = sim.contacts()[1].contact[contact::kFlange].N;
+    out.push_back(x);
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  wall_per_s = wall / sim.time();
+  const vehicle::IntegratorCounters k = sim.Counters();
+  std::printf("%s max_step %g rtol %g atol %g (%s): %.2f s simulated, %.1f s wall, %.3f s per simulated s; steps %ld, "
+              "RHS %ld + %ld for %ld Jacobians; %s %s\n",
+              c.method.c_str(), c.max_step, scene.solver.vehicle_rtol, scene.solver.vehicle_atol,
+              sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.time(), wall, wall_per_s, k.steps,
+              k.rhs_evals, k.rhs_evals_jacobian, k.jacobian_evals,
+              status == vehicle::RunStatus::kFinished ? "finished" : "stopped:", sim.message().c_str());
+  std::fflush(stdout);
+  return out;
+}
+
+void Write(const std::string& path, const std::vector<Sample>& v) {
+  std::ofstream f(path);
+  f.precision(17);
+  f << "t,s,lateral,vertical,attack,flange_left,flange_right\n";
+  for (const Sample& x : v) {
+    f << x.t << ',' << x.s << ',' << x.lateral << ',' << x.vertical << ',' << x.attack << ',' << x.flange_left << ','
+      << x.flange_right << '\n';
+  }
+}
+
+bool Read(const std::string& path, std::vector<Sample>& v) {
+  std::ifstream f(path);
+  if (!f) return false;
+  std::string line;
+  std::getline(f, line);
+  while (std::getline(f, line)) {
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream is(line);
+    Sample x;
+    is >> x.t >> x.s >> x.lateral >> x.vertical >> x.attack >> x.flange_left >> x.flange_right;
+    v.push_back(x);
+  }
+  return !v.empty();
+}
+
+struct Bursts {
+  int count = 0;
+  double peak = 0.0, mean = 0.0;  // [N]; mean over the samples in contact
+  double mean_peak = 0.0;         // mean of the bursts' own peaks [N]
+};
+
+// Flange-force bursts of the wheel with the larger total in [t0, t1].
+Bursts FlangeBursts(const std::vector<Sample>& v, double t0, double t1) {
+  double left = 0.0, right = 0.0;
+  for (const Sample& x : v) {
+    if (x.t >= t0 && x.t <= t1) left += x.flange_left, right += x.flange_right;
+  }
+  const bool use_left = left > right;
+  Bursts b;
+  bool in = false;
+  int n = 0;
+  double burst_peak = 0.0;
+  for (const Sample& x : v) {
+    if (x.t < t0 || x.t > t1) continue;
+    const double f = use_left ? x.flange_left : x.flange_right;
+    if (f > 0.0) {
+      if (!in) ++b.count, burst_peak = 0.0;
+      in = true;
+      b.peak = std::max(b.peak, f);
+      burst_peak = std::max(burst_peak, f);
+      b.mean += f;
+      ++n;
+    } else {
+      if (in) b.mean_peak += burst_peak;
+      in = false;
+    }
+  }
+  if (in) b.mean_peak += burst_peak;
+  if (n > 0) b.mean /= n;
+  if (b.count > 0) b.mean_peak /= b.count;
+  return b;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: %s scene.yaml reference.csv [method max_step rtol atol] ...\n", argv[0]);
+    return 2;
+  }
+  const core::Scene scene = core::load_scene_file(argv[1]);
+  std::vector<Sample> ref;
+  if (!Read(argv[2], ref)) {
+    double wall = 0.0;
+    ref = Run(scene, Candidate{"adams", 5e-6, 0.0, 0.0}, wall);
+    Write(argv[2], ref);
+  }
+  std::vector<Candidate> candidates;
+  for (int i = 3; i + 3 < argc; i += 4) {
+    candidates.push_back(Candidate{argv[i], std::atof(argv[i + 1]), std::atof(argv[i + 2]), std::atof(argv[i + 3])});
+  }
+  if (candidates.empty()) candidates.push_back(Candidate{});
+  // Windows by the leading wheelset's arc length on the paper scene's layout: straight 0-100 m, transition
+  // 100-200 m, circle 200-380 m, transition 380-480 m, straight 480-500 m; a transition's effect on the
+  // steady parts is left out for 20 m after it.
+  struct Window { const char* name; double s0, s1; };
+  const Window steady[] = {{"straight", 0.0, 100.0}, {"steady curve", 220.0, 380.0}, {"final straight", 485.0, 500.0}};
+  const Window transitions[] = {{"entry transition", 100.0, 220.0}, {"exit transition", 380.0, 485.0}};
+  for (const Candidate& c : candidates) {
+    double wall = 0.0;
+    const std::vector<Sample> run = Run(scene, c, wall);
+    const std::size_t n = std::min(run.size(), ref.size());
+    std::printf("| window | max |d lateral| [m] | max |d vertical| [m] | max |d attack| [deg] |\n|---|---|---|---|\n");
+    for (const Window& w : steady) {
+      double dl = 0.0, dv = 0.0, da = 0.0;
+      for (std::size_t k = 0; k < n; ++k) {
+        if (ref[k].s < w.s0 || ref[k].s > w.s1) continue;
+        dl = std::max(dl, std::abs(run[k].lateral - ref[k].lateral));
+        dv = std::max(dv, std::abs(run[k].vertical - ref[k].vertical));
+        da = std::max(da, std::abs(run[k].attack - ref[k].attack) * 180.0 / M_PI);
+      }
+      std::printf("| %s (s %.0f-%.0f m) | %.2e | %.2e | %.2e |\n", w.name, w.s0, w.s1, dl, dv, da);
+    }
+    std::printf("| transition | bursts (ref) | peak [kN] (ref) | mean burst peak [kN] (ref) | mean [kN] (ref) | count / "
+                "peak / mean burst peak / mean differences |\n|---|---|---|---|---|---|\n");
+    for (const Window& w : transitions) {
+      double t0 = 1e9, t1 = -1e9;
+      for (const Sample& x : ref) {
+        if (x.s >= w.s0 && x.s <= w.s1) t0 = std::min(t0, x.t), t1 = std::max(t1, x.t);
+      }
+      const Bursts a = FlangeBursts(run, t0, t1), b = FlangeBursts(ref, t0, t1);
+      const auto rel = [](double x, double y) { return y != 0.0 ? 100.0 * (x - y) / y : 0.0; };
+      std::printf("| %s (t %.2f-%.2f s) | %d (%d) | %.1f (%.1f) | %.1f (%.1f) | %.1f (%.1f) | %+.1f %% / %+.1f %% / "
+                  "%+.1f %% / %+.1f %% |\n", w.name, t0, t1, a.count, b.count, a.peak * 1e-3, b.peak * 1e-3,
+                  a.mean_peak * 1e-3, b.mean_peak * 1e-3, a.mean * 1e-3, b.mean * 1e-3, rel(a.count, b.count),
+                  rel(a.peak, b.peak), rel(a.mean_peak, b.mean_peak), rel(a.mean, b.mean));
+    }
+    std::fflush(stdout);
+  }
+  return 0;
+}
