@@ -33,6 +33,8 @@ TOOLS = [
     ([os.path.join(LIB, "rail_track_node", "track_end_reflection")], "usage"),
     ([os.path.join(LIB, "rail_track_node", "track_receptance")], "usage"),
     ([os.path.join(LIB, "rail_vehicle_node", "bench_vehicle_rhs")], "usage"),
+    ([os.path.join(LIB, "rail_vehicle_node", "bench_vehicle_simulator")], "usage"),
+    ([os.path.join(LIB, "rail_vehicle_node", "bench_vehicle_accuracy")], "usage"),
     ([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "contact_geometry_for_scene.py")], "usage"),
     ([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "plot_contact_geometry.py")], "Plots"),
     ([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "manchester_a22.py")], "usage"),
