@@ -839,6 +839,14 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
            exit_code == kExitOk ? "finished" : "stopped", static_cast<unsigned long long>(coupling.next_step()),
            coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h,
            track->newmarkSteps(), wall);
+  // How the contact was found, so that a run never hides approximate contact points.
+  rail::contact::DetectionCounts detection;
+  for (int id = 0; id < track->wheelCount(); ++id)
+    for (const rail::contact::DetectionWork& d : track->contactWork(id).detection) detection.add(d);
+  if (detection.approximations > 0)
+    ROS_WARN("%s: %s", me.c_str(), rail::contact::describe(detection).c_str());
+  else
+    ROS_INFO("%s: %s", me.c_str(), rail::contact::describe(detection).c_str());
   return exit_code;
 }
 

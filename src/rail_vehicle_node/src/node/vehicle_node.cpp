@@ -618,6 +618,16 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
              rc == kExitOk ? "finished" : "stopped", sim->time(), sim->leading_arc_length(), wall,
              wall / std::max(sim->time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
              c.projections, c.adams_fallbacks);
+    // How the contact was found (the vehicle's own contact on the rigid track), never hiding approximations.
+    if (!cosim) {
+      rail::contact::DetectionCounts detection;
+      for (const rail::contact::WheelContactWork& w : sim->contact_data().work)
+        for (const rail::contact::DetectionWork& d : w.detection) detection.add(d);
+      if (detection.approximations > 0)
+        ROS_WARN("%s: %s", node.c_str(), rail::contact::describe(detection).c_str());
+      else
+        ROS_INFO("%s: %s", node.c_str(), rail::contact::describe(detection).c_str());
+    }
   } catch (const std::exception& e) {
     ROS_FATAL("%s: internal error at t = %.4f s: %s", node.c_str(), sim->time(), e.what());
     rc = kExitInternal;
