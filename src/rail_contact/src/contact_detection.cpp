@@ -23,6 +23,8 @@ const char* toString(DetectionStatus status) noexcept {
 
 std::string describe(const DetectionCounts& c) {
   std::ostringstream m;
+  m.setf(std::ios::fixed);
+  m.precision(2);
   m << c.calls << " contact detections, " << (c.calls > 0 ? static_cast<double>(c.newton_iterations) / c.calls : 0.0)
     << " Newton iterations each, " << c.searches << " robust searches (" << c.fallbacks
     << " after a failed warm start), " << c.approximations << " approximate";

@@ -528,7 +528,7 @@ TEST(DetectionCounts, SumAndDescribeSayWhatApproximateMeans) {
   EXPECT_EQ(c.calls, 20);
   EXPECT_EQ(c.approximations, 1);
   const std::string s = rc::describe(c);
-  EXPECT_NE(s.find("20 contact detections, 2 Newton iterations each, 2 robust searches (1 after a failed warm start), "
+  EXPECT_NE(s.find("20 contact detections, 2.00 Newton iterations each, 2 robust searches (1 after a failed warm start), "
                    "1 approximate (Newton did not converge"),
             std::string::npos)
       << s;
