@@ -300,7 +300,9 @@ std::string describe(const Scene& s, Role role) {
   std::snprintf(hash, sizeof(hash), "%016llx", static_cast<unsigned long long>(s.hash));
   o << "scene '" << s.name << "' (" << s.file << "), hash " << hash << "\n";
   o << "track: " << fixed(t.length(), 1) << " m from s = " << fixed(t.start_arc_length, 1) << " m, gauge "
-    << fixed(t.gauge * 1e3, 0) << " mm, rail " << t.rail_profile << " at 1/" << fixed(1.0 / t.rail_inclination, 0)
+    << fixed(t.gauge * 1e3, 0) << " mm, rail " << t.rail_profile
+    << (t.rail_inclination == 0.0 ? std::string(" with no inclination added (as the profile gives it)")
+                                  : " at 1/" + fixed(1.0 / t.rail_inclination, 0))
     << ", sleepers every " << fixed(t.sleeper_spacing, 2) << " m\n";
   for (std::size_t i = 0; i < t.segments.size(); ++i) {
     o << "  segment " << i << ": " << segment_line(t.segments[i]) << "\n";
