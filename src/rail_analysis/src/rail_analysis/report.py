@@ -53,6 +53,14 @@ def write_report(runs, skipped, run_dir, out_dir, t_discard, figure_list, checks
         L.append("")
         L.append("Track: %s. Speed %.2f m/s (%.1f km/h), sleepers every %.2f m: sleeper-passing frequency %.2f Hz."
                  % (segs, scene.speed, scene.speed * 3.6, scene.sleeper_spacing, scene.sleeper_frequency()))
+    # A run that did not finish (the runner's run.yaml) is marked, not presented as whole.
+    for name in loading.RUN_NAMES:
+        r = runs.get(name)
+        why = (r.info.get("incomplete") or ("" if r.info.get("exit_code") in (0, None) else
+                                            "the run exited %s" % r.info.get("exit_code"))) if r else ""
+        if why:
+            L.append("")
+            L.append("**%s: incomplete: %s**" % (name, why))
     L.append("")
     L.append("## Runs")
     L.append("")
