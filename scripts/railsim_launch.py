@@ -191,6 +191,7 @@ def main():
         if f.endswith(".exit"):
             os.remove(os.path.join(a.status_dir, f))
     env = dict(os.environ, RAILSIM_STATUS_DIR=os.path.abspath(a.status_dir))
+    env.setdefault("ROSCONSOLE_STDOUT_LINE_BUFFERED", "1")  # console lines as they are written
 
     def launch_child():
         # roslaunch stops its nodes and master when this runner dies (SIGKILL included).
