@@ -10,6 +10,7 @@ from . import analysis, figures, loading
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
+EXIT_TOO_SHORT = 3  # a run too short for the analysis (one line on stderr)
 
 
 def _fmt(x, spec="%.3g"):
@@ -184,6 +185,7 @@ def main(argv=None):
         path, _, _, _ = analyze(a.run_dir, a.out, a.discard, names, progress=lambda s: print(s, flush=True))
     except loading.AnalysisInputError as e:
         sys.stderr.write("railsim_analyze: %s\n" % str(e).replace("\n", " "))
-        return EXIT_BAD_INPUT
+        # A run too short for the analysis is not a bad input: the runner says so and keeps the run's code.
+        return EXIT_TOO_SHORT if type(e).__name__ == "AnalysisTooShortError" else EXIT_BAD_INPUT
     print("report: %s" % os.path.abspath(path))
     return EXIT_OK
