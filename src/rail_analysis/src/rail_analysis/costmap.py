@@ -607,12 +607,15 @@ def run_case(spec):
     env["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
     # Whitespace inside {...}, [...] and quotes stays within one override (docs/scene.md, Overrides).
     overrides = " ".join(spec["overrides"] + ["output.bag=" + BAG])
-    cmd = wrap + ["roslaunch", "--disable-title", "-p", str(port), launch, "scene:=" + spec["scene"],
+    # In a network namespace with only loopback where the system allows it (scripts/railsim_isolate).
+    isolate = os.path.join(spec["workspace"], "scripts", "railsim_isolate")
+    prefix = [isolate] if os.access(isolate, os.X_OK) else []
+    cmd = prefix + wrap + ["roslaunch", "--disable-title", "-p", str(port), launch, "scene:=" + spec["scene"],
                   "output_dir:=" + case_dir, "overrides:=" + overrides]
     rec["plan"] = plan
     t0 = time.monotonic()
     with open(log_path, "w") as log:
-        log.write("# %s\n" % " ".join(cmd[4:]))
+        log.write("# %s\n" % " ".join(cmd[len(prefix) + 4:]))
         log.flush()
         proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
         proc.case_dir = case_dir  # what _stop clears up after the launch
