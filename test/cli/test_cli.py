@@ -175,7 +175,7 @@ class TestCli(unittest.TestCase):
     # -- options ---------------------------------------------------------------------------------------
     def test_help_of_every_subcommand(self):
         for args in (["--help"], ["run", "-h"], ["run", "--help"], ["run", SHORT, "-h"], ["validate", "-h"],
-                     ["test", "-h"], ["setup", "--help"], ["hard-cases", "-h"]):
+                     ["test", "-h"], ["setup", "--help"], ["hard-cases", "-h"], ["two-hosts", "-h"]):
             rc, text = self.railsim(*args)
             self.assertEqual(rc, 0, "%s: %s" % (args, text))
             self.assertIn("usage", text.lower(), args)
@@ -400,6 +400,17 @@ class TestCli(unittest.TestCase):
         self.assertEqual(p.returncode, 4, text)
         self.assertIn("the track node died before the handshake: rail_track exited with code 2", text)
         self.assertLess(wall, 15.0, "the vehicle waited %.1f s" % wall)
+
+    @unittest.skipUnless(os.geteuid() == 0, "needs root (ip netns, veth), as CI has")
+    def test_two_hosts(self):
+        rc, text = self.railsim("two-hosts", "--out", os.path.join(self.dir, "two_hosts"), timeout=300)
+        self.assertEqual(rc, 0, text)
+        self.assertIn("two-hosts: service: both nodes finished across the hosts", text)
+        self.assertIn("two-hosts: topic: both nodes finished across the hosts", text)
+        self.assertRegex(text, r"two-hosts: shm refused across the hosts .*created on host 'railsim-[ab]', "
+                               r"this is host 'railsim-[ab]'")
+        left = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
+        self.assertNotRegex(left, r"railsim_[ab]_\d+", "network namespaces left behind")
 
     def test_readme_standalone_example(self):
         env = dict(self.env, ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.port)
