@@ -212,6 +212,10 @@ class TestCli(unittest.TestCase):
         self.assertEqual(rc, 0, text)
         rc, text = self.railsim("validate", "nothere.yaml", cwd=self.dir)
         self.assertEqual(rc, 1, text)
+        self.assertIn("error: nothere.yaml: cannot read the scene file (looked for %s/nothere.yaml): No such file"
+                      % os.path.realpath(self.dir), text)
+        rc, text = self.railsim("run", "nothere.yaml", cwd=self.dir)
+        self.assertEqual(rc, 1, text)
         self.assertIn("error: %s/nothere.yaml: cannot read the scene file: No such file" % self.dir, text)
         # The validator itself, given a relative path, says where it looked.
         p = subprocess.run([os.path.join(ROOT, "devel", "lib", "rail_core", "railsim_validate_scene"), "nothere.yaml"],
