@@ -135,12 +135,14 @@ class TestCli(unittest.TestCase):
         f.close()
         return p
 
-    def wait_for(self, pattern, timeout=60.0):
+    def wait_for(self, pattern, timeout=60.0, path=None):
+        """Waits until pattern appears in the console (or in the file path)."""
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
-            with open(self.log) as f:
-                if re.search(pattern, f.read()):
-                    return
+            if os.path.isfile(path or self.log):
+                with open(path or self.log) as f:
+                    if re.search(pattern, f.read()):
+                        return
             time.sleep(0.1)
         self.fail("'%s' did not appear in the console within %.0f s" % (pattern, timeout))
 
@@ -338,6 +340,15 @@ class TestCli(unittest.TestCase):
         info = self.run_yaml("paper_demo_60m")
         self.assertEqual(info["exit_code"], 5)
         self.assertIn("stopped by", info["incomplete"])
+
+    def test_ctrl_c_stops_the_demonstration(self):
+        p = self.start("run", "--scene", SHORT, "--end", "1.0", "--runs", "standalone rigid_fe", "--out", self.out)
+        self.wait_for("integrating with", path=os.path.join(self.out, "standalone.log"))
+        os.killpg(p.pid, signal.SIGINT)
+        self.assertEqual(p.wait(timeout=60), 5, self.console())
+        self.assertIn("demonstration stopped", self.console())
+        self.assertEqual(self.run_yaml("standalone")["exit_code"], 5)
+        self.assertFalse(os.path.exists(os.path.join(self.out, "rigid_fe.run.yaml")), "the next run started")
 
     def test_kill_9_of_a_node_reindexes_its_bag(self):
         p = self.start("run", COSIM, "--set", "solver.end={time: 2.0}", "--out", self.out)
