@@ -386,6 +386,35 @@ class TestCli(unittest.TestCase):
         self.assertIn("roslaunch left", self.console())
         self.assertIn("roslaunch was killed by SIGKILL", self.run_yaml("paper_demo_60m")["incomplete"])
 
+    def test_kill_9_of_a_bare_roslaunch_stops_its_nodes(self):
+        # roslaunch used directly (README): its nodes' guards stop them when it dies, so they close their
+        # bags. The master and rosout it started are outside any guard: only ./railsim run stops those
+        # (test above); this test stops them itself.
+        env = dict(self.env, ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.port)
+        self.log = os.path.join(self.dir, "console.log")
+        with open(self.log, "w") as f:
+            p = subprocess.Popen(["bash", "-c", 'source "$0/devel/setup.bash" && exec "$@"', ROOT, "roslaunch", "-p",
+                                  str(self.port), os.path.join(ROOT, "launch", "cosim.launch"), "scene:=" + COSIM,
+                                  "output_dir:=" + self.out, "overrides:=solver.end={time: 2.0}"],
+                                 stdout=f, stderr=subprocess.STDOUT, env=env, cwd=ROOT, start_new_session=True)
+        self.wait_for("integrating with")
+        os.kill(p.pid, signal.SIGKILL)
+        p.wait()
+        deadline = time.monotonic() + 30.0
+        nodes = lambda: [c for _, c in processes_naming(self.dir) if "_node __name:=" in c and "guard" not in c]
+        while nodes() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        left = nodes()
+        # The known leftovers of a bare roslaunch: its master and rosout (named by their __log:= paths).
+        rest = [pid for pid, c in processes_naming(self.dir) if "rosmaster" in c or "rosout" in c]
+        for pid in rest:
+            os.kill(pid, signal.SIGTERM)
+        self.assertEqual(left, [])
+        self.assertEqual(len(rest), 2, "expected the master and rosout of the bare roslaunch")
+        text = self.console()
+        self.assertIn("railsim_node_guard: roslaunch (pid %d) went away: stopping rail_vehicle" % p.pid, text)
+        self.assertIn("bag closed", text)
+
     def test_kill_9_of_the_runner_leaves_nothing(self):
         p = self.start("run", COSIM, "--set", "solver.end={time: 2.0}", "--out", self.out)
         self.wait_for("integrating with")
