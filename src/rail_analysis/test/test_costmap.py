@@ -252,6 +252,10 @@ def num(s):
 class Sweep(unittest.TestCase):
     """Real runs of the small grid plus a case the validator refuses."""
 
+    # The refused case failed (the validator's exit 1), so every sweep of this grid exits 1: the map's
+    # exit code tells that a case did not finish.
+    SWEEP_RC = 1
+
     @classmethod
     def setUpClass(cls):
         cls.work = tempfile.mkdtemp(prefix="rail_costmap_sweep_")
@@ -263,14 +267,14 @@ class Sweep(unittest.TestCase):
         cls.grid = write(os.path.join(cls.work, "grid.yaml"), yaml.safe_dump(g))
         cls.out = os.path.join(cls.work, "local")
         cls.proc = run_tool([cls.grid, "--out", cls.out, "--jobs", "2"])
-        cls.rows = load_csv(os.path.join(cls.out, "map.csv")) if cls.proc.returncode == 0 else {}
+        cls.rows = load_csv(os.path.join(cls.out, "map.csv")) if cls.proc.returncode == cls.SWEEP_RC else {}
 
     @classmethod
     def tearDownClass(cls):
         shutil.rmtree(cls.work, ignore_errors=True)
 
     def test_1_table_metrics_and_plot(self):
-        self.assertEqual(self.proc.returncode, 0, self.proc.stdout + self.proc.stderr)
+        self.assertEqual(self.proc.returncode, self.SWEEP_RC, self.proc.stdout + self.proc.stderr)
         self.assertEqual(list(self.rows), ["tight", "default", "loose", "refused"])
         for name in ("tight", "default", "loose"):
             self.assertEqual(self.rows[name]["status"], "ok", self.rows[name])
@@ -307,12 +311,12 @@ class Sweep(unittest.TestCase):
             self.assertEqual(r["settings_hash"], c.settings_hash)
 
     def test_2_rerun_skips_current_cases_and_reruns_a_stale_one(self):
-        self.assertEqual(self.proc.returncode, 0, self.proc.stderr)
+        self.assertEqual(self.proc.returncode, self.SWEEP_RC, self.proc.stderr)
         g = costmap.Grid(self.grid)
         res = {c.name: os.path.join(self.out, "cases", c.case_id, costmap.RESULT) for c in g.cases}
         before = {n: os.stat(p).st_mtime_ns for n, p in res.items()}
         proc = run_tool([self.grid, "--out", self.out, "--jobs", "2"])
-        self.assertEqual(proc.returncode, 0, proc.stderr)
+        self.assertEqual(proc.returncode, self.SWEEP_RC, proc.stderr)
         for n in ("tight", "default", "loose"):
             self.assertIn("%s: current result, skipped" % n, proc.stdout)
         self.assertIn("1 case(s) to run", proc.stdout)   # only the refused one is tried again
@@ -323,7 +327,7 @@ class Sweep(unittest.TestCase):
         r["settings_hash"] = "0000000000000000"
         costmap.write_yaml_atomic(res["default"], r)
         proc = run_tool([self.grid, "--out", self.out, "--jobs", "2", "--only", "default"])
-        self.assertEqual(proc.returncode, 0, proc.stderr)
+        self.assertEqual(proc.returncode, self.SWEEP_RC, proc.stderr)
         self.assertIn("1 case(s) to run", proc.stdout)
         self.assertIn("default: ok", proc.stdout)
         self.assertEqual(costmap.read_result(os.path.dirname(res["default"]))["settings_hash"],
@@ -333,7 +337,7 @@ class Sweep(unittest.TestCase):
     def test_4_a_sweep_stopped_mid_run_leaves_nothing_running_and_resumes(self):
         # SIGTERM to the tool while its second case runs (one job): it stops that launch (roslaunch and its
         # nodes), exits 130, keeps the first case's result; a rerun skips that case and runs the rest.
-        self.assertEqual(self.proc.returncode, 0, self.proc.stderr)
+        self.assertEqual(self.proc.returncode, self.SWEEP_RC, self.proc.stderr)
         out = os.path.join(self.work, "stopped")
         env = dict(os.environ, PYTHONPATH=PKG_SRC + os.pathsep + os.environ.get("PYTHONPATH", ""), MPLBACKEND="Agg",
                    PATH="/usr/bin:/bin:" + os.environ.get("PATH", ""))
@@ -355,14 +359,14 @@ class Sweep(unittest.TestCase):
         left = subprocess.run(["pgrep", "-f", os.path.join(out, "cases")], stdout=subprocess.PIPE, text=True).stdout
         self.assertEqual(left.strip(), "", "processes left: " + left)
         proc = run_tool([self.grid, "--out", out, "--jobs", "2"])
-        self.assertEqual(proc.returncode, 0, proc.stdout + proc.stderr)
+        self.assertEqual(proc.returncode, self.SWEEP_RC, proc.stdout + proc.stderr)
         self.assertIn("%s: current result, skipped" % g.cases[0].name, proc.stdout)
         rows = load_csv(os.path.join(out, "map.csv"))
         for name in ("tight", "default", "loose"):
             self.assertEqual(rows[name]["status"], "ok", rows[name])
 
     def test_3_dask_cluster_gives_the_same_metrics(self):
-        self.assertEqual(self.proc.returncode, 0, self.proc.stderr)
+        self.assertEqual(self.proc.returncode, self.SWEEP_RC, self.proc.stderr)
         from distributed import LocalCluster
         out = os.path.join(self.work, "dask")
         # The workers import rail_analysis.costmap (the case function) as a worker started from a sourced
@@ -370,7 +374,7 @@ class Sweep(unittest.TestCase):
         os.environ["PYTHONPATH"] = PKG_SRC + os.pathsep + os.environ.get("PYTHONPATH", "")
         with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cluster:
             proc = run_tool([self.grid, "--out", out, "--scheduler", cluster.scheduler_address])
-        self.assertEqual(proc.returncode, 0, proc.stdout + proc.stderr)
+        self.assertEqual(proc.returncode, self.SWEEP_RC, proc.stdout + proc.stderr)
         self.assertIn("on tcp://", proc.stdout)
         rows = load_csv(os.path.join(out, "map.csv"))
         self.assertEqual(list(rows), list(self.rows))

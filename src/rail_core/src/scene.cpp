@@ -351,7 +351,9 @@ std::string describe(const Scene& s, Role role) {
   o << "\n";
 
   // Components this process builds (the FE sizes follow the mesh rules of the track model).
-  const long sleepers = static_cast<long>(std::floor(t.length() / t.sleeper_spacing + 1e-9)) + 1;
+  // The loader bounds the length (1000 km), so the count fits; clamped all the same rather than overflow.
+  const double sleepers_d = std::floor(t.length() / t.sleeper_spacing + 1e-9) + 1.0;
+  const long sleepers = std::isfinite(sleepers_d) && sleepers_d < 1e12 ? static_cast<long>(sleepers_d) : 0;
   const long rail_nodes = (sleepers - 1) * t.rail_elements_between_sleepers + 1;
   const long free_nodes = 2 * rail_nodes + 6 * sleepers;
   std::string builds;

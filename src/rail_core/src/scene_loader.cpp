@@ -3,12 +3,16 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <sstream>
+
+#include <unistd.h>
 
 #include "yaml_reader.hpp"
 
@@ -55,6 +59,10 @@ void in_range(MapReader& r, const char* key, double v, double lo, double hi, con
     r.fail(key, "must be between " + format_double(lo) + " and " + format_double(hi) + " " + unit + got(v));
   }
 }
+
+// Longer than any line (1000 km): a typing error, and the sleeper and node counts of the track would
+// overflow.
+constexpr double kMaxTrackLength = 1e6;  // [m]
 
 // A curve radius tighter than any track a rail vehicle runs on (tram depots reach ~15 m; EN 13803 main
 // lines 150 m and up) is a typing error, not a scenario: refused before it becomes a curvature of 1e300.
@@ -118,6 +126,10 @@ Segment read_segment(const YAML::Node& node, const std::string& path, const Cont
   r.require("length");
   r.number("length", seg.length);
   positive(r, "length", seg.length);
+  if (seg.length > kMaxTrackLength) {
+    r.fail("length", "must be <= " + format_double(kMaxTrackLength) + " m (the longest track a run builds)" +
+                         got(seg.length));
+  }
   r.number("gradient", seg.gradient);
   in_range(r, "gradient", seg.gradient, -0.1, 0.1, "(rise over run)");
   r.boolean("jump_allowed", seg.jump_allowed);
@@ -246,6 +258,10 @@ void read_track(MapReader& root, Scene& s, const Context& ctx) {
     t.segments.push_back(read_segment(seq[i], "track.segments[" + std::to_string(i) + "]", ctx));
   }
   check_chain(t, seq, ctx.file);
+  if (t.length() > kMaxTrackLength) {
+    r.fail("segments", "the track must be at most " + format_double(kMaxTrackLength) + " m long, got " +
+                           format_double(t.length()) + " m");
+  }
   if (t.length() < 2.0 * t.sleeper_spacing) {
     r.fail("segments", "the track must be at least two sleeper spacings long, got " +
                            format_double(t.length()) + " m");
@@ -595,6 +611,24 @@ void set_at(YAML::Node node, const std::vector<std::string>& parts, std::size_t 
   set_at(node[parts[i]], parts, i + 1, value, file, item);
 }
 
+// "{a:1, b:{c:2}}" -> "{a: 1, b: {c: 2}}": a space after each ':' outside quotes that has none.
+std::string spaced_colons(const std::string& text) {
+  std::string out;
+  char quote = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    out += c;
+    if (quote != 0) {
+      if (c == quote) quote = 0;
+    } else if (c == '\'' || c == '"') {
+      quote = c;
+    } else if (c == ':' && i + 1 < text.size() && !std::isspace(static_cast<unsigned char>(text[i + 1]))) {
+      out += ' ';
+    }
+  }
+  return out;
+}
+
 // Applies "a.b.c=value" to doc (a map). Throws SceneError naming the override.
 void apply_override(YAML::Node& doc, const std::string& file, const std::string& item) {
   const std::size_t eq = item.find('=');
@@ -607,6 +641,12 @@ void apply_override(YAML::Node& doc, const std::string& file, const std::string&
   YAML::Node value;
   try {
     value = YAML::Load(item.substr(eq + 1));
+    // YAML reads "{time:1.0}" as the key "time:1.0" without a value; an override means {time: 1.0}.
+    if (value.IsMap() && std::any_of(value.begin(), value.end(), [](const auto& kv) {
+          return kv.first.IsScalar() && kv.first.Scalar().find(':') != std::string::npos && kv.second.IsNull();
+        })) {
+      value = YAML::Load(spaced_colons(item.substr(eq + 1)));
+    }
   } catch (const YAML::Exception& e) {
     fail_at(file, key, "override '" + item + "': the value is not valid YAML: " + e.msg, 0);
   }
@@ -625,6 +665,33 @@ void apply_override(YAML::Node& doc, const std::string& file, const std::string&
 
 }  // namespace
 
+namespace {
+
+// yaml-cpp keeps the first of two equal keys without a word: a key given twice is refused, naming both lines.
+void refuse_duplicate_keys(const YAML::Node& node, const std::string& file, const std::string& path) {
+  if (node.IsMap()) {
+    std::map<std::string, int> seen;  // key -> line
+    for (const auto& kv : node) {
+      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : std::string();
+      const int line = kv.first.Mark().line + 1;
+      const std::string field = path.empty() ? key : path + "." + key;
+      const auto it = seen.find(key);
+      if (it != seen.end()) {
+        fail_at(file, field, "given twice (lines " + std::to_string(it->second) + " and " + std::to_string(line) +
+                                 "): remove one", line);
+      }
+      seen.emplace(key, line);
+      refuse_duplicate_keys(kv.second, file, field);
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      refuse_duplicate_keys(node[i], file, path + "[" + std::to_string(i) + "]");
+    }
+  }
+}
+
+}  // namespace
+
 Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir,
                       const SceneOverrides& overrides) {
   YAML::Node doc;
@@ -633,6 +700,7 @@ Scene load_scene_text(const std::string& text, const std::string& file, const st
   } catch (const YAML::Exception& e) {
     fail_at(file, "", "not valid YAML: " + e.msg, e.mark.line >= 0 ? e.mark.line + 1 : 0);
   }
+  refuse_duplicate_keys(doc, file, "");
   if (!doc.IsDefined() || doc.IsNull()) fail_at(file, "", "is empty", 0);
   if (!overrides.empty() && !doc.IsMap()) fail_at(file, "", "must be a map of keys to values", 1);
   for (const std::string& item : overrides) apply_override(doc, file, item);
@@ -685,7 +753,16 @@ Scene load_scene_handed_over(const std::string& text, const std::string& file, c
 
 Scene load_scene_file(const std::string& path, const SceneOverrides& overrides) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw SceneError(path + ": cannot read the scene file: " + std::strerror(errno));
+  if (!in) {
+    const std::string why = std::strerror(errno);
+    // A relative path is taken from the working directory: say which one.
+    std::string where;
+    if (!path.empty() && path[0] != '/') {
+      char cwd[4096];
+      if (::getcwd(cwd, sizeof cwd) != nullptr) where = " (looked for " + std::string(cwd) + "/" + path + ")";
+    }
+    throw SceneError(path + ": cannot read the scene file" + where + ": " + why);
+  }
   std::ostringstream ss;
   ss << in.rdbuf();
   return load_scene_text(ss.str(), path, dir_of(path), overrides);

@@ -331,3 +331,26 @@ TEST(Scene, BadOverridesAreRefusedNamingTheOverride) {
             std::string::npos);
   EXPECT_NE(error({"effects.flange_contat=true"}).find("effects.flange_contat: unknown key"), std::string::npos);
 }
+
+TEST(Scene, AKeyGivenTwiceIsRefusedNamingBothLines) {
+  // yaml-cpp would keep the first value without a word.
+  const std::string twice = replaced(kBase, "  speed: 30.0\n", "  speed: 30.0\n  speed: 10.0\n");
+  const std::string e = error_of(twice);
+  EXPECT_NE(e.find("scene.yaml: vehicle.speed: given twice (lines "), std::string::npos) << e;
+  // Inside a list item too.
+  const std::string in_list = replaced(kBase, "{type: straight, length: 50.0}", "{type: straight, length: 50.0, length: 5}");
+  EXPECT_NE(error_of(in_list).find("track.segments[0].length: given twice"), std::string::npos) << error_of(in_list);
+}
+
+TEST(Scene, AFlowMapOverrideWithoutSpacesReadsAsWritten) {
+  // scene.launch's comment writes solver.end={time:1.0}; YAML alone would read the key "time:1.0".
+  const Scene s = load_scene_text(kBase, "scene.yaml", kData, {"solver.end={time:1.0}"});
+  EXPECT_EQ(s.solver.end.kind, EndKind::kTime);
+  EXPECT_DOUBLE_EQ(s.solver.end.value, 1.0);
+  EXPECT_EQ(load_scene_text(kBase, "scene.yaml", kData, {"output.bag='a:b.bag'"}).output.bag, "a:b.bag");
+}
+
+TEST(Scene, TrackLengthsThatWouldOverflowACountAreRefused) {
+  const std::string e = error_of(replaced(kBase, "length: 50.0", "length: 1e308"));
+  EXPECT_NE(e.find("track.segments[0].length: must be <= 1e+06 m"), std::string::npos) << e;
+}

@@ -535,6 +535,18 @@ def _node_exit_codes(log_text):
     return [int(c) for c in re.findall(r"process has died \[pid \d+, exit code (-?\d+)", log_text)]
 
 
+def _guard_exit_codes(status_dir):
+    """{node: exit code} of the <node>.exit files the node guards wrote ({} without any)."""
+    out = {}
+    for f in sorted(glob.glob(os.path.join(status_dir, "*.exit"))):
+        try:
+            with open(f) as fh:
+                out[os.path.basename(f)[:-5]] = int(fh.read().strip())
+        except (OSError, ValueError):
+            continue
+    return out
+
+
 def _tail(text, n=LOG_TAIL_LINES):
     text = re.sub(r"\x1b\[[0-9;]*m", "", text)
     return "\n".join(text.rstrip().splitlines()[-n:])
@@ -564,6 +576,10 @@ def run_case(spec):
     env["ROS_IP"] = "127.0.0.1"
     env.pop("ROS_HOSTNAME", None)
     env["PYTHONUNBUFFERED"] = "1"
+    # Each node's guard (scripts/railsim_node_guard) writes its exit code here, shutdown exits included.
+    status_dir = os.path.join(case_dir, "node_exit")
+    _rmtree(status_dir)
+    env["RAILSIM_STATUS_DIR"] = status_dir
     wrap = ["bash", "-c", 'source "$0" >/dev/null || exit 97; exec "$@"', setup]
     sets = []
     for o in spec["overrides"]:
@@ -591,12 +607,15 @@ def run_case(spec):
     env["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
     # Whitespace inside {...}, [...] and quotes stays within one override (docs/scene.md, Overrides).
     overrides = " ".join(spec["overrides"] + ["output.bag=" + BAG])
-    cmd = wrap + ["roslaunch", "--disable-title", "-p", str(port), launch, "scene:=" + spec["scene"],
+    # In a network namespace with only loopback where the system allows it (scripts/railsim_isolate).
+    isolate = os.path.join(spec["workspace"], "scripts", "railsim_isolate")
+    prefix = [isolate] if os.access(isolate, os.X_OK) else []
+    cmd = prefix + wrap + ["roslaunch", "--disable-title", "-p", str(port), launch, "scene:=" + spec["scene"],
                   "output_dir:=" + case_dir, "overrides:=" + overrides]
     rec["plan"] = plan
     t0 = time.monotonic()
     with open(log_path, "w") as log:
-        log.write("# %s\n" % " ".join(cmd[4:]))
+        log.write("# %s\n" % " ".join(cmd[len(prefix) + 4:]))
         log.flush()
         proc = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True)
         proc.case_dir = case_dir  # what _stop clears up after the launch
@@ -625,7 +644,14 @@ def run_case(spec):
     with open(log_path, errors="replace") as f:
         text = f.read()
     died = [c for c in _node_exit_codes(text) if c != 0]
-    rec["exit_code"] = rc if rc != 0 else (died[0] if died else 0)
+    nodes = _guard_exit_codes(status_dir)
+    if nodes:
+        # The worst node code (a signal N as 128 + N); 0 only when every node finished.
+        rec["nodes"] = nodes
+        worst = max((128 - c if c < 0 else c) for c in nodes.values())
+        rec["exit_code"] = worst if worst != 0 else rc
+    else:
+        rec["exit_code"] = rc if rc != 0 else (died[0] if died else 0)
     if timed_out:
         rec["status"] = "timeout"
         rec["log_tail"] = _tail(text) + "\n[railsim_map] stopped after the timeout of %g s" % spec["timeout"]
@@ -1022,4 +1048,7 @@ def main(argv=None):
     ok = sum(1 for r in rows if r.get("status") == "ok")
     print("map: %d case(s) ok, %d failed, %d without a result; table %s" % (
         ok, len(rows) - ok, len(grid.cases) - len(rows), os.path.join(out, "map.md")), flush=True)
-    return 0
+    # The sweep's exit code tells whether every case finished: the worst code of a failed case's nodes.
+    codes = [r.get("exit_code") if isinstance(r.get("exit_code"), int) and r.get("exit_code") > 0 else 1
+             for r in rows if r.get("status") != "ok"]
+    return min(max(codes), 255) if codes else 0

@@ -10,6 +10,7 @@ from . import analysis, figures, loading
 
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
+EXIT_TOO_SHORT = 3  # a run too short for the analysis (one line on stderr)
 
 
 def _fmt(x, spec="%.3g"):
@@ -53,6 +54,14 @@ def write_report(runs, skipped, run_dir, out_dir, t_discard, figure_list, checks
         L.append("")
         L.append("Track: %s. Speed %.2f m/s (%.1f km/h), sleepers every %.2f m: sleeper-passing frequency %.2f Hz."
                  % (segs, scene.speed, scene.speed * 3.6, scene.sleeper_spacing, scene.sleeper_frequency()))
+    # A run that did not finish (the runner's run.yaml) is marked, not presented as whole.
+    for name in loading.RUN_NAMES:
+        r = runs.get(name)
+        why = (r.info.get("incomplete") or ("" if r.info.get("exit_code") in (0, None) else
+                                            "the run exited %s" % r.info.get("exit_code"))) if r else ""
+        if why:
+            L.append("")
+            L.append("**%s: incomplete: %s**" % (name, why))
     L.append("")
     L.append("## Runs")
     L.append("")
@@ -176,6 +185,7 @@ def main(argv=None):
         path, _, _, _ = analyze(a.run_dir, a.out, a.discard, names, progress=lambda s: print(s, flush=True))
     except loading.AnalysisInputError as e:
         sys.stderr.write("railsim_analyze: %s\n" % str(e).replace("\n", " "))
-        return EXIT_BAD_INPUT
+        # A run too short for the analysis is not a bad input: the runner says so and keeps the run's code.
+        return EXIT_TOO_SHORT if type(e).__name__ == "AnalysisTooShortError" else EXIT_BAD_INPUT
     print("report: %s" % os.path.abspath(path))
     return EXIT_OK

@@ -26,6 +26,10 @@ import numpy as np
 from . import comfort, loading
 from .loading import AnalysisInputError, MissingTopicError
 
+
+class AnalysisTooShortError(AnalysisInputError):
+    """The run ends before the analysis has enough samples after its discard time (not a bad input)."""
+
 G = 9.81  # [m/s^2], when a vehicle data file gives no gravity
 
 # Maximum flange angle of the S1002 wheel profile (EN 13715): 70 deg; the flank of config/profiles/S1002.txt
@@ -446,8 +450,8 @@ def evaluate(run, settings=None):
     kin = run.kinematics
     mask = kin["t"] >= st.t_discard
     if mask.sum() < 2:
-        raise AnalysisInputError("%s: fewer than 2 /wheelset_kinematics samples after t = %.3f s"
-                                 % (run.bag, st.t_discard))
+        raise AnalysisTooShortError("%s: fewer than 2 /wheelset_kinematics samples after t = %.3f s: the run "
+                                    "is too short for this analysis" % (run.bag, st.t_discard))
     t = kin["t"][mask]
     s = kin["arc_length"][mask]
     fl, fr = kin["left_force"][mask], kin["right_force"][mask]

@@ -10,6 +10,7 @@ import os
 import sys
 
 import numpy as np
+import yaml
 
 from . import comfort, loading, safety
 
@@ -17,6 +18,7 @@ CSV_COLUMNS = ("run", "quantity", "unit", "maximum", "wheel_id", "wheelset", "si
                "margin", "status", "note")
 EXIT_OK = 0          # done (limits exceeded or not: see the status column)
 EXIT_BAD_INPUT = 2   # an input refused (one line on stderr)
+EXIT_TOO_SHORT = 3   # a run too short for the analysis (one line on stderr)
 
 SOURCES = [
     "Y/Q: Nadal's limit (tan g - mu)/(1 + mu tan g) (J. Nadal, Annales des Mines, 1896), g = the wheel "
@@ -350,6 +352,21 @@ def _settings_from_args(a):
     return safety.Settings(**kw)
 
 
+def _incomplete(bag):
+    """Why the run of bag did not finish, from the runner's <bag stem>.run.yaml beside it ('' when it did, or
+    when there is no run.yaml)."""
+    path = (bag[:-4] if bag.endswith(".bag") else bag) + ".run.yaml"
+    try:
+        with open(path) as f:
+            info = yaml.safe_load(f) or {}
+    except (OSError, yaml.YAMLError):
+        return ""
+    if info.get("incomplete"):
+        return str(info["incomplete"])
+    code = info.get("exit_code")
+    return "" if code in (0, None) else "the run exited %s" % code
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(prog="railsim_safety", description=(
         "Running-safety, track-loading, wear and comfort quantities of railsim runs. "
@@ -390,8 +407,11 @@ def main(argv=None):
         evals = evaluate_runs(runs, settings)
     except safety.AnalysisInputError as e:
         sys.stderr.write("railsim_safety: %s\n" % str(e).replace("\n", " "))
-        return EXIT_BAD_INPUT
+        return EXIT_TOO_SHORT if isinstance(e, safety.AnalysisTooShortError) else EXIT_BAD_INPUT
+    incomplete = {n: _incomplete(r.bag) for n, r in runs.items()}
     for n, ev in evals.items():
+        if incomplete[n]:
+            print("%s: incomplete: %s" % (n, incomplete[n]))
         print(text_table(n, ev.rows))
         print("")
         bag = runs[n].bag
@@ -402,6 +422,9 @@ def main(argv=None):
         os.makedirs(a.out, exist_ok=True)
         figs = figures(evals, a.out)
         lines = markdown_section(runs, evals, a.out, figs)
+        marks = ["**%s: incomplete: %s**" % (n, why) for n, why in incomplete.items() if why]
+        if marks:
+            lines[1:1] = [""] + marks
         path = os.path.join(a.out, "safety.md")
         with open(path, "w") as f:
             f.write("\n".join(lines))

@@ -1,6 +1,8 @@
 #include "rail_core/ros/master_watch.hpp"
 
 #include <ros/master.h>
+#include <ros/param.h>
+#include <xmlrpcpp/XmlRpcValue.h>
 
 #include <chrono>
 #include <memory>
@@ -43,6 +45,29 @@ MasterWatch::MasterWatch(std::atomic<bool>& stop, double period_s, int misses) :
 MasterWatch::~MasterWatch() {
   state_->quit.store(true);
   release(static_cast<Shared*>(state_));
+}
+
+std::string exited_peer(const std::string& me) {
+  XmlRpc::XmlRpcValue exits;
+  if (!ros::param::get("/railsim/node_exit", exits) || exits.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
+    return "";
+  }
+  std::string run_id;
+  ros::param::get("/railsim/run_id", run_id);
+  const std::string my_name = me.substr(me.find_last_of('/') + 1);
+  for (auto& [name, entry] : exits) {
+    if (name == my_name || entry.getType() != XmlRpc::XmlRpcValue::TypeStruct || !entry.hasMember("code") ||
+        entry["code"].getType() != XmlRpc::XmlRpcValue::TypeInt) {
+      continue;
+    }
+    const bool same_run = entry.hasMember("run_id") && entry["run_id"].getType() == XmlRpc::XmlRpcValue::TypeString &&
+                          static_cast<std::string>(entry["run_id"]) == run_id;
+    if (!same_run) continue;
+    const int code = entry["code"];
+    return code < 0 ? name + " was killed by signal " + std::to_string(-code)
+                    : name + " exited with code " + std::to_string(code);
+  }
+  return "";
 }
 
 }  // namespace rail::core::ros_glue

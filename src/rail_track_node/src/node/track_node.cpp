@@ -96,10 +96,23 @@ int runHandshake(ros::NodeHandle& nh, const Scene& scene, std::string& peer) {
   server.mine = handshake_info(scene, ros::this_node::getName());
   ros::ServiceServer srv = nh.advertiseService("/railsim/handshake", &HandshakeServer::on_request, &server);
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
+  // A vehicle node that died before calling (its guard's record, master_watch.hpp) is reported at once.
+  std::string dead;
+  ros::WallTime next_check = ros::WallTime::now();
   while (ros::ok() && !g_stop && !server.answered && ros::WallTime::now() < deadline) {
     ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.05));
+    if (!server.answered && ros::WallTime::now() >= next_check) {
+      dead = rail::core::ros_glue::exited_peer(ros::this_node::getName());
+      if (!dead.empty()) break;
+      next_check = ros::WallTime::now() + ros::WallDuration(0.2);
+    }
   }
   if (!ros::ok() || g_stop) return kExitInterrupted;
+  if (!dead.empty()) {
+    ROS_FATAL("%s: the vehicle node died before the handshake: %s (its log says why)",
+              ros::this_node::getName().c_str(), dead.c_str());
+    return kExitPeerTimeout;
+  }
   if (!server.answered) {
     ROS_FATAL("%s: no vehicle node called /railsim/handshake within %.1f s (solver.handshake_timeout): is "
               "rail_vehicle running?", ros::this_node::getName().c_str(), scene.solver.handshake_timeout);

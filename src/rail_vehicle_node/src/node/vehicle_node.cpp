@@ -66,11 +66,22 @@ const char* StopReason() {
 // peer: set to the track node's name once it answered.
 int handshake(const Scene& scene, std::string& peer) {
   const std::string service = "/railsim/handshake";
-  const ros::Duration timeout(scene.solver.handshake_timeout);
-  if (!ros::service::waitForService(service, timeout)) {
-    ROS_FATAL("%s: the track node did not offer %s within %.1f s (solver.handshake_timeout): is rail_track "
-              "running?", ros::this_node::getName().c_str(), service.c_str(), scene.solver.handshake_timeout);
-    return kExitPeerTimeout;
+  // Waits in short slices so that a track node that died (its guard's record, master_watch.hpp) is
+  // reported at once, with its exit code, not after the whole timeout.
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
+  while (!ros::service::waitForService(service, ros::Duration(0.2))) {
+    const std::string dead = rail::core::ros_glue::exited_peer(ros::this_node::getName());
+    if (!dead.empty()) {
+      ROS_FATAL("%s: the track node died before the handshake: %s (its log says why)",
+                ros::this_node::getName().c_str(), dead.c_str());
+      return kExitPeerTimeout;
+    }
+    if (g_stop || !ros::ok()) return kExitInterrupted;
+    if (ros::WallTime::now() >= deadline) {
+      ROS_FATAL("%s: the track node did not offer %s within %.1f s (solver.handshake_timeout): is rail_track "
+                "running?", ros::this_node::getName().c_str(), service.c_str(), scene.solver.handshake_timeout);
+      return kExitPeerTimeout;
+    }
   }
   const HandshakeInfo mine = handshake_info(scene, ros::this_node::getName());
   rail_msgs::Handshake srv;

@@ -31,4 +31,10 @@ class MasterWatch {
   State* state_;  // shared with the thread; freed by whichever of the two ends last
 };
 
+// A peer of this run that has already exited, as scripts/railsim_node_guard records it on the parameter
+// server (/railsim/node_exit/<name>: {code, run_id}, same /railsim/run_id as this node's): "rail_track
+// exited with code 2", or "" when none has. Lets a node waiting for its handshake report a dead peer at
+// once instead of after the whole timeout.
+std::string exited_peer(const std::string& me);
+
 }  // namespace rail::core::ros_glue
