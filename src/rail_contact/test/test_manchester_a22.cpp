@@ -215,3 +215,49 @@ TEST(ManchesterA22, ContactPositionsAndAnglesAgreeWithThePublishedReferenceCode)
   }
   EXPECT_EQ(compared, 42);
 }
+
+TEST(WornProfiles, ShippedExamplesLoadAndSolveWithTheWearTheyClaim) {
+  // config/profiles/ (make_worn_profiles.py): material removed along the inward normal, up to 1.5 mm on
+  // the tread, 3 mm on the flange face, 3 mm on the rail's gauge corner.
+  const std::string dir = RAILSIM_PROFILES_DIR "/";
+  const rc::WheelProfile s1002 = rc::makeS1002();
+  const rc::WheelProfile thin = rc::loadWheelProfile(dir + "S1002_thin_flange.txt");
+  const rc::WheelProfile hollow = rc::loadWheelProfile(dir + "S1002_hollow_worn.txt");
+  // Thin flange: 32.5 mm thick at 10 mm above the taping line, less about 3 mm of wear (the face leans at
+  // about 70 deg there, so its lateral wear is a little more than the normal depth): 2.5 to 3.5 mm thinner.
+  const double t_new = rc::flangeThickness(s1002), t_thin = rc::flangeThickness(thin);
+  EXPECT_NEAR(t_new, 0.0325, 1e-5);
+  EXPECT_GT(t_new - t_thin, 2.5e-3);
+  EXPECT_LT(t_new - t_thin, 3.5e-3);
+  // Hollow tread: the taping line worn by 1.5 cos^2(pi/2 * 8/30) = 1.25 mm (radius smaller: z larger).
+  EXPECT_NEAR(rc::tapingLineZ(hollow) - rc::tapingLineZ(s1002), 1.5e-3 * std::pow(std::cos(0.5 * M_PI * 8.0 / 30.0), 2),
+              0.05e-3);
+  // Side-worn rail: the gauge face 14 mm down moves about 3 mm toward the field side; the top stays.
+  const rc::ProfileCurve rail = rc::loadRailProfile(dir + "UIC60_1in20.ban");
+  const rc::ProfileCurve worn = rc::loadRailProfile(dir + "UIC60_1in20_side_worn.txt");
+  EXPECT_NEAR(rc::railTopPoint(worn).y(), rc::railTopPoint(rail).y(), 1e-5);
+  const double face_wear = rc::gaugePoint(rail).x() - rc::gaugePoint(worn).x();
+  EXPECT_GT(face_wear, 2.0e-3);
+  EXPECT_LT(face_wear, 3.2e-3);
+  // Each solves every row of a table to 12 mm of shift; the thin flange gives the wheelset more play before
+  // the flange takes the contact, and so does the side-worn rail where it lies where the new rail lay (the
+  // gauge, measured 14 mm down, widened by the face wear on both rails). At the same measured gauge the
+  // side-worn rail's face sits where the new one's did: the onset stays within one step.
+  auto onset = [](const rc::WheelProfile& w, const rc::ProfileCurve& r, double gauge) {
+    rc::WheelsetTrackSpec spec;
+    spec.track_gauge = gauge;
+    rc::ContactGeometryTable t(w, r, spec);
+    const std::vector<rc::ContactGeometryRow> rows = t.table(-0.012, 0.0, 0.0005);
+    double first = std::nan("");
+    for (const rc::ContactGeometryRow& row : rows) {
+      EXPECT_TRUE(row.ok) << row.y << ": " << row.failure;
+      if (row.right.contact_angle > 0.6) first = -row.y;  // rows run toward 0: the last is the onset
+    }
+    return first;
+  };
+  const double new_onset = onset(s1002, rail, 1.435);
+  EXPECT_GT(onset(thin, rail, 1.435), new_onset + 2e-3);
+  EXPECT_NEAR(onset(s1002, worn, 1.435), new_onset, 0.5e-3 + 1e-9);
+  EXPECT_GT(onset(s1002, worn, 1.435 + 2.0 * face_wear), new_onset + face_wear - 0.5e-3);
+  EXPECT_FALSE(std::isnan(onset(hollow, worn, 1.435)));
+}
