@@ -80,6 +80,42 @@ class ToolsAnswerHelp(unittest.TestCase):
         self.assertIn("usage: count_tests.py", p.stderr)
 
 
+class NodesStartedByHand(unittest.TestCase):
+    """The two nodes are started by roslaunch; started by hand they say so on --help, and without a master
+    they wait for it with a deadline and stop on SIGTERM at once (roscpp's own registration would retry
+    for ever, deaf to the node's signal handler)."""
+
+    NODES = [os.path.join(LIB, "rail_vehicle_node", "vehicle_node"), os.path.join(LIB, "rail_track_node", "track_node")]
+
+    def test_help_says_how_the_node_is_started(self):
+        for node in self.NODES:
+            with self.subTest(node=os.path.basename(node)):
+                p = run([node, "--help"], timeout=10)
+                self.assertEqual(p.returncode, 0, p.stderr)
+                self.assertIn("Started by roslaunch", p.stdout)
+
+    def test_sigterm_while_waiting_for_the_master_stops_the_node(self):
+        env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:%d" % (29000 + os.getpid() % 900),
+                   ROS_HOME=tempfile.mkdtemp(prefix="tools_cli_rh_"))
+        for node in self.NODES:
+            with self.subTest(node=os.path.basename(node)):
+                proc = subprocess.Popen([node], stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                                        universal_newlines=True)
+                try:
+                    _, err = proc.communicate(timeout=3)
+                    self.fail("the node ended without a master before the signal: %s" % err)
+                except subprocess.TimeoutExpired:
+                    pass
+                proc.terminate()
+                try:
+                    _, err = proc.communicate(timeout=3)
+                finally:
+                    if proc.poll() is None:
+                        proc.kill()
+                self.assertEqual(proc.returncode, 5, err)
+                self.assertIn("waiting for the ROS master at", err)
+
+
 class ContactGeometryIsHonest(unittest.TestCase):
     def setUp(self):
         self.dir = tempfile.mkdtemp(prefix="cg_cli_")
@@ -155,7 +191,7 @@ class ContactGeometryIsHonest(unittest.TestCase):
 
 def main():
     loader = unittest.TestLoader()
-    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, ContactGeometryIsHonest)])
+    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, NodesStartedByHand, ContactGeometryIsHonest)])
     return rosunit_main.run(suite, "test_tools_cli")
 
 

@@ -5,6 +5,8 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 
 #include <chrono>
+#include <cstdio>
+#include <string>
 #include <memory>
 #include <thread>
 
@@ -68,6 +70,41 @@ std::string exited_peer(const std::string& me) {
                     : name + " exited with code " + std::to_string(code);
   }
   return "";
+}
+
+int wait_for_master(const std::string& node, const std::atomic<int>& signal, double timeout_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  bool said = false;
+  while (!ros::master::check()) {
+    if (signal.load() != 0) return 5;
+    const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (waited > timeout_s) {
+      std::fprintf(stderr, "%s: no ROS master answers at %s after %.0f s: start the node with roslaunch (or "
+                   "roscore first)\n", node.c_str(), ros::master::getURI().c_str(), timeout_s);
+      return 4;
+    }
+    if (!said && waited > 2.0) {
+      std::fprintf(stderr, "%s: waiting for the ROS master at %s (up to %.0f s)\n", node.c_str(),
+                   ros::master::getURI().c_str(), timeout_s);
+      said = true;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  return 0;
+}
+
+bool node_help_requested(int argc, char** argv, const char* node, const char* what) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::printf("%s: %s\nStarted by roslaunch (launch/*.launch; ./railsim run picks the file); its settings are "
+                  "the private parameters ~scene_yaml (the scene, loaded by launch/scene.launch with its overrides), "
+                  "~output_dir and ~validate_only.\n"
+                  "See README.md (running a scenario, exit codes) and docs/scene.md.\n", node, what);
+      return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace rail::core::ros_glue

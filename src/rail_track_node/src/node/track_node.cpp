@@ -866,11 +866,13 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (ros_glue::node_help_requested(argc, argv, "rail_track", "the track side of a railsim run (FE track and the wheel-rail contact in co-simulation, moving loads, replay)")) return 0;
   ros::init(argc, argv, "rail_track", ros::init_options::NoSigintHandler);
   // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
   ::umask(077);
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
+  if (const int rc = ros_glue::wait_for_master(ros::this_node::getName(), g_signal); rc != 0) return rc;
   ros::NodeHandle nh, pnh("~");
   Scene scene;
   if (!ros_glue::read_scene(pnh, scene)) return kExitBadInput;

@@ -662,11 +662,13 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (ros_glue::node_help_requested(argc, argv, "rail_vehicle", "the vehicle side of a railsim run (multibody vehicle on CVODE; alone on the rigid track or co-simulated with rail_track)")) return 0;
   ros::init(argc, argv, "rail_vehicle", ros::init_options::NoSigintHandler);
   // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
   ::umask(077);
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
+  if (const int rc = ros_glue::wait_for_master(ros::this_node::getName(), g_signal); rc != 0) return rc;
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
   Scene scene;

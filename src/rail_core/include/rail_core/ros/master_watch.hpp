@@ -37,4 +37,14 @@ class MasterWatch {
 // once instead of after the whole timeout.
 std::string exited_peer(const std::string& me);
 
+// Before a node's first NodeHandle (whose registration roscpp retries for ever, deaf to the node's own
+// signal handler): waits for the master with a deadline. Returns 0 when it answers; kExitNoPeer-like 4
+// after timeout_s with an error naming the master's URI; 5 when `signal` becomes non-zero (SIGINT,
+// SIGTERM) meanwhile. node: the node's name for the message.
+int wait_for_master(const std::string& node, const std::atomic<int>& signal, double timeout_s = 30.0);
+
+// True, after printing what the node is and how it is started, when argv holds -h or --help (the nodes
+// are started by roslaunch; their settings are private parameters, not options).
+bool node_help_requested(int argc, char** argv, const char* node, const char* what);
+
 }  // namespace rail::core::ros_glue
