@@ -25,10 +25,11 @@ SIDE_RIGHT = 1
 
 # Flange contact, as the report counts it: an active contact whose normal leans more than this toward the
 # track centre (ContactPoint.contact_angle, to the wheelset's axle): the flange root and the flank, whichever
-# of the wheel's two surfaces reported the point. The tread of a new S1002 on UIC60 stays below 0.15 rad;
-# the flange root rises from about 0.3 rad to the flank's 1.22 rad (70 deg). Bags recorded before the
-# message carried the angle fall back on the reporting surface (ContactPoint.kind).
-FLANGE_CONTACT_ANGLE = 0.35  # rad (20 deg)
+# of the wheel's two surfaces reported the point. The limit sits in the gap between the tread and the
+# flange root: a new S1002 on UIC60 touches its tread below 0.15 rad (0.05 rad in the paper's runs) and its
+# flange root from about 0.28 rad up to the flank's 1.22 rad (70 deg). Bags recorded before the message
+# carried the angle fall back on the reporting surface (ContactPoint.kind).
+FLANGE_CONTACT_ANGLE = 0.20  # rad (11 deg)
 FLANGE_CONTACT_DEFINITION = ("flange contact: a contact whose normal leans more than %.2f rad (%.0f deg) toward "
                              "the track centre (flange root and flank)" % (FLANGE_CONTACT_ANGLE,
                                                                            np.degrees(FLANGE_CONTACT_ANGLE)))
