@@ -155,9 +155,9 @@ def fig_flange_forces(runs, scene, t_discard, out_dir):
     """Flange contact normal forces on the leading wheelset's left and right wheels (paper Fig. 19)."""
     def series(r):
         return analysis.leading_flange_forces(r) if r.points is not None else None
-    return _two_wheels(runs, scene, t_discard, out_dir, series,
-                       "flange normal force [kN] (contact angle > %.0f deg)" % np.degrees(loading.FLANGE_CONTACT_ANGLE),
-                       "Leading wheelset: flange contact normal force (paper Fig. 19)", "fig19_flange_forces.png")
+    return _two_wheels(runs, scene, t_discard, out_dir, series, "flange normal force [kN]",
+                       "Leading wheelset: flange contact normal force, contact angle > %.0f deg (paper Fig. 19)"
+                       % np.degrees(loading.FLANGE_CONTACT_ANGLE), "fig19_flange_forces.png")
 
 
 def _wheel_force(component):
