@@ -17,6 +17,8 @@ sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
 import rosunit_main  # noqa: E402
 
 REPO = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", ".."))
+sys.path.insert(0, os.path.join(REPO, "src", "rail_contact", "scripts"))
+import manchester_a22  # noqa: E402  (its SIMPACK point reader)
 LIB = os.path.join(REPO, "devel", "lib")
 PY = "/usr/bin/python3"
 
@@ -121,18 +123,8 @@ class ContactGeometryIsHonest(unittest.TestCase):
         self.dir = tempfile.mkdtemp(prefix="cg_cli_")
         # The benchmark's rail cut 4 mm gauge side of its top: the running band half gone, as a careless
         # export of a measurement might leave it. Some rows solve, some cannot.
-        pts, inside = [], False
-        with open(os.path.join(MB, "MBench_UIC60_v3.prr")) as f:
-            for line in f:
-                t = line.split("!", 1)[0].strip()
-                if t == "point.begin":
-                    inside = True
-                elif t == "point.end":
-                    inside = False
-                elif inside and t:
-                    y, z = (float(v) for v in t.split()[:2])
-                    if -y >= 4.0:
-                        pts.append((-y, -z))
+        pts = [p for p in manchester_a22.simpack_points(os.path.join(MB, "MBench_UIC60_v3.prr"), -1.0, -1.0)
+               if p[0] >= 4.0]
         self.cut = os.path.join(self.dir, "rail_cut.txt")
         with open(self.cut, "w") as f:
             f.write("# units: mm\n")

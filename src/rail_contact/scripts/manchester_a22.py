@@ -157,30 +157,31 @@ def markdown(pairs, cmd):
     return "\n".join(out) + "\n"
 
 
+def simpack_points(path, sign_y, sign_z):
+    """The (y, z) rows of a SIMPACK profile's point table as written (mm), times sign_y and sign_z; the
+    spline block's modifications are not applied (the benchmark's files need only their signs)."""
+    pts, inside = [], False
+    with open(path) as fh:
+        for line in fh:
+            t = line.split("!", 1)[0].strip()
+            if t == "point.begin":
+                inside = True
+            elif t == "point.end":
+                inside = False
+            elif inside and t:
+                y, z = (float(v) for v in t.split()[:2])
+                pts.append((sign_y * y, sign_z * z))
+    return pts
+
+
 def plot(pairs, ws, path):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    sys.path.insert(0, HERE)
     prof = os.path.join(ws, "config", "profiles", "manchester_a22")
-
-    def simpack_points(name, sign_y, sign_z):
-        pts, inside = [], False
-        with open(os.path.join(prof, name)) as fh:
-            for line in fh:
-                t = line.split("!", 1)[0].strip()
-                if t == "point.begin":
-                    inside = True
-                elif t == "point.end":
-                    inside = False
-                elif inside and t:
-                    y, z = (float(v) for v in t.split()[:2])
-                    pts.append((sign_y * y, sign_z * z))
-        return list(zip(*pts))
-
     # Library frames: rail y toward the gauge side, z up; wheel y toward the flange, z up (radius r0 - z).
-    ry, rz = simpack_points("MBench_UIC60_v3.prr", -1.0, -1.0)
-    wy, wz = simpack_points("MBench_S1002_v3.prw", 1.0, -1.0)  # the file mirrors y itself
+    rail = list(zip(*simpack_points(os.path.join(prof, "MBench_UIC60_v3.prr"), -1.0, -1.0)))
+    wheel = list(zip(*simpack_points(os.path.join(prof, "MBench_S1002_v3.prw"), 1.0, -1.0)))  # mirrors y itself
     fig, ax = plt.subplots(2, 1, figsize=(10, 9))
     fig.subplots_adjust(hspace=0.35)
     cmap = plt.get_cmap("viridis")
@@ -196,19 +197,17 @@ def plot(pairs, ws, path):
                       label="%s wheel, this code" % side, zorder=3)
         ax[1].scatter([side_sign(p[3]) * p[3]["ycp_w_mm"] for p in sel], [-p[3]["zcp_w_mm"] for p in sel], facecolors="none",
                       edgecolors=col, marker=marker, s=90, label="%s wheel, CONTACT" % side, zorder=3)
-    ax[0].plot(ry, rz, "k-", lw=1)
-    ax[0].set_xlim(-35, 45)
-    ax[0].set_ylim(-20, 2)
-    ax[0].set_title("Contact points on the rail (UIC60 1:40, origin at its highest point)")
-    ax[0].set_xlabel("y toward the gauge side [mm]")
-    ax[0].set_ylabel("z [mm]")
-    ax[1].plot(wy, wz, "k-", lw=1)
-    ax[1].set_xlim(-40, 50)
-    ax[1].set_ylim(-30, 3)
-    ax[1].set_title("Contact points on the wheel (S1002, origin on the taping line)")
-    ax[1].set_xlabel("y toward the flange [mm]")
-    ax[1].set_ylabel("z toward the axle [mm]")
-    for a in ax:
+    panels = ((rail, (-35, 45), (-20, 2), "Contact points on the rail (UIC60 1:40, origin at its highest point)",
+               "y toward the gauge side [mm]", "z [mm]"),
+              (wheel, (-40, 50), (-30, 3), "Contact points on the wheel (S1002, origin on the taping line)",
+               "y toward the flange [mm]", "z toward the axle [mm]"))
+    for a, (curve, xlim, ylim, title, xlabel, ylabel) in zip(ax, panels):
+        a.plot(curve[0], curve[1], "k-", lw=1)
+        a.set_xlim(*xlim)
+        a.set_ylim(*ylim)
+        a.set_title(title)
+        a.set_xlabel(xlabel)
+        a.set_ylabel(ylabel)
         a.grid(True, alpha=0.3)
         a.legend(fontsize=8, loc="lower left")
     sm = plt.cm.ScalarMappable(cmap=cmap, norm=plt.Normalize(0, 10))

@@ -129,21 +129,24 @@ def load_wheelset_kinematics(path):
     return out
 
 
-def load_contact_points(path):
-    """The /contact_points topic of a bag (rail_msgs/ContactPoints), sorted by time.
+def load_contact_points(path, purpose="the flange contact forces"):
+    """The /contact_points topic of a bag (rail_msgs/ContactPoints), sorted by time; purpose names what needs
+    it in the message of a bag without the topic.
 
     Returns a dict: t [s] (N,); per point slot (N, P) arrays wheel_id, side, kind (KIND_TREAD/KIND_FLANGE),
-    active (bool), normal_force [N], creep_force_longitudinal [N], creep_force_lateral [N], arc_length [m],
-    penetration [m].
+    active (bool), normal_force [N], creep_force_longitudinal [N], creep_force_lateral [N], creepage_longitudinal,
+    creepage_lateral [-], creepage_spin [1/m], arc_length [m], penetration [m], contact_angle [rad] (NaN in
+    bags recorded before the message carried it).
     Messages with fewer than P points are padded with inactive slots (wheel_id -1, forces 0).
     """
-    msgs = _messages(path, "/contact_points", "the flange contact forces")
+    msgs = _messages(path, "/contact_points", purpose)
     n = len(msgs)
     p = max(len(m.points) for m in msgs)
     t = np.array([m.header.stamp.to_sec() for m in msgs])
     out = {"t": t}
     ints = {"wheel_id": -1, "side": -1, "kind": -1}
-    floats = ("normal_force", "creep_force_longitudinal", "creep_force_lateral", "arc_length", "penetration")
+    floats = ("normal_force", "creep_force_longitudinal", "creep_force_lateral", "creepage_longitudinal",
+              "creepage_lateral", "creepage_spin", "arc_length", "penetration")
     for k, fill in ints.items():
         out[k] = np.full((n, p), fill, dtype=int)
     for k in floats:

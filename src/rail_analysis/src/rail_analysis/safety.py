@@ -190,32 +190,6 @@ def _find_topic(bags, topic):
     return None
 
 
-def load_contacts(path):
-    """/contact_points with creepages: dict t [s] (N,), per slot (N, P): wheel_id, side, kind, active,
-    normal_force, creep_force_longitudinal, creep_force_lateral [N], creepage_longitudinal,
-    creepage_lateral [-], creepage_spin [1/m], arc_length [m]."""
-    msgs = loading._messages(path, "/contact_points", "Tgamma")
-    n, p = len(msgs), max(len(m.points) for m in msgs)
-    out = {"t": np.array([m.header.stamp.to_sec() for m in msgs])}
-    for k in ("wheel_id", "side", "kind"):
-        out[k] = np.full((n, p), -1, dtype=int)
-    floats = ("normal_force", "creep_force_longitudinal", "creep_force_lateral", "creepage_longitudinal",
-              "creepage_lateral", "creepage_spin", "arc_length")
-    for k in floats:
-        out[k] = np.zeros((n, p))
-    out["contact_angle"] = np.full((n, p), np.nan)  # NaN: recorded before the message carried it
-    out["active"] = np.zeros((n, p), dtype=bool)
-    for i, m in enumerate(msgs):
-        for j, c in enumerate(m.points):
-            out["wheel_id"][i, j], out["side"][i, j], out["kind"][i, j] = c.wheel_id, c.side, c.kind
-            out["active"][i, j] = c.active
-            for k in floats:
-                out[k][i, j] = getattr(c, k)
-            out["contact_angle"][i, j] = getattr(c, "contact_angle", np.nan)
-    order = np.argsort(out["t"], kind="stable")
-    return {k: v[order] for k, v in out.items()}
-
-
 def load_floor(path):
     """/floor_accelerations: dict t [s] (N,), names [str] (M,), position [m] (M, 3) in the vehicle data frame,
     specific_force [m/s^2] (N, M, 3) in the carbody frame (x forward, y left, z up)."""
@@ -275,7 +249,7 @@ def static_wheel_load_from_vehicle(path, wheelsets):
 
 class SafetyRun(object):
     """One run's inputs for the safety evaluation: name, scene (raw mapping) and scene_path, kinematics
-    (loading.load_wheelset_kinematics), contacts (load_contacts) or None, floor (load_floor) or None, pads
+    (loading.load_wheelset_kinematics), contacts (loading.load_contact_points) or None, floor (load_floor) or None, pads
     (load_pads) or None, missing {topic: bag searched}, notes [str], bags used."""
 
     def __init__(self, name):
@@ -320,7 +294,7 @@ def load(bag, scene_path=None, track_bag=None, name=None):
     bags = [bag, track_bag]
     found = _find_topic([track_bag, bag], "/contact_points")
     if found:
-        run.contacts = load_contacts(found)
+        run.contacts = loading.load_contact_points(found, "Tgamma")
     else:
         run.missing["/contact_points"] = track_bag or bag
     found = _find_topic(bags, "/floor_accelerations")

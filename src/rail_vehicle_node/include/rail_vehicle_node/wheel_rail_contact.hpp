@@ -66,6 +66,15 @@ struct WheelRailContactData {
   std::vector<contact::WheelContactResult> saved_result;
   std::vector<double> saved_s_hint;
   std::vector<Vector3> saved_force_in_world, saved_moment_in_world;
+  // Calls f(member, its saved copy) for each member above: the one list that saving and restoring share.
+  template <class F>
+  void ForEachSaved(F&& f) {
+    f(work, saved_work);
+    f(result, saved_result);
+    f(s_hint, saved_s_hint);
+    f(force_in_world, saved_force_in_world);
+    f(moment_in_world, saved_moment_in_world);
+  }
   bool enabled = true;                              // false: no contact forces (set-up only)
   long long evaluations = 0;                        // wheel evaluations since construction
   contact::ContactCost* cost = nullptr;             // optional timing of the evaluations (not owned)

@@ -25,11 +25,7 @@ WheelRailContactData::WheelRailContactData(const WheelRailContactModel& model) {
   s_hint.assign(n, 0.0);
   force_in_world.assign(n, Vector3::Zero());
   moment_in_world.assign(n, Vector3::Zero());
-  saved_work = work;
-  saved_result = result;
-  saved_s_hint = s_hint;
-  saved_force_in_world = force_in_world;
-  saved_moment_in_world = moment_in_world;
+  ForEachSaved([](auto& live, auto& saved) { saved = live; });  // sizes the copies once
 }
 
 void EvaluateWheel(const WheelRailContactModel& model, const VehicleData& data, int k,
@@ -88,21 +84,11 @@ void WheelRailContactElement::CouplingGroups(std::vector<std::vector<int>>& grou
 
 // Same-size vector assignments: element copies, no allocation.
 void WheelRailContactElement::SaveWorkState() const {
-  WheelRailContactData& cd = *contact_data_;
-  cd.saved_work = cd.work;
-  cd.saved_result = cd.result;
-  cd.saved_s_hint = cd.s_hint;
-  cd.saved_force_in_world = cd.force_in_world;
-  cd.saved_moment_in_world = cd.moment_in_world;
+  contact_data_->ForEachSaved([](auto& live, auto& saved) { saved = live; });
 }
 
 void WheelRailContactElement::RestoreWorkState() const {
-  WheelRailContactData& cd = *contact_data_;
-  cd.work = cd.saved_work;
-  cd.result = cd.saved_result;
-  cd.s_hint = cd.saved_s_hint;
-  cd.force_in_world = cd.saved_force_in_world;
-  cd.moment_in_world = cd.saved_moment_in_world;
+  contact_data_->ForEachSaved([](auto& live, auto& saved) { live = saved; });
 }
 
 }  // namespace rail::vehicle
