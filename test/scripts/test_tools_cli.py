@@ -82,6 +82,23 @@ class ToolsAnswerHelp(unittest.TestCase):
         self.assertIn("usage: count_tests.py", p.stderr)
 
 
+class ScriptsOnBadInput(unittest.TestCase):
+    def test_benchmark_script_without_a_built_tool_says_so_and_leaves_nothing(self):
+        ws = os.path.join(tempfile.mkdtemp(prefix="tools_cli_ws_"), "ws")
+        p = run([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "manchester_a22.py"), "--workspace", ws])
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn("contact_geometry: not built", p.stderr)
+        self.assertNotIn("Traceback", p.stderr)
+        self.assertFalse(os.path.exists(ws))
+
+    def test_worn_profile_maker_names_the_missing_standard_shape(self):
+        d = os.path.join(tempfile.mkdtemp(prefix="tools_cli_prof_"), "none")
+        p = run([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "make_worn_profiles.py"), "--profiles", d])
+        self.assertEqual(p.returncode, 1, p.stderr)
+        self.assertIn(os.path.join(d, "S1002.txt"), p.stderr)
+        self.assertNotIn("Traceback", p.stderr)
+
+
 class NodesStartedByHand(unittest.TestCase):
     """The two nodes are started by roslaunch; started by hand they say so on --help, and without a master
     they wait for it with a deadline and stop on SIGTERM at once (roscpp's own registration would retry
@@ -183,7 +200,7 @@ class ContactGeometryIsHonest(unittest.TestCase):
 
 def main():
     loader = unittest.TestLoader()
-    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, NodesStartedByHand, ContactGeometryIsHonest)])
+    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, ScriptsOnBadInput, NodesStartedByHand, ContactGeometryIsHonest)])
     return rosunit_main.run(suite, "test_tools_cli")
 
 

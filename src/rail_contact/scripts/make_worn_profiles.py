@@ -78,8 +78,13 @@ def main(argv):
     elif args:
         print("make_worn_profiles.py: unknown arguments %s (--help lists them)" % " ".join(args), file=sys.stderr)
         return 2
-    wheel = read_plain(os.path.join(out, "S1002.txt"))
-    rail = read_miniprof(os.path.join(out, "UIC60_1in20.ban"))
+    try:
+        wheel = read_plain(os.path.join(out, "S1002.txt"))
+        rail = read_miniprof(os.path.join(out, "UIC60_1in20.ban"))
+    except (OSError, ValueError) as e:
+        print("make_worn_profiles.py: %s (the standard shapes S1002.txt and UIC60_1in20.ban are read from "
+              "--profiles DIR)" % e, file=sys.stderr)
+        return 1
     # Keep the files' order along the curve (a vertical face has no order in y); only make y increase.
     if wheel[-1, 0] < wheel[0, 0]:
         wheel = wheel[::-1]

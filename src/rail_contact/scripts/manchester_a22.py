@@ -223,6 +223,10 @@ def main(argv=None):
     ap.add_argument("--out", default=None, help="output directory (default WS/output/manchester_a22)")
     a = ap.parse_args(argv)
     out = a.out or os.path.join(a.workspace, "output", "manchester_a22")
+    tool = os.path.join(a.workspace, "devel", "lib", "rail_contact", "contact_geometry")
+    if not os.access(tool, os.X_OK):
+        sys.stderr.write("manchester_a22.py: %s: not built (run ./railsim setup in %s)\n" % (tool, a.workspace))
+        return 1
     os.makedirs(out, exist_ok=True)
     table = os.path.join(out, "a22.csv")
     cmd = run_tool(a.workspace, table)
