@@ -271,6 +271,29 @@ class TestCli(unittest.TestCase):
             self.assertEqual(rc, 1, "%s: run: %s" % (what, text))
             self.assertIn(msg, text, what)
 
+    def test_data_file_key_given_twice_refused(self):
+        # The vehicle's and the track's data files: yaml-cpp would keep the first value without a word.
+        def copy_with(src, name, old, new):
+            with open(os.path.join(ROOT, "config", src)) as f:
+                text = f.read()
+            self.assertIn(old, text)
+            path = os.path.join(self.dir, name)
+            with open(path, "w") as f:
+                f.write(text.replace(old, new, 1))
+            return path
+        coach = copy_with("vehicle/paper_coach.yaml", "coach.yaml", "gravity: [0.0, 0.0, -9.81]\n",
+                          "gravity: [0.0, 0.0, -9.81]\ngravity: [0.0, 0.0, -9.80]\n")
+        track = copy_with("track/paper_track.yaml", "track.yaml", "  E: 2.10e11 ", "  E: 2.10e12\n  E: 2.10e11 ")
+        s = self.scene("dup_vehicle.yaml", SHORT, ("data: %s/config/vehicle/paper_coach.yaml" % ROOT, "data: " + coach))
+        for args in (["validate", s], ["run", s, "--out", self.out]):
+            rc, text = self.railsim(*args)
+            self.assertEqual(rc, 1, text)
+            self.assertIn("%s: gravity: given twice (lines 34 and 35): remove one" % coach, text)
+        s = self.scene("dup_track.yaml", COSIM, ("data: %s/config/track/paper_track.yaml" % ROOT, "data: " + track))
+        rc, text = self.railsim("validate", s)
+        self.assertEqual(rc, 1, text)
+        self.assertIn("%s: rail.E: given twice (lines 9 and 10): remove one" % track, text)
+
     # -- exit codes of runs ------------------------------------------------------------------------------
     def test_track_end_exits_7_and_marks_table_incomplete(self):
         # 25 m + 30.6 m/s * 2 s goes past the 60 m track: the vehicle stops at its end (exit 7).
@@ -386,11 +409,11 @@ class TestCli(unittest.TestCase):
         self.assertIn("roslaunch left", self.console())
         self.assertIn("roslaunch was killed by SIGKILL", self.run_yaml("paper_demo_60m")["incomplete"])
 
-    def test_kill_9_of_a_bare_roslaunch_stops_its_nodes(self):
+    def test_kill_9_of_a_bare_roslaunch_leaves_nothing(self):
         # roslaunch used directly (README): its nodes' guards stop them when it dies, so they close their
-        # bags. The master and rosout it started are outside any guard: only ./railsim run stops those
-        # (test above); this test stops them itself.
+        # bags; then one guard stops the master and rosout that roslaunch had started.
         env = dict(self.env, ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.port)
+        env.pop("RAILSIM_STATUS_DIR", None)
         self.log = os.path.join(self.dir, "console.log")
         with open(self.log, "w") as f:
             p = subprocess.Popen(["bash", "-c", 'source "$0/devel/setup.bash" && exec "$@"', ROOT, "roslaunch", "-p",
@@ -398,22 +421,23 @@ class TestCli(unittest.TestCase):
                                   "output_dir:=" + self.out, "overrides:=solver.end={time: 2.0}"],
                                  stdout=f, stderr=subprocess.STDOUT, env=env, cwd=ROOT, start_new_session=True)
         self.wait_for("integrating with")
+        master = [pid for pid, c in processes_naming(self.dir) if "rosmaster" in c]
+        self.assertEqual(len(master), 1, "the master roslaunch started")
         os.kill(p.pid, signal.SIGKILL)
         p.wait()
-        deadline = time.monotonic() + 30.0
-        nodes = lambda: [c for _, c in processes_naming(self.dir) if "_node __name:=" in c and "guard" not in c]
-        while nodes() and time.monotonic() < deadline:
+        deadline = time.monotonic() + 45.0
+        while processes_naming(self.dir) and time.monotonic() < deadline:
             time.sleep(0.2)
-        left = nodes()
-        # The known leftovers of a bare roslaunch: its master and rosout (named by their __log:= paths).
-        rest = [pid for pid, c in processes_naming(self.dir) if "rosmaster" in c or "rosout" in c]
-        for pid in rest:
-            os.kill(pid, signal.SIGTERM)
+        left = processes_naming(self.dir)
+        for pid, _ in left:
+            os.kill(pid, signal.SIGKILL)
         self.assertEqual(left, [])
-        self.assertEqual(len(rest), 2, "expected the master and rosout of the bare roslaunch")
         text = self.console()
         self.assertIn("railsim_node_guard: roslaunch (pid %d) went away: stopping rail_vehicle" % p.pid, text)
         self.assertIn("bag closed", text)
+        self.assertRegex(text, r"railsim_node_guard: stopping what roslaunch \(pid %d\) left running: "
+                               r"rosmaster \(pid %d\), rosout \(pid \d+\)" % (p.pid, master[0]))
+        # Bags are checked readable by tearDown.
 
     def test_kill_9_of_the_runner_leaves_nothing(self):
         p = self.start("run", COSIM, "--set", "solver.end={time: 2.0}", "--out", self.out)

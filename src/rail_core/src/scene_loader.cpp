@@ -14,6 +14,7 @@
 
 #include <unistd.h>
 
+#include "rail_core/yaml_duplicates.hpp"
 #include "yaml_reader.hpp"
 
 namespace rail::core {
@@ -665,33 +666,6 @@ void apply_override(YAML::Node& doc, const std::string& file, const std::string&
 
 }  // namespace
 
-namespace {
-
-// yaml-cpp keeps the first of two equal keys without a word: a key given twice is refused, naming both lines.
-void refuse_duplicate_keys(const YAML::Node& node, const std::string& file, const std::string& path) {
-  if (node.IsMap()) {
-    std::map<std::string, int> seen;  // key -> line
-    for (const auto& kv : node) {
-      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : std::string();
-      const int line = kv.first.Mark().line + 1;
-      const std::string field = path.empty() ? key : path + "." + key;
-      const auto it = seen.find(key);
-      if (it != seen.end()) {
-        fail_at(file, field, "given twice (lines " + std::to_string(it->second) + " and " + std::to_string(line) +
-                                 "): remove one", line);
-      }
-      seen.emplace(key, line);
-      refuse_duplicate_keys(kv.second, file, field);
-    }
-  } else if (node.IsSequence()) {
-    for (std::size_t i = 0; i < node.size(); ++i) {
-      refuse_duplicate_keys(node[i], file, path + "[" + std::to_string(i) + "]");
-    }
-  }
-}
-
-}  // namespace
-
 Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir,
                       const SceneOverrides& overrides) {
   YAML::Node doc;
@@ -700,7 +674,7 @@ Scene load_scene_text(const std::string& text, const std::string& file, const st
   } catch (const YAML::Exception& e) {
     fail_at(file, "", "not valid YAML: " + e.msg, e.mark.line >= 0 ? e.mark.line + 1 : 0);
   }
-  refuse_duplicate_keys(doc, file, "");
+  if (const auto dup = find_duplicate_key(doc)) fail_at(file, dup->field, dup->describe(), dup->second_line);
   if (!doc.IsDefined() || doc.IsNull()) fail_at(file, "", "is empty", 0);
   if (!overrides.empty() && !doc.IsMap()) fail_at(file, "", "must be a map of keys to values", 1);
   for (const std::string& item : overrides) apply_override(doc, file, item);

@@ -83,6 +83,14 @@ TEST(TrackData, UnknownKeyThrows) {
             "track.yaml: ballast: unknown key, got 'colour'");
 }
 
+// yaml-cpp would keep the first of two equal keys: the second must not be silently dropped.
+TEST(TrackData, KeyGivenTwiceThrowsNamingBothLines) {
+  const std::string text = readFile(paperTrackPath());
+  // Line 9 is the rail's E; the copy goes right below it.
+  EXPECT_EQ(errorOf(replaced(text, "  E: 2.10e11", "  E: 2.10e11\n  E: 2.10e12")),
+            "track.yaml: rail.E: given twice (lines 9 and 10): remove one");
+}
+
 TEST(TrackData, MissingKeyThrows) {
   const std::string text = readFile(paperTrackPath());
   EXPECT_EQ(errorOf(replaced(text, "  sleeper_spacing: 0.60", "")),

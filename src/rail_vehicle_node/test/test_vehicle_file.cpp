@@ -177,6 +177,21 @@ TEST(VehicleLoader, NamesAnUndefinedBodyOfAJoint) {
   EXPECT_EQ(LoadError(path), path + ": joints[0].body_j: no body of that name is defined, got axlebox_9 (line 5)");
 }
 
+// yaml-cpp would keep the first of two equal keys: a key given twice is refused, naming both lines.
+TEST(VehicleLoader, RefusesAKeyGivenTwice) {
+  const std::string top = WriteTemp("twice_top.yaml", std::string("gravity: [0, 0, -9.81]\n") + kTwoBodies +
+                                                          "gravity: [0, 0, -9.80]\n");
+  EXPECT_EQ(LoadError(top), top + ": gravity: given twice (lines 1 and 5): remove one");
+  const std::string nested = WriteTemp("twice_nested.yaml", R"(bodies:
+  - name: ws
+    mass: 1800
+    mass: 1900
+    centre_of_mass: [0, 0, 0.445]
+    inertia: [900, 10, 900]
+)");
+  EXPECT_EQ(LoadError(nested), nested + ": bodies[0].mass: given twice (lines 3 and 4): remove one");
+}
+
 TEST(VehicleLoader, RejectsNonPhysicalMass) {
   const std::string path = WriteTemp("negative_mass.yaml", R"(bodies:
   - {name: ws, mass: -5, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 900]}

@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "rail_core/yaml_duplicates.hpp"
+
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -185,6 +187,9 @@ TrackData parseTrackData(const std::string& yaml_text, const std::string& source
     root = YAML::Load(yaml_text);
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(source_name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
+  }
+  if (const auto dup = core::find_duplicate_key(root)) {
+    throw std::runtime_error(source_name + ": " + dup->field + ": " + dup->describe());
   }
   MapReader r(root, "", source_name);
   TrackData data;

@@ -10,6 +10,8 @@
 #include <utility>
 #include <vector>
 
+#include "rail_core/yaml_duplicates.hpp"
+
 namespace rail::vehicle {
 namespace {
 
@@ -201,6 +203,9 @@ void LoadVehicleInto(const std::string& path, VehicleModel& model) {
     std::ostringstream os;
     os << path << ":" << e.mark.line + 1 << ": YAML syntax error: " << e.msg;
     throw VehicleFileError(os.str());
+  }
+  if (const auto dup = core::find_duplicate_key(root)) {
+    throw VehicleFileError(path + ": " + dup->field + ": " + dup->describe());
   }
   if (!root.IsMap()) reader.Fail(root, "(top level)", "expected a map", Describe(root));
   reader.CheckKeys(root, "", {"name", "description", "parameters", "gravity", "bodies", "load_points", "joints", "forces",
