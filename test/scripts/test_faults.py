@@ -607,12 +607,17 @@ class Faults(RunTestCase):
         run, code, track_code, took, port = self.master_died()
         log = run.log()
         uri = re.escape("http://127.0.0.1:%d" % port)
-        self.assertEqual(code, EXIT_INTERRUPTED, log)
+        # Whichever node notices the lost master first exits 5 naming it; the other may instead see that node
+        # go (exit 4) before its own master check: both orders happen, depending on the machine's load.
+        self.assertIn(EXIT_INTERRUPTED, (code, track_code), log)
+        self.assertIn(code, (EXIT_INTERRUPTED, EXIT_PEER_TIMEOUT), log)
         self.assertIn(track_code, (EXIT_INTERRUPTED, EXIT_PEER_TIMEOUT), log)
         self.assertLess(took, 15.0, log)
-        # Each node says that the master (its URI) went away and when (the simulated time it stopped at).
-        self.assertTrue(run.vehicle.lines(r"master %s.*t = [0-9.]+ s" % uri), log)
-        self.assertTrue(run.track.lines(r"master %s|vehicle node %s went away" % (uri, run.vehicle_name)), log)
+        # The node that exited 5 says that the master (its URI) went away and when (the simulated time).
+        if code == EXIT_INTERRUPTED:
+            self.assertTrue(run.vehicle.lines(r"master %s.*t = [0-9.]+ s" % uri), log)
+        if track_code == EXIT_INTERRUPTED:
+            self.assertTrue(run.track.lines(r"master %s|vehicle node %s went away" % (uri, run.vehicle_name)), log)
         self.assert_bag_readable(run.bag, log)
         self.assert_clean(run)
 
