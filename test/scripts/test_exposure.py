@@ -29,8 +29,8 @@ from test_faults import (EXIT_OK, EXIT_PEER_REFUSED, EXIT_PEER_TIMEOUT, EXIT_TIM
 
 RAILSIM = os.path.join(REPO, "railsim")
 COSIM_LAUNCH = os.path.join(REPO, "launch", "cosim.launch")
-STATES_TOPIC = "/railsim/wheel_states_exchange"  # rail_core/ros/topic_transport.hpp, TopicTransportOptions
-LOCKSTEP_SERVICE = "/railsim/lockstep"            # rail_core/ros/service_transport.hpp, ServiceTransportOptions
+STATES_TOPIC = "/railsim/wheel_states_exchange"  # rail_ros/topic_transport.hpp, TopicTransportOptions
+LOCKSTEP_SERVICE = "/railsim/lockstep"            # rail_ros/service_transport.hpp, ServiceTransportOptions
 TRACK_STEP = 2.0e-5                               # s, solver.track_step of test/scenes/paper_demo_60m.yaml
 FOREIGN_HASH = 0x0123456789ABCDEF                 # not the scene's hash (which the run prints)
 

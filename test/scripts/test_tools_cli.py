@@ -27,7 +27,7 @@ TOOLS = [
     ([os.path.join(LIB, "rail_contact", "contact_geometry")], "usage"),
     ([os.path.join(LIB, "rail_contact", "bench_contact")], "usage"),
     ([os.path.join(LIB, "rail_core", "railsim_bench_shm")], "usage"),
-    ([os.path.join(LIB, "rail_core", "railsim_bench_transports")], "usage"),
+    ([os.path.join(LIB, "rail_ros", "railsim_bench_transports")], "usage"),
     ([os.path.join(LIB, "rail_track_node", "bench_cosim_track")], "usage"),
     ([os.path.join(LIB, "rail_track_node", "bench_newmark")], "usage"),
     ([os.path.join(LIB, "rail_track_node", "bench_track")], "usage"),

@@ -15,8 +15,8 @@
 #include "rail_core/coupling/frames.hpp"
 #include "rail_core/coupling/protocol.hpp"
 #include "rail_core/coupling/shm_transport.hpp"
-#include "rail_core/ros/service_transport.hpp"
-#include "rail_core/ros/topic_transport.hpp"
+#include "rail_ros/service_transport.hpp"
+#include "rail_ros/topic_transport.hpp"
 
 namespace railsim_test {
 

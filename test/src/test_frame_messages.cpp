@@ -1,5 +1,5 @@
 // gtest (no ROS master needed): the conversions between the coupling frames and rail_msgs
-// (rail_core/ros/frame_messages.hpp): exact round trip, time rebuilt from the step, refusals, the close
+// (rail_ros/frame_messages.hpp): exact round trip, time rebuilt from the step, refusals, the close
 // marker, and no allocation once the messages are reserved. Replaces the global operator new to count
 // allocations, so it is an executable of its own.
 #include <cstdlib>
@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "rail_core/ros/frame_messages.hpp"
+#include "rail_ros/frame_messages.hpp"
 
 namespace {
 long g_allocations = 0;
@@ -24,7 +24,7 @@ void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
 
 using namespace rail::core;
-using namespace rail::core::ros_glue;
+using namespace rail::ros_glue;
 
 namespace {
 

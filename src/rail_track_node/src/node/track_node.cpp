@@ -22,14 +22,14 @@
 #include <string>
 #include <sys/stat.h>
 
-#include "rail_core/ros/master_watch.hpp"
+#include "rail_ros/master_watch.hpp"
 #include <vector>
 
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/handshake.hpp>
-#include <rail_core/ros/scene_param.hpp>
+#include <rail_ros/scene_param.hpp>
 #include <rail_core/scene_loader.hpp>
 #include <rail_msgs/Handshake.h>
 #include <rail_msgs/ContactPoints.h>
@@ -38,8 +38,8 @@
 #include <rail_msgs/Energy.h>
 #include <rail_msgs/WheelStates.h>
 
-#include <rail_core/ros/contact_point_message.hpp>
-#include <rail_core/ros/cosim_transport.hpp>
+#include <rail_ros/contact_point_message.hpp>
+#include <rail_ros/cosim_transport.hpp>
 #include "rail_track_node/cosim_track.hpp"
 #include "rail_track_node/track_window.hpp"
 
@@ -47,6 +47,7 @@
 #include "rail_track_node/track_simulator.hpp"
 
 using namespace rail::core;
+namespace ros_glue = rail::ros_glue;
 namespace rt = rail::track;
 
 namespace {
@@ -102,7 +103,7 @@ int runHandshake(ros::NodeHandle& nh, const Scene& scene, std::string& peer) {
   while (ros::ok() && !g_stop && !server.answered && ros::WallTime::now() < deadline) {
     ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.05));
     if (!server.answered && ros::WallTime::now() >= next_check) {
-      dead = rail::core::ros_glue::exited_peer(ros::this_node::getName());
+      dead = rail::ros_glue::exited_peer(ros::this_node::getName());
       if (!dead.empty()) break;
       next_check = ros::WallTime::now() + ros::WallDuration(0.2);
     }
@@ -277,7 +278,7 @@ void fill(geometry_msgs::Vector3& out, const Eigen::Vector3d& v) {
 
 int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene) {
   const std::string me = ros::this_node::getName();
-  rail::core::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
+  rail::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
   // ---- build ----
   std::unique_ptr<rt::SceneTrack> track;
   rt::SimulatorSettings settings;
@@ -544,7 +545,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   namespace cc = rail::core::coupling;
   const std::string me = ros::this_node::getName();
   CostProfile cost;
-  rail::core::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
+  rail::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
   rail::core::CostClock clock;  // the finer split, filled by the track core (cost_profile.hpp)
   rt::CosimTrackOptions track_options;
   track_options.cost = &clock;
@@ -580,7 +581,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
   }
   try {
-    if (!replay) transport = railsim_node::MakeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &g_stop);
+    if (!replay) transport = rail::ros_glue::MakeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &g_stop);
   } catch (const cc::CouplingError& e) {
     ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), to_string(scene.solver.transport),
               peer.c_str(), e.what());
@@ -665,7 +666,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         for (int k = 0; k < 2; ++k) {
           const rail::contact::ContactPointResult& c = track->contact(id).contact[k];
           rail_msgs::ContactPoint& p = points_msg.points[2 * static_cast<std::size_t>(id) + static_cast<std::size_t>(k)];
-          rail::core::ros_glue::to_message(c, id, id % 2, k, p);
+          rail::ros_glue::to_message(c, id, id % 2, k, p);
         }
       }
       points_pub.publish(points_msg);

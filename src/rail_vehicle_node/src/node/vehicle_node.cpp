@@ -16,7 +16,7 @@
 #include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/handshake.hpp>
-#include <rail_core/ros/scene_param.hpp>
+#include <rail_ros/scene_param.hpp>
 #include <rail_core/scene_loader.hpp>
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/ContactWrenches.h>
@@ -28,8 +28,8 @@
 #include <rail_vehicle_node/cosim_vehicle.hpp>
 #include <rail_vehicle_node/vehicle_simulator.hpp>
 
-#include <rail_core/ros/contact_point_message.hpp>
-#include <rail_core/ros/cosim_transport.hpp>
+#include <rail_ros/contact_point_message.hpp>
+#include <rail_ros/cosim_transport.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -43,9 +43,10 @@
 #include <string>
 #include <sys/stat.h>
 
-#include "rail_core/ros/master_watch.hpp"
+#include "rail_ros/master_watch.hpp"
 
 using namespace rail::core;
+namespace ros_glue = rail::ros_glue;
 namespace rv = rail::vehicle;
 namespace rc = rail::contact;
 
@@ -70,7 +71,7 @@ int handshake(const Scene& scene, std::string& peer) {
   // reported at once, with its exit code, not after the whole timeout.
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
   while (!ros::service::waitForService(service, ros::Duration(0.2))) {
-    const std::string dead = rail::core::ros_glue::exited_peer(ros::this_node::getName());
+    const std::string dead = rail::ros_glue::exited_peer(ros::this_node::getName());
     if (!dead.empty()) {
       ROS_FATAL("%s: the track node died before the handshake: %s (its log says why)",
                 ros::this_node::getName().c_str(), dead.c_str());
@@ -200,7 +201,7 @@ struct Outputs {
       for (int k = 0; k < 2; ++k) {
         const rc::ContactPointResult& c = sim.contacts()[i].contact[k];
         rail_msgs::ContactPoint& p = contact_points.points[2 * i + static_cast<std::size_t>(k)];
-        rail::core::ros_glue::to_message(c, m.wheel_id, m.side, k, p);
+        rail::ros_glue::to_message(c, m.wheel_id, m.side, k, p);
       }
     }
     for (std::size_t w = 0; w < sim.wheelsets().size(); ++w) {
@@ -383,7 +384,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   const std::string node = ros::this_node::getName();
   const bool cosim = scene.cosimulation();
   CostProfile cost;
-  rail::core::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
+  rail::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
   rail::core::CostClock clock;  // the finer split, filled by the simulator (cost_profile.hpp)
   rv::SimulatorSettings sim_settings;
   sim_settings.cost = &clock;
@@ -395,7 +396,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   rv::VehicleSimulator* sim = nullptr;
   if (cosim) {
     try {
-      transport = railsim_node::MakeTransport(scene, rail::core::coupling::Role::kVehicle, nh, pnh, peer,
+      transport = rail::ros_glue::MakeTransport(scene, rail::core::coupling::Role::kVehicle, nh, pnh, peer,
                                               &g_stop);
     } catch (const rail::core::coupling::CouplingError& e) {
       ROS_FATAL("%s: cannot open the %s transport to the track node: %s", node.c_str(),

@@ -6,7 +6,9 @@
 
 #include "rail_core/coupling/transport.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
+
+namespace coupling = rail::core::coupling;
 
 struct RosTransportOptions {
   coupling::Role role = coupling::Role::kVehicle;
@@ -21,4 +23,4 @@ struct RosTransportOptions {
 // transport ("service transport").
 void check_options(const RosTransportOptions& o, const char* what);
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

@@ -1,11 +1,13 @@
-#include "rail_core/ros/frame_messages.hpp"
+#include "rail_ros/frame_messages.hpp"
 
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <string>
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
+
+namespace coupling = rail::core::coupling;
 
 using coupling::Result;
 using coupling::Status;
@@ -165,4 +167,4 @@ Result from_message(const rail_msgs::ContactWrenches& msg, double track_step, co
   return {};
 }
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

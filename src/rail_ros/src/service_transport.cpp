@@ -1,4 +1,4 @@
-#include "rail_core/ros/service_transport.hpp"
+#include "rail_ros/service_transport.hpp"
 
 #include <condition_variable>
 #include <cstdio>
@@ -9,10 +9,12 @@
 #include <ros/ros.h>
 #include <rail_msgs/Lockstep.h>
 
-#include "rail_core/ros/frame_messages.hpp"
+#include "rail_ros/frame_messages.hpp"
 #include "ros_transport_util.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
+
+namespace coupling = rail::core::coupling;
 
 using coupling::Clock;
 using coupling::Deadline;
@@ -411,4 +413,4 @@ std::string ServiceTransport::peer_node() const {
   return track_->vehicle;
 }
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

@@ -10,8 +10,8 @@
 #include <rail_core/coupling/protocol.hpp>
 #include <rail_core/coupling/shm_transport.hpp>
 #include <rail_core/coupling/transport.hpp>
-#include <rail_core/ros/service_transport.hpp>
-#include <rail_core/ros/topic_transport.hpp>
+#include <rail_ros/service_transport.hpp>
+#include <rail_ros/topic_transport.hpp>
 #include <rail_core/scene.hpp>
 
 #include <atomic>
@@ -20,7 +20,9 @@
 #include <memory>
 #include <string>
 
-namespace railsim_node {
+namespace rail::ros_glue {
+
+namespace coupling = rail::core::coupling;
 
 // The run id of the shm regions: ~run_id, else /railsim/run_id (cosim.launch sets it with $(anon run)),
 // else "run". A value that is not 1..48 characters of [A-Za-z0-9_.-] is replaced by its 64-bit FNV-1a
@@ -92,4 +94,4 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> MakeTransport(
   throw std::runtime_error("solver.transport: unknown transport");
 }
 
-}  // namespace railsim_node
+}  // namespace rail::ros_glue

@@ -7,7 +7,7 @@
 #include <rail_contact/wheel_contact.hpp>
 #include <rail_msgs/ContactPoint.h>
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
 
 // Contact k (rail::contact::kTread or kFlange) of wheel `wheel_id` on rail `side` (WheelState::SIDE_*).
 inline void to_message(const rail::contact::ContactPointResult& c, int wheel_id, int side, int k,
@@ -35,4 +35,4 @@ inline void to_message(const rail::contact::ContactPointResult& c, int wheel_id,
   p.contact_angle = c.contact_angle;
 }
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

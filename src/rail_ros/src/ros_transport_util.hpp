@@ -1,4 +1,4 @@
-// Helpers shared by the ROS service and topic transports (private to rail_core_ros).
+// Helpers shared by the ROS service and topic transports (private to rail_ros).
 #pragma once
 
 #include <algorithm>
@@ -10,7 +10,7 @@
 
 #include "rail_core/coupling/transport.hpp"
 
-namespace rail::core::ros_glue::detail {
+namespace rail::ros_glue::detail {
 
 // Longest sleep between checks of the interrupt flag, of ros::ok() and of the peer's connection.
 constexpr auto kSlice = std::chrono::milliseconds(20);
@@ -40,4 +40,4 @@ inline std::string node_label(const std::string& node, coupling::Role peer) {
 // The node that provides `service`, from the master's system state; empty when unknown or unreachable.
 std::string service_provider(const std::string& service);
 
-}  // namespace rail::core::ros_glue::detail
+}  // namespace rail::ros_glue::detail

@@ -8,12 +8,12 @@
 
 #include "rail_core/scene.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
 
 // The launch file hands the scene over as its file's text (<ns>/scene_yaml, via `textfile`) and its path
 // (<ns>/scene_file); ns is ~scene_ns, default /railsim (tests give nodes different scenes this way).
 // On failure logs one fatal message naming the node, the parameter or the scene's file and field, and
 // returns false.
-bool read_scene(ros::NodeHandle& private_nh, Scene& scene);
+bool read_scene(ros::NodeHandle& private_nh, core::Scene& scene);
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

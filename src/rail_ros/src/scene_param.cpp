@@ -1,18 +1,18 @@
-#include "rail_core/ros/scene_param.hpp"
+#include "rail_ros/scene_param.hpp"
 
 #include <ros/ros.h>
 
 #include "rail_core/scene_loader.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
 
-bool read_scene(ros::NodeHandle& private_nh, Scene& scene) {
+bool read_scene(ros::NodeHandle& private_nh, core::Scene& scene) {
   const std::string ns = private_nh.param<std::string>("scene_ns", "/railsim");
   const std::string& node = ros::this_node::getName();
   std::string text, file;
   if (!ros::param::get(ns + "/scene_yaml", text)) {
     ROS_FATAL("%s: parameter %s/scene_yaml is not set: start the node from a launch file that loads a scene "
-              "(e.g. roslaunch launch/scenario.launch scene:=<file>)",
+              "(e.g. roslaunch launch/cosim.launch scene:=<file>)",
               node.c_str(), ns.c_str());
     return false;
   }
@@ -21,12 +21,12 @@ bool read_scene(ros::NodeHandle& private_nh, Scene& scene) {
   std::string overrides;
   ros::param::param<std::string>(ns + "/scene_overrides", overrides, "");
   try {
-    scene = load_scene_handed_over(text, file, split_overrides(overrides));
-  } catch (const SceneError& e) {
+    scene = core::load_scene_handed_over(text, file, core::split_overrides(overrides));
+  } catch (const core::SceneError& e) {
     ROS_FATAL("%s: scene refused: %s", node.c_str(), e.what());
     return false;
   }
   return true;
 }
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

@@ -5,7 +5,7 @@
 //
 // usage: railsim_bench_transports [exchanges (default 20000)] [service,topic,shm]
 // Needs a ROS master: `roslaunch test/bench_transports.launch` (starts one), or with a running roscore
-// `rosrun rail_core railsim_bench_transports`. The program forks its track end itself.
+// `rosrun rail_ros railsim_bench_transports`. The program forks its track end itself.
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
@@ -25,11 +25,11 @@
 #include "rail_contact/tool_args.hpp"
 #include "rail_core/coupling/protocol.hpp"
 #include "rail_core/coupling/shm_transport.hpp"
-#include "rail_core/ros/service_transport.hpp"
-#include "rail_core/ros/topic_transport.hpp"
+#include "rail_ros/service_transport.hpp"
+#include "rail_ros/topic_transport.hpp"
 
 using namespace rail::core::coupling;
-using namespace rail::core::ros_glue;
+using namespace rail::ros_glue;
 
 namespace {
 

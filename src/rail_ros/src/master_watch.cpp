@@ -1,4 +1,4 @@
-#include "rail_core/ros/master_watch.hpp"
+#include "rail_ros/master_watch.hpp"
 
 #include <ros/master.h>
 #include <ros/param.h>
@@ -10,7 +10,7 @@
 #include <memory>
 #include <thread>
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
 
 namespace {
 // The state outlives whichever of watch and thread ends last.
@@ -107,4 +107,4 @@ bool node_help_requested(int argc, char** argv, const char* node, const char* wh
   return false;
 }
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

@@ -1,4 +1,4 @@
-#include "rail_core/ros/topic_transport.hpp"
+#include "rail_ros/topic_transport.hpp"
 
 #include <cstdio>
 #include <vector>
@@ -6,10 +6,12 @@
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 
-#include "rail_core/ros/frame_messages.hpp"
+#include "rail_ros/frame_messages.hpp"
 #include "ros_transport_util.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
+
+namespace coupling = rail::core::coupling;
 
 using coupling::Clock;
 using coupling::Deadline;
@@ -322,4 +324,4 @@ void TopicTransport::close() {
 
 const std::string& TopicTransport::peer_node() const { return impl_->peer; }
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

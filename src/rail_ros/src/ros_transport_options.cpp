@@ -1,4 +1,4 @@
-#include "rail_core/ros/ros_transport_options.hpp"
+#include "rail_ros/ros_transport_options.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -12,7 +12,7 @@
 
 #include "ros_transport_util.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
 
 namespace {
 std::string num(double v) {
@@ -55,4 +55,4 @@ std::string service_provider(const std::string& service) {
 }
 
 }  // namespace detail
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

@@ -19,9 +19,11 @@
 #include <ros/node_handle.h>
 
 #include "rail_core/coupling/transport.hpp"
-#include "rail_core/ros/ros_transport_options.hpp"
+#include "rail_ros/ros_transport_options.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
+
+namespace coupling = rail::core::coupling;
 
 struct ServiceTransportOptions : RosTransportOptions {
   std::string service = "/railsim/lockstep";  // resolved against the node handle given
@@ -58,4 +60,4 @@ class ServiceTransport : public coupling::FrameTransport {
   coupling::Role role_;
 };
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

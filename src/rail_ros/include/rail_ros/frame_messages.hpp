@@ -15,7 +15,9 @@
 #include "rail_core/coupling/frames.hpp"
 #include "rail_core/coupling/transport.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
+
+namespace coupling = rail::core::coupling;
 
 // Step index of the close marker: a message with this step and no wheels tells the receiver that the
 // sender closed (the ROS transports send one from close()).
@@ -50,4 +52,4 @@ coupling::Result from_message(const rail_msgs::WheelStates& msg, double track_st
 coupling::Result from_message(const rail_msgs::ContactWrenches& msg, double track_step,
                               coupling::WrenchFrame& frame, const char* source);
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

@@ -19,9 +19,11 @@
 #include <ros/node_handle.h>
 
 #include "rail_core/coupling/transport.hpp"
-#include "rail_core/ros/ros_transport_options.hpp"
+#include "rail_ros/ros_transport_options.hpp"
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
+
+namespace coupling = rail::core::coupling;
 
 struct TopicTransportOptions : RosTransportOptions {
   std::string states_topic = "/railsim/wheel_states_exchange";      // vehicle -> track (WheelStates)
@@ -58,4 +60,4 @@ class TopicTransport : public coupling::FrameTransport {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue

@@ -7,7 +7,7 @@
 #include <atomic>
 #include <string>
 
-namespace rail::core::ros_glue {
+namespace rail::ros_glue {
 
 class MasterWatch {
  public:
@@ -47,4 +47,4 @@ int wait_for_master(const std::string& node, const std::atomic<int>& signal, dou
 // are started by roslaunch; their settings are private parameters, not options).
 bool node_help_requested(int argc, char** argv, const char* node, const char* what);
 
-}  // namespace rail::core::ros_glue
+}  // namespace rail::ros_glue
