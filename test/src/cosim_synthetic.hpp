@@ -81,6 +81,7 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> make_transport(cons
                                                                             ros::NodeHandle& nh,
                                                                             const std::string& peer_node) {
   using namespace rail::core;
+  namespace ros_glue = rail::ros_glue;
   if (kind == "shm") {
     coupling::ShmOptions o;
     o.role = role;
