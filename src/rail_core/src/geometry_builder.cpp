@@ -59,6 +59,25 @@ rc::ProfileCurve rail_profile_curve(const Scene& scene) {
   }
 }
 
+rc::WheelProfile wheel_profile(const Scene& scene) {
+  try {
+    if (scene.vehicle.wheel_profile_file.empty()) return rc::makeS1002();
+    return rc::loadWheelProfile(scene.vehicle.wheel_profile_file.path);
+  } catch (const std::exception& e) {
+    fail(scene, "vehicle.wheel_profile", e.what());
+  }
+}
+
+rc::WheelContactOptions contact_options(const Scene& scene, rc::WheelContactOptions base) {
+  base.flange_contact = scene.effects.flange_contact;
+  base.spin = scene.effects.spin_creepage;
+  base.creep_law = rc::CreepLaw::kPolach;  // the scene's contact.creep_law has Polach only
+  base.friction = scene.contact.friction;
+  base.damping.restitution = scene.contact.restitution;
+  base.damping.impact_velocity_floor = scene.contact.impact_velocity_floor;
+  return base;
+}
+
 Eigen::Vector2d gauge_point_in_track_plane(const rc::ProfileCurve& rail_own_frame, double inclination,
                                            double depth) {
   // tiltProfile takes the tan of the tilt.

@@ -1,12 +1,13 @@
-// Scene -> rail_contact track geometry: the GeometrySpec (segments, cant base, rail spacing and
-// inclination), the irregularities and the TrackGeometry built from them. ROS-free; used at build time
-// only. Errors of the geometry, profile or irregularity code come back as SceneError naming the scene file
+// Scene -> rail_contact: the track geometry (the GeometrySpec of segments, cant base, rail spacing and
+// inclination; the irregularities; the TrackGeometry built from them), the profiles and the contact options,
+// built here once for both sides of a co-simulation. ROS-free; used at build time only. Errors of the geometry, profile or irregularity code come back as SceneError naming the scene file
 // and the field.
 #pragma once
 
 #include <rail_contact/irregularities.hpp>
 #include <rail_contact/profile.hpp>
 #include <rail_contact/track_geometry.hpp>
+#include <rail_contact/wheel_contact.hpp>
 
 #include "rail_core/scene.hpp"
 
@@ -16,6 +17,15 @@ namespace rail::core {
 // y toward the track centre, z up the rail axis). The built-in "uic60" is the EN 13674-1 60E1 head; a
 // profile file is read as given (its coordinates are taken in the rail's own frame, like the built-in).
 rail::contact::ProfileCurve rail_profile_curve(const Scene& scene);
+
+// The scene's wheel profile: the built-in S1002 (EN 13715), or vehicle.wheel_profile's file. Throws
+// SceneError naming vehicle.wheel_profile.
+rail::contact::WheelProfile wheel_profile(const Scene& scene);
+
+// The contact options of the scene over `base` (the caller's numerical settings): effects.flange_contact and
+// effects.spin_creepage, Polach's creep law, contact.friction and the impact damping of contact.restitution
+// and contact.impact_velocity_floor.
+rail::contact::WheelContactOptions contact_options(const Scene& scene, rail::contact::WheelContactOptions base);
 
 // Gauge point of a rail (EN 13848-1: on the gauge face, depth below the running surface) in a frame
 // aligned with the track plane with its origin at the rail profile origin: y toward the track centre,

@@ -170,24 +170,10 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     geometry_ = rigid_geometry_.get();
   }
 
-  // Contact model, built as the vehicle side builds it on the rigid track.
-  try {
-    wheel_profile_ = scene.vehicle.wheel_profile_file.empty() ? rc::makeS1002()
-                                                              : rc::loadWheelProfile(scene.vehicle.wheel_profile_file.path);
-  } catch (const SceneError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw SceneError(scene.file + ": vehicle.wheel_profile: " + e.what());
-  }
+  // Contact model, built from the scene as the vehicle side builds it (rail_core's geometry builder).
+  wheel_profile_ = rail::core::wheel_profile(scene);
   rail_profile_ = rail::core::rail_profile_curve(scene);
-  rc::WheelContactOptions contact = options.contact;
-  contact.flange_contact = scene.effects.flange_contact;
-  contact.spin = scene.effects.spin_creepage;
-  contact.creep_law = rc::CreepLaw::kPolach;  // core::CreepLaw has Polach only
-  // The scene's contact section (friction, eq. 9 damping) over the caller's contact data.
-  contact.friction = scene.contact.friction;
-  contact.damping.restitution = scene.contact.restitution;
-  contact.damping.impact_velocity_floor = scene.contact.impact_velocity_floor;
+  const rc::WheelContactOptions contact = rail::core::contact_options(scene, options.contact);
   contact_model_ = std::make_unique<rc::WheelContactModel>(wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
                                                            rc::railSectionCentre(rail_profile_, section_depth),
                                                            contact);

@@ -242,8 +242,7 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
 
   // Track, profiles.
   track_ = std::make_unique<rc::TrackGeometry>(core::build_track_geometry(scene));
-  wheel_profile_ = scene.vehicle.wheel_profile_file.empty() ? rc::makeS1002()
-                                                            : rc::loadWheelProfile(scene.vehicle.wheel_profile_file.path);
+  wheel_profile_ = core::wheel_profile(scene);
   rail_profile_ = core::rail_profile_curve(scene);
 
   // Vehicle.
@@ -303,15 +302,8 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
     }
   }
 
-  // Contact: the scene's effects are the contact options.
-  rc::WheelContactOptions options = settings.contact;
-  options.flange_contact = scene.effects.flange_contact;
-  options.spin = scene.effects.spin_creepage;
-  options.creep_law = rc::CreepLaw::kPolach;  // core::CreepLaw has Polach only
-  // The scene's contact section (friction, eq. 9 damping) over the caller's contact data.
-  options.friction = scene.contact.friction;
-  options.damping.restitution = scene.contact.restitution;
-  options.damping.impact_velocity_floor = scene.contact.impact_velocity_floor;
+  // Contact: the scene's effects and contact section over the caller's numerical settings.
+  const rc::WheelContactOptions options = core::contact_options(scene, settings.contact);
   nominal_height_ = scene.vehicle.nominal_radius;
   contact_model_ = std::make_unique<WheelRailContactModel>(
       *track_, wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
