@@ -23,15 +23,14 @@
 #include <sys/stat.h>
 
 #include "rail_ros/master_watch.hpp"
+#include "rail_ros/node_scaffold.hpp"
 #include <vector>
 
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/exit_codes.hpp>
-#include <rail_core/handshake.hpp>
 #include <rail_ros/scene_param.hpp>
 #include <rail_core/scene_loader.hpp>
-#include <rail_msgs/Handshake.h>
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/RailDeflection.h>
 #include <rail_msgs/RailPadForces.h>
@@ -52,83 +51,10 @@ namespace rt = rail::track;
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-std::atomic<int> g_signal{0};  // the signal that set g_stop (0: ROS shutdown)
-void onSignal(int s) {
-  g_signal = s;
-  g_stop = true;
-}
-// Why the run loop stopped, for its log line.
-const char* stopReason() {
-  const int s = g_signal;
-  return s == SIGINT ? "SIGINT" : s == SIGTERM ? "SIGTERM" : "ROS shutdown";
-}
-
-// Answers the vehicle's handshake; remembers whether it was accepted.
-struct HandshakeServer {
-  HandshakeInfo mine;
-  bool answered = false;
-  bool accepted = false;
-  std::string refusal;
-  std::string peer;  // the vehicle node's name
-
-  bool on_request(rail_msgs::Handshake::Request& req, rail_msgs::Handshake::Response& res) {
-    HandshakeInfo theirs;
-    theirs.node = req.node_name;
-    theirs.scene_file = req.scene_file;
-    theirs.scene_hash = req.scene_hash;
-    theirs.wheel_count = req.wheel_count;
-    theirs.track_step = req.track_step;
-    theirs.transport = req.transport;
-    refusal = compare_handshake(mine, theirs);
-    res.accepted = refusal.empty();
-    res.message = refusal;
-    res.peer_name = mine.node;
-    answered = true;
-    accepted = res.accepted;
-    peer = req.node_name;
-    return true;
-  }
-};
-
-// Serves /railsim/handshake until the vehicle called; peer: the vehicle node's name.
-int runHandshake(ros::NodeHandle& nh, const Scene& scene, std::string& peer) {
-  HandshakeServer server;
-  server.mine = handshake_info(scene, ros::this_node::getName());
-  ros::ServiceServer srv = nh.advertiseService("/railsim/handshake", &HandshakeServer::on_request, &server);
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
-  // A vehicle node that died before calling (its guard's record, master_watch.hpp) is reported at once.
-  std::string dead;
-  ros::WallTime next_check = ros::WallTime::now();
-  while (ros::ok() && !g_stop && !server.answered && ros::WallTime::now() < deadline) {
-    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.05));
-    if (!server.answered && ros::WallTime::now() >= next_check) {
-      dead = rail::ros_glue::exited_peer(ros::this_node::getName());
-      if (!dead.empty()) break;
-      next_check = ros::WallTime::now() + ros::WallDuration(0.2);
-    }
-  }
-  if (!ros::ok() || g_stop) return kExitInterrupted;
-  if (!dead.empty()) {
-    ROS_FATAL("%s: the vehicle node died before the handshake: %s (its log says why)",
-              ros::this_node::getName().c_str(), dead.c_str());
-    return kExitPeerTimeout;
-  }
-  if (!server.answered) {
-    ROS_FATAL("%s: no vehicle node called /railsim/handshake within %.1f s (solver.handshake_timeout): is "
-              "rail_vehicle running?", ros::this_node::getName().c_str(), scene.solver.handshake_timeout);
-    return kExitPeerTimeout;
-  }
-  if (!server.accepted) {
-    ROS_FATAL("%s: handshake refused: %s", ros::this_node::getName().c_str(), server.refusal.c_str());
-    return kExitPeerRefused;
-  }
-  ROS_INFO("%s: handshake with %s complete", ros::this_node::getName().c_str(), server.peer.c_str());
-  peer = server.peer;
-  // Let the service response reach the caller before the server goes away.
-  ros::WallDuration(0.1).sleep();
-  return kExitOk;
-}
+// The stop request of this process (rail_ros/node_scaffold.hpp): SIGINT, SIGTERM or a lost master.
+std::atomic<bool>& g_stop = rail::ros_glue::node_stop().requested;
+std::atomic<int>& g_signal = rail::ros_glue::node_stop().signal;
+const char* stopReason() { return rail::ros_glue::node_stop().reason(); }
 
 // mkdir -p; false on failure.
 bool makeDirs(const std::string& dir) {
@@ -871,8 +797,7 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "rail_track", ros::init_options::NoSigintHandler);
   // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
   ::umask(077);
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
+  ros_glue::install_stop_signals();
   if (const int rc = ros_glue::wait_for_master(ros::this_node::getName(), g_signal); rc != 0) return rc;
   ros::NodeHandle nh, pnh("~");
   Scene scene;
@@ -895,7 +820,7 @@ int main(int argc, char** argv) {
     }
     if (scene.has_vehicle) {
       std::string peer;
-      const int rc = runHandshake(nh, scene, peer);
+      const int rc = ros_glue::handshake_as_track(nh, scene, peer);
       if (rc != kExitOk) return rc;
       return runCosim(nh, pnh, scene, peer);
     }

@@ -15,12 +15,10 @@
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/exit_codes.hpp>
-#include <rail_core/handshake.hpp>
 #include <rail_ros/scene_param.hpp>
 #include <rail_core/scene_loader.hpp>
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/ContactWrenches.h>
-#include <rail_msgs/Handshake.h>
 #include <rail_msgs/WheelStates.h>
 #include <rail_msgs/WheelsetKinematics.h>
 #include <rail_msgs/FloorAccelerations.h>
@@ -44,6 +42,7 @@
 #include <sys/stat.h>
 
 #include "rail_ros/master_watch.hpp"
+#include "rail_ros/node_scaffold.hpp"
 
 using namespace rail::core;
 namespace ros_glue = rail::ros_glue;
@@ -52,60 +51,10 @@ namespace rc = rail::contact;
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-std::atomic<int> g_signal{0};  // the signal that set g_stop (0: ROS shutdown)
-void OnSignal(int s) {
-  g_signal = s;
-  g_stop = true;
-}
-// Why the run loop stopped, for its log line.
-const char* StopReason() {
-  const int s = g_signal;
-  return s == SIGINT ? "SIGINT" : s == SIGTERM ? "SIGTERM" : "ROS shutdown";
-}
-
-// peer: set to the track node's name once it answered.
-int handshake(const Scene& scene, std::string& peer) {
-  const std::string service = "/railsim/handshake";
-  // Waits in short slices so that a track node that died (its guard's record, master_watch.hpp) is
-  // reported at once, with its exit code, not after the whole timeout.
-  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
-  while (!ros::service::waitForService(service, ros::Duration(0.2))) {
-    const std::string dead = rail::ros_glue::exited_peer(ros::this_node::getName());
-    if (!dead.empty()) {
-      ROS_FATAL("%s: the track node died before the handshake: %s (its log says why)",
-                ros::this_node::getName().c_str(), dead.c_str());
-      return kExitPeerTimeout;
-    }
-    if (g_stop || !ros::ok()) return kExitInterrupted;
-    if (ros::WallTime::now() >= deadline) {
-      ROS_FATAL("%s: the track node did not offer %s within %.1f s (solver.handshake_timeout): is rail_track "
-                "running?", ros::this_node::getName().c_str(), service.c_str(), scene.solver.handshake_timeout);
-      return kExitPeerTimeout;
-    }
-  }
-  const HandshakeInfo mine = handshake_info(scene, ros::this_node::getName());
-  rail_msgs::Handshake srv;
-  srv.request.node_name = mine.node;
-  srv.request.scene_file = mine.scene_file;
-  srv.request.scene_hash = mine.scene_hash;
-  srv.request.wheel_count = mine.wheel_count;
-  srv.request.track_step = mine.track_step;
-  srv.request.transport = mine.transport;
-  if (!ros::service::call(service, srv)) {
-    ROS_FATAL("%s: the call to %s failed: the track node went away", ros::this_node::getName().c_str(),
-              service.c_str());
-    return kExitPeerTimeout;
-  }
-  if (!srv.response.accepted) {
-    ROS_FATAL("%s: %s refused the handshake: %s", ros::this_node::getName().c_str(),
-              srv.response.peer_name.c_str(), srv.response.message.c_str());
-    return kExitPeerRefused;
-  }
-  peer = srv.response.peer_name;
-  ROS_INFO("%s: handshake with %s complete", ros::this_node::getName().c_str(), srv.response.peer_name.c_str());
-  return kExitOk;
-}
+// The stop request of this process (rail_ros/node_scaffold.hpp): SIGINT, SIGTERM or a lost master.
+std::atomic<bool>& g_stop = rail::ros_glue::node_stop().requested;
+std::atomic<int>& g_signal = rail::ros_glue::node_stop().signal;
+const char* StopReason() { return rail::ros_glue::node_stop().reason(); }
 
 bool Records(const Scene& scene, const char* topic) {
   return std::find(scene.output.topics.begin(), scene.output.topics.end(), topic) != scene.output.topics.end();
@@ -667,8 +616,7 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "rail_vehicle", ros::init_options::NoSigintHandler);
   // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
   ::umask(077);
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
+  ros_glue::install_stop_signals();
   if (const int rc = ros_glue::wait_for_master(ros::this_node::getName(), g_signal); rc != 0) return rc;
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
@@ -683,7 +631,7 @@ int main(int argc, char** argv) {
   if (pnh.param("validate_only", false)) return kExitOk;
   std::string peer;
   if (scene.cosimulation()) {
-    const int rc = handshake(scene, peer);
+    const int rc = ros_glue::handshake_as_vehicle(scene, peer);
     if (rc != kExitOk) return rc;
   }
   const int rc = RunVehicle(scene, nh, pnh, peer);

@@ -1,0 +1,40 @@
+// What both railsim nodes do around their run loop, the same way: the stop flag that SIGINT, SIGTERM and a
+// lost master set, and the co-simulation handshake over /railsim/handshake (rail_msgs/Handshake), in which
+// the vehicle node calls and the track node answers.
+#pragma once
+
+#include <ros/node_handle.h>
+
+#include <atomic>
+#include <string>
+
+#include "rail_core/scene.hpp"
+
+namespace rail::ros_glue {
+
+// The process's stop request: set from a signal handler, read by the run loop, the transports' waits and
+// MasterWatch.
+struct NodeStop {
+  std::atomic<bool> requested{false};
+  std::atomic<int> signal{0};  // the signal that set `requested` (0: ROS shutdown or a lost master)
+
+  // "SIGINT", "SIGTERM" or "ROS shutdown", for the run's closing line.
+  const char* reason() const;
+};
+
+// The one NodeStop of this process.
+NodeStop& node_stop();
+
+// SIGINT and SIGTERM set node_stop() (the run loop then closes the bags and exits 5).
+void install_stop_signals();
+
+// The vehicle's side: waits for the track's service (up to solver.handshake_timeout; a track node that died
+// meanwhile is reported at once with its exit code) and calls it. Returns 0 and the track node's name in
+// `peer`, else the exit code (4 no or dead peer, 3 refused, 5 stopped) after a FATAL line saying why.
+int handshake_as_vehicle(const core::Scene& scene, std::string& peer);
+
+// The track's side: serves /railsim/handshake until the vehicle has called (same timeout and dead-peer
+// check). Returns 0 and the vehicle node's name in `peer`, else the exit code after a FATAL line.
+int handshake_as_track(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer);
+
+}  // namespace rail::ros_glue

@@ -1,0 +1,150 @@
+#include "rail_ros/node_scaffold.hpp"
+
+#include <ros/callback_queue.h>
+#include <ros/ros.h>
+
+#include <csignal>
+
+#include <rail_msgs/Handshake.h>
+
+#include "rail_core/exit_codes.hpp"
+#include "rail_core/handshake.hpp"
+#include "rail_ros/master_watch.hpp"
+
+namespace rail::ros_glue {
+
+namespace {
+
+const char* const kHandshakeService = "/railsim/handshake";
+
+void on_stop_signal(int s) {
+  node_stop().signal = s;
+  node_stop().requested = true;
+}
+
+bool stop_requested() { return node_stop().requested || !ros::ok(); }
+
+// Answers the vehicle's handshake; remembers whether it was accepted.
+struct HandshakeServer {
+  core::HandshakeInfo mine;
+  bool answered = false;
+  bool accepted = false;
+  std::string refusal;
+  std::string peer;  // the vehicle node's name
+
+  bool on_request(rail_msgs::Handshake::Request& req, rail_msgs::Handshake::Response& res) {
+    core::HandshakeInfo theirs;
+    theirs.node = req.node_name;
+    theirs.scene_file = req.scene_file;
+    theirs.scene_hash = req.scene_hash;
+    theirs.wheel_count = req.wheel_count;
+    theirs.track_step = req.track_step;
+    theirs.transport = req.transport;
+    refusal = core::compare_handshake(mine, theirs);
+    res.accepted = refusal.empty();
+    res.message = refusal;
+    res.peer_name = mine.node;
+    answered = true;
+    accepted = res.accepted;
+    peer = req.node_name;
+    return true;
+  }
+};
+
+}  // namespace
+
+const char* NodeStop::reason() const {
+  const int s = signal;
+  return s == SIGINT ? "SIGINT" : s == SIGTERM ? "SIGTERM" : "ROS shutdown";
+}
+
+NodeStop& node_stop() {
+  static NodeStop stop;
+  return stop;
+}
+
+void install_stop_signals() {
+  node_stop();  // constructed before a signal can arrive
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+}
+
+int handshake_as_vehicle(const core::Scene& scene, std::string& peer) {
+  const std::string& me = ros::this_node::getName();
+  // Waits in short slices so that a track node that died (its guard's record, master_watch.hpp) is
+  // reported at once, with its exit code, not after the whole timeout.
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
+  while (!ros::service::waitForService(kHandshakeService, ros::Duration(0.2))) {
+    const std::string dead = exited_peer(me);
+    if (!dead.empty()) {
+      ROS_FATAL("%s: the track node died before the handshake: %s (its log says why)", me.c_str(), dead.c_str());
+      return core::kExitPeerTimeout;
+    }
+    if (stop_requested()) return core::kExitInterrupted;
+    if (ros::WallTime::now() >= deadline) {
+      ROS_FATAL("%s: the track node did not offer %s within %.1f s (solver.handshake_timeout): is rail_track "
+                "running?", me.c_str(), kHandshakeService, scene.solver.handshake_timeout);
+      return core::kExitPeerTimeout;
+    }
+  }
+  const core::HandshakeInfo mine = core::handshake_info(scene, me);
+  rail_msgs::Handshake srv;
+  srv.request.node_name = mine.node;
+  srv.request.scene_file = mine.scene_file;
+  srv.request.scene_hash = mine.scene_hash;
+  srv.request.wheel_count = mine.wheel_count;
+  srv.request.track_step = mine.track_step;
+  srv.request.transport = mine.transport;
+  if (!ros::service::call(kHandshakeService, srv)) {
+    ROS_FATAL("%s: the call to %s failed: the track node went away", me.c_str(), kHandshakeService);
+    return core::kExitPeerTimeout;
+  }
+  if (!srv.response.accepted) {
+    ROS_FATAL("%s: %s refused the handshake: %s", me.c_str(), srv.response.peer_name.c_str(),
+              srv.response.message.c_str());
+    return core::kExitPeerRefused;
+  }
+  peer = srv.response.peer_name;
+  ROS_INFO("%s: handshake with %s complete", me.c_str(), peer.c_str());
+  return core::kExitOk;
+}
+
+int handshake_as_track(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer) {
+  const std::string& me = ros::this_node::getName();
+  HandshakeServer server;
+  server.mine = core::handshake_info(scene, me);
+  ros::ServiceServer srv = nh.advertiseService(kHandshakeService, &HandshakeServer::on_request, &server);
+  const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
+  // A vehicle node that died before calling (its guard's record, master_watch.hpp) is reported at once.
+  std::string dead;
+  ros::WallTime next_check = ros::WallTime::now();
+  while (!stop_requested() && !server.answered && ros::WallTime::now() < deadline) {
+    ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.05));
+    if (!server.answered && ros::WallTime::now() >= next_check) {
+      dead = exited_peer(me);
+      if (!dead.empty()) break;
+      next_check = ros::WallTime::now() + ros::WallDuration(0.2);
+    }
+  }
+  if (stop_requested()) return core::kExitInterrupted;
+  if (!dead.empty()) {
+    ROS_FATAL("%s: the vehicle node died before the handshake: %s (its log says why)", me.c_str(), dead.c_str());
+    return core::kExitPeerTimeout;
+  }
+  if (!server.answered) {
+    ROS_FATAL("%s: no vehicle node called %s within %.1f s (solver.handshake_timeout): is rail_vehicle running?",
+              me.c_str(), kHandshakeService, scene.solver.handshake_timeout);
+    return core::kExitPeerTimeout;
+  }
+  if (!server.accepted) {
+    ROS_FATAL("%s: handshake refused: %s", me.c_str(), server.refusal.c_str());
+    return core::kExitPeerRefused;
+  }
+  ROS_INFO("%s: handshake with %s complete", me.c_str(), server.peer.c_str());
+  peer = server.peer;
+  // Let the service response reach the caller before the server goes away.
+  ros::WallDuration(0.1).sleep();
+  return core::kExitOk;
+}
+
+}  // namespace rail::ros_glue
