@@ -43,6 +43,7 @@ TOOLS = [
     ([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "make_worn_profiles.py")], "Makes"),
     ([PY, os.path.join(REPO, "scripts", "count_tests.py")], "Counts"),
     (["/bin/bash", os.path.join(REPO, "scripts", "rviz_screenshot.sh")], "Screenshot"),
+    (["/bin/bash", os.path.join(REPO, "scripts", "check_naming")], "check_naming:"),
 ]
 
 MB = os.path.join(REPO, "config", "profiles", "manchester_a22")
@@ -80,6 +81,28 @@ class ToolsAnswerHelp(unittest.TestCase):
         p = run([PY, os.path.join(REPO, "scripts", "count_tests.py")])
         self.assertEqual(p.returncode, 2)
         self.assertIn("usage: count_tests.py", p.stderr)
+
+
+class NamingCheck(unittest.TestCase):
+    """scripts/check_naming, which ./railsim test (and so CI) runs over the whole tree: a name against the
+    convention of .clang-tidy fails it, naming file, line and the name."""
+
+    def test_a_violation_fails_naming_file_line_and_name(self):
+        d = self_dir()
+        bad, good = os.path.join(d, "bad.cpp"), os.path.join(d, "good.cpp")
+        with open(bad, "w") as f:
+            f.write("namespace rail {\nvoid load_scene_file();\nstruct wheel_state {};\nvoid AdvanceTo(double t);\n}\n")
+        with open(good, "w") as f:
+            f.write("namespace rail {\nvoid loadSceneFile();\nstruct WheelState { double speed() const; };\n}\n")
+        p = run(["/bin/bash", os.path.join(REPO, "scripts", "check_naming"), bad], timeout=120)
+        self.assertEqual(p.returncode, 1, p.stdout + p.stderr)
+        self.assertIn("%s:2:6: invalid case style for function 'load_scene_file'" % bad, p.stdout)
+        self.assertIn("%s:3:8: invalid case style for struct 'wheel_state'" % bad, p.stdout)
+        self.assertIn("%s:4:6: invalid case style for function 'AdvanceTo'" % bad, p.stdout)
+        self.assertIn("3 name(s) break the convention", p.stderr)
+        p = run(["/bin/bash", os.path.join(REPO, "scripts", "check_naming"), good], timeout=120)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertIn("every name follows the convention", p.stdout)
 
 
 class ScriptsOnBadInput(unittest.TestCase):
@@ -200,7 +223,7 @@ class ContactGeometryIsHonest(unittest.TestCase):
 
 def main():
     loader = unittest.TestLoader()
-    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, ScriptsOnBadInput, NodesStartedByHand, ContactGeometryIsHonest)])
+    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, ScriptsOnBadInput, NodesStartedByHand, ContactGeometryIsHonest, NamingCheck)])
     return rosunit_main.run(suite, "test_tools_cli")
 
 

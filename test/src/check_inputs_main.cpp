@@ -74,69 +74,69 @@ struct RunFailed {
 };
 
 template <typename Derived>
-void RequireFinite(const Eigen::DenseBase<Derived>& v, const std::string& what, const std::string& file) {
+void requireFinite(const Eigen::DenseBase<Derived>& v, const std::string& what, const std::string& file) {
   if (!v.derived().allFinite()) throw NonFinite{what, file};
 }
-void RequireFinite(double v, const std::string& what, const std::string& file) {
+void requireFinite(double v, const std::string& what, const std::string& file) {
   if (!std::isfinite(v)) throw NonFinite{what, file};
 }
 
 // The file a vehicle result comes from: the vehicle data file, or the scene when it has none.
-std::string VehicleFile(const Scene& scene) {
+std::string vehicleFile(const Scene& scene) {
   return scene.vehicle.data.empty() ? scene.file : scene.vehicle.data.path;
 }
-std::string TrackDataFile(const Scene& scene) {
+std::string trackDataFile(const Scene& scene) {
   return scene.track.data.empty() ? scene.file : scene.track.data.path;
 }
 
 // Samples the centre line and both rails at 101 points and the rail profile at 101 points.
-void CheckGeometry(const Scene& scene, const rc::TrackGeometry& geometry, const rc::ProfileCurve& rail) {
+void checkGeometry(const Scene& scene, const rc::TrackGeometry& geometry, const rc::ProfileCurve& rail) {
   rc::TrackPoint tp;
   rc::RailPoint rp;
   const double s0 = geometry.sStart(), s1 = geometry.sEnd();
-  RequireFinite(s0, "track geometry start arc length", scene.file);
-  RequireFinite(s1, "track geometry end arc length", scene.file);
+  requireFinite(s0, "track geometry start arc length", scene.file);
+  requireFinite(s1, "track geometry end arc length", scene.file);
   for (int i = 0; i <= 100; ++i) {
     const double s = s0 + (s1 - s0) * i / 100.0;
     geometry.centre(s, tp);
-    RequireFinite(tp.p_center_in_world, "track centre line", scene.file);
-    RequireFinite(tp.R_track_to_world, "track frame", scene.file);
+    requireFinite(tp.p_center_in_world, "track centre line", scene.file);
+    requireFinite(tp.R_track_to_world, "track frame", scene.file);
     for (rc::RailSide side : {rc::RailSide::kLeft, rc::RailSide::kRight}) {
       geometry.rail(side, s, rp);
-      RequireFinite(rp.p_origin_in_world, "rail origin", scene.file);
-      RequireFinite(rp.R_rail_to_world, "rail frame", scene.file);
+      requireFinite(rp.p_origin_in_world, "rail origin", scene.file);
+      requireFinite(rp.R_rail_to_world, "rail frame", scene.file);
     }
   }
   const std::string profile_file =
       scene.track.rail_profile_file.empty() ? scene.file : scene.track.rail_profile_file.path;
-  RequireFinite(rail.uMax(), "rail profile length", profile_file);
+  requireFinite(rail.uMax(), "rail profile length", profile_file);
   for (int i = 0; i <= 100; ++i) {
     const double u = rail.uMax() * i / 100.0;
-    RequireFinite(rail.position(u), "rail profile point", profile_file);
-    RequireFinite(rail.normal(u), "rail profile normal", profile_file);
+    requireFinite(rail.position(u), "rail profile point", profile_file);
+    requireFinite(rail.normal(u), "rail profile normal", profile_file);
   }
 }
 
-void CheckVehicleOutputs(const Scene& scene, rv::VehicleSimulator& sim) {
-  const std::string file = VehicleFile(scene);
-  sim.UpdateOutputs();
-  RequireFinite(sim.state(), "vehicle state", file);
-  RequireFinite(sim.time(), "vehicle time", file);
+void checkVehicleOutputs(const Scene& scene, rv::VehicleSimulator& sim) {
+  const std::string file = vehicleFile(scene);
+  sim.updateOutputs();
+  requireFinite(sim.state(), "vehicle state", file);
+  requireFinite(sim.time(), "vehicle time", file);
   for (const rv::WheelOutput& w : sim.wheels()) {
-    RequireFinite(w.p_in_world, "wheel centre position", file);
-    RequireFinite(w.v_in_world, "wheel centre velocity", file);
-    RequireFinite(w.omega_in_world, "wheelset angular velocity", file);
-    RequireFinite(w.force_in_world, "wheel contact force", file);
-    RequireFinite(w.moment_in_world, "wheel contact moment", file);
-    RequireFinite(w.arc_length, "wheel arc length", file);
+    requireFinite(w.p_in_world, "wheel centre position", file);
+    requireFinite(w.v_in_world, "wheel centre velocity", file);
+    requireFinite(w.omega_in_world, "wheelset angular velocity", file);
+    requireFinite(w.force_in_world, "wheel contact force", file);
+    requireFinite(w.moment_in_world, "wheel contact moment", file);
+    requireFinite(w.arc_length, "wheel arc length", file);
   }
   for (const rv::WheelsetTrackOutput& o : sim.wheelsets()) {
-    RequireFinite(Eigen::Vector4d(o.lateral, o.vertical, o.angle_of_attack, o.roll), "wheelset kinematics", file);
+    requireFinite(Eigen::Vector4d(o.lateral, o.vertical, o.angle_of_attack, o.roll), "wheelset kinematics", file);
   }
 }
 
 // Wheel states of the vehicle's wheels as the co-simulation frame of step k.
-void FillFrame(const rv::VehicleSimulator& sim, std::uint64_t k, double h, std::uint64_t hash,
+void fillFrame(const rv::VehicleSimulator& sim, std::uint64_t k, double h, std::uint64_t hash,
                cc::WheelStateFrame& frame) {
   frame.step = k;
   frame.time = static_cast<double>(k) * h;
@@ -156,14 +156,14 @@ void FillFrame(const rv::VehicleSimulator& sim, std::uint64_t k, double h, std::
 
 // Advances the vehicle to t; a run that stops for another reason than its end or a derailment/leaving the
 // track (outcomes of the physics, reported in the summary) is a failure.
-rv::RunStatus Advance(rv::VehicleSimulator& sim, double t) {
-  const rv::RunStatus st = sim.AdvanceTo(t);
+rv::RunStatus advance(rv::VehicleSimulator& sim, double t) {
+  const rv::RunStatus st = sim.advanceTo(t);
   if (st == rv::RunStatus::kNonFinite) throw RunFailed{"non-finite vehicle state: " + sim.message()};
   if (st == rv::RunStatus::kIntegratorFailed) throw RunFailed{"vehicle integrator failed: " + sim.message()};
   return st;
 }
 
-const char* StatusName(rv::RunStatus s) {
+const char* statusName(rv::RunStatus s) {
   switch (s) {
     case rv::RunStatus::kRunning: return "running";
     case rv::RunStatus::kFinished: return "finished";
@@ -176,16 +176,16 @@ const char* StatusName(rv::RunStatus s) {
 }
 
 // Builds and runs everything; returns the summary.
-std::string Check(const std::string& path, const rail::core::SceneOverrides& overrides, int steps,
+std::string check(const std::string& path, const rail::core::SceneOverrides& overrides, int steps,
                   double vehicle_time) {
   std::ostringstream summary;
-  const Scene scene = rail::core::load_scene_file(path, overrides);
-  summary << "scene " << scene.name << " (" << rail::core::to_string(scene.effects.track_model) << ")";
+  const Scene scene = rail::core::loadSceneFile(path, overrides);
+  summary << "scene " << scene.name << " (" << rail::core::toString(scene.effects.track_model) << ")";
 
   // Track geometry and rail profile (both nodes build them).
-  const rc::TrackGeometry geometry = rail::core::build_track_geometry(scene);
-  const rc::ProfileCurve rail_profile = rail::core::rail_profile_curve(scene);
-  CheckGeometry(scene, geometry, rail_profile);
+  const rc::TrackGeometry geometry = rail::core::buildTrackGeometry(scene);
+  const rc::ProfileCurve rail_profile = rail::core::railProfileCurve(scene);
+  checkGeometry(scene, geometry, rail_profile);
   summary << "; track " << geometry.sEnd() - geometry.sStart() << " m";
 
   // Vehicle on the rigid track.
@@ -193,26 +193,26 @@ std::string Check(const std::string& path, const rail::core::SceneOverrides& ove
   rv::RunStatus vehicle_status = rv::RunStatus::kRunning;
   if (scene.has_vehicle) {
     vehicle = std::make_unique<rv::VehicleSimulator>(scene);
-    CheckVehicleOutputs(scene, *vehicle);
-    RequireFinite(vehicle->settle_lift(), "vehicle settling lift", VehicleFile(scene));
+    checkVehicleOutputs(scene, *vehicle);
+    requireFinite(vehicle->settleLift(), "vehicle settling lift", vehicleFile(scene));
   }
 
   // FE track under the moving loads (or its own weight) with the scene's deflection sections.
   long fe_dofs = 0, fe_steps = 0;
-  const bool fe_track = scene.needs_track_node() || !scene.has_vehicle;
+  const bool fe_track = scene.needsTrackNode() || !scene.has_vehicle;
   if (fe_track) {
     rt::SceneTrack track = rt::buildSceneTrack(scene);
     rt::SimulatorSettings settings;
     settings.dt = scene.solver.track_step;
     if (!scene.has_vehicle) {
       const double t_end = rt::movingLoadEndTime(scene);
-      RequireFinite(t_end, "moving-load end time", scene.file);
+      requireFinite(t_end, "moving-load end time", scene.file);
       settings.loads = scene.moving_loads;
     }
     settings.t_end = steps * settings.dt;
     settings.rail_height = track.rail_height;
     rt::TrackSimulator sim(track.model, settings);
-    const std::string file = TrackDataFile(scene);
+    const std::string file = trackDataFile(scene);
     const bool deflections = scene.effects.rail_deflection_output && !scene.output.deflection_sections.empty();
     if (deflections) {
       const rt::TrackFrameFunction frames = rt::seatPlaneFrames(track.geometry, track.seat_below_centre);
@@ -224,18 +224,18 @@ std::string Check(const std::string& path, const rail::core::SceneOverrides& ove
         }
       }
     }
-    RequireFinite(sim.state().d, "track static displacement", file);
+    requireFinite(sim.state().d, "track static displacement", file);
     rt::RailSectionDeflection deflection;
     for (int k = 1; k <= steps; ++k) {
       sim.advanceTo(k * settings.dt);
-      RequireFinite(sim.state().d, "track displacement", file);
-      RequireFinite(sim.state().v, "track velocity", file);
-      RequireFinite(sim.state().a, "track acceleration", file);
+      requireFinite(sim.state().d, "track displacement", file);
+      requireFinite(sim.state().v, "track velocity", file);
+      requireFinite(sim.state().a, "track acceleration", file);
       for (int i = 0; i < sim.sectionCount(); ++i) {
         sim.sectionDeflection(i, deflection);
         for (int r = 0; r < 2; ++r) {
-          RequireFinite(deflection.displacement[r], "rail deflection", file);
-          RequireFinite(deflection.rotation[r], "rail rotation", file);
+          requireFinite(deflection.displacement[r], "rail deflection", file);
+          requireFinite(deflection.rotation[r], "rail rotation", file);
         }
       }
     }
@@ -261,32 +261,32 @@ std::string Check(const std::string& path, const rail::core::SceneOverrides& ove
     cc::WheelStateFrame states(n);
     cc::WrenchFrame wrenches(n);
     const double h = scene.solver.track_step;
-    const std::string file = TrackDataFile(scene);
+    const std::string file = trackDataFile(scene);
     rt::RailSectionDeflection deflection;
     int k = 0;
     for (; k <= steps; ++k) {
       if (k > 0) {
-        vehicle_status = Advance(*vehicle, k * h);
+        vehicle_status = advance(*vehicle, k * h);
         if (vehicle_status != rv::RunStatus::kRunning) break;
       }
-      CheckVehicleOutputs(scene, *vehicle);
-      FillFrame(*vehicle, static_cast<std::uint64_t>(k), h, scene.hash, states);
+      checkVehicleOutputs(scene, *vehicle);
+      fillFrame(*vehicle, static_cast<std::uint64_t>(k), h, scene.hash, states);
       const rt::CosimStepStatus st = track.step(states, wrenches);
       if (st != rt::CosimStepStatus::kOk) {
         throw RunFailed{"co-simulation track step " + std::to_string(k) + " refused the vehicle's frame (status " +
                         std::to_string(static_cast<int>(st)) + ")"};
       }
       for (std::uint32_t i = 0; i < wrenches.count; ++i) {
-        RequireFinite(wrenches.wheels[i].f_wheel_in_world, "co-simulation wheel force", file);
-        RequireFinite(wrenches.wheels[i].n_wheel_in_world, "co-simulation wheel moment", file);
+        requireFinite(wrenches.wheels[i].f_wheel_in_world, "co-simulation wheel force", file);
+        requireFinite(wrenches.wheels[i].n_wheel_in_world, "co-simulation wheel moment", file);
       }
       if (const rt::NewmarkState* s = track.state()) {
-        RequireFinite(s->d, "co-simulation track displacement", file);
-        RequireFinite(s->v, "co-simulation track velocity", file);
+        requireFinite(s->d, "co-simulation track displacement", file);
+        requireFinite(s->v, "co-simulation track velocity", file);
       }
       for (int i = 0; i < track.sectionCount(); ++i) {
         track.sectionDeflection(i, deflection);
-        for (int r = 0; r < 2; ++r) RequireFinite(deflection.displacement[r], "co-simulation rail deflection", file);
+        for (int r = 0; r < 2; ++r) requireFinite(deflection.displacement[r], "co-simulation rail deflection", file);
       }
     }
     summary << "; co-simulation track " << (track.flexible() ? "flexible" : "rigid") << " "
@@ -299,19 +299,19 @@ std::string Check(const std::string& path, const rail::core::SceneOverrides& ove
     const double t_end = std::max(vehicle_time, vehicle->time());
     const double dt_out = 5e-4;  // outputs checked every 0.5 ms
     for (double t = vehicle->time() + dt_out; vehicle_status == rv::RunStatus::kRunning; t += dt_out) {
-      vehicle_status = Advance(*vehicle, std::min(t, t_end));
-      CheckVehicleOutputs(scene, *vehicle);
+      vehicle_status = advance(*vehicle, std::min(t, t_end));
+      checkVehicleOutputs(scene, *vehicle);
       if (t >= t_end) break;
     }
-    const rv::IntegratorCounters c = vehicle->Counters();
-    summary << "; vehicle " << vehicle->model().n_bodies() << " bodies, " << vehicle->wheels().size()
-            << " wheels, settled " << vehicle->settle_lift() * 1e3 << " mm, t = " << vehicle->time() << " s ("
-            << StatusName(vehicle_status) << "), " << c.steps << " CVODE steps";
+    const rv::IntegratorCounters c = vehicle->counters();
+    summary << "; vehicle " << vehicle->model().nBodies() << " bodies, " << vehicle->wheels().size()
+            << " wheels, settled " << vehicle->settleLift() * 1e3 << " mm, t = " << vehicle->time() << " s ("
+            << statusName(vehicle_status) << "), " << c.steps << " CVODE steps";
   }
   return summary.str();
 }
 
-int Usage(const char* msg) {
+int usage(const char* msg) {
   std::cerr << "error: usage: " << msg
             << "\n  railsim_check_inputs <scene.yaml> [--set key=value ...] [--steps N] [--vehicle-time T]\n";
   return kExitUsage;
@@ -327,14 +327,14 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--set" || a == "--steps" || a == "--vehicle-time") {
-      if (i + 1 >= argc) return Usage((a + " needs a value").c_str());
+      if (i + 1 >= argc) return usage((a + " needs a value").c_str());
       const char* v = argv[++i];
       if (a == "--set") {
         overrides.push_back(v);
       } else {
         char* end = nullptr;
         const double x = std::strtod(v, &end);
-        if (end == v || *end != '\0' || !(x >= 0.0) || !std::isfinite(x)) return Usage((a + ": not a number >= 0").c_str());
+        if (end == v || *end != '\0' || !(x >= 0.0) || !std::isfinite(x)) return usage((a + ": not a number >= 0").c_str());
         if (a == "--steps") steps = static_cast<int>(x);
         else vehicle_time = x;
       }
@@ -344,12 +344,12 @@ int main(int argc, char** argv) {
     } else if (path == nullptr) {
       path = argv[i];
     } else {
-      return Usage(("unexpected argument '" + a + "'").c_str());
+      return usage(("unexpected argument '" + a + "'").c_str());
     }
   }
-  if (path == nullptr) return Usage("no scene file");
+  if (path == nullptr) return usage("no scene file");
   try {
-    const std::string summary = Check(path, overrides, steps, vehicle_time);
+    const std::string summary = check(path, overrides, steps, vehicle_time);
     std::cout << "ok: " << summary << std::endl;
     return kExitOk;
   } catch (const NonFinite& e) {

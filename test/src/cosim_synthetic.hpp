@@ -37,7 +37,7 @@ inline rail::core::coupling::CouplingConfig config(double exchange_timeout) {
 }
 
 // g(t): wheel centre i (wheelset i/2, side i%2) rolling at V along x, bouncing 1 mm at 7 Hz.
-inline void wheel_state_at(double t, int i, rail::core::coupling::WheelState& w) {
+inline void wheelStateAt(double t, int i, rail::core::coupling::WheelState& w) {
   const double x0 = 20.0 - 2.5 * (i / 2);
   const double y = (i % 2) ? -0.75 : 0.75;
   const double phase = 2.0 * kPi * 7.0 * t + 0.3 * i;
@@ -51,7 +51,7 @@ inline void wheel_state_at(double t, int i, rail::core::coupling::WheelState& w)
 }
 
 // f(step, state): the wrench the synthetic track returns for one wheel.
-inline void wrench_for(std::uint64_t step, const rail::core::coupling::WheelState& s,
+inline void wrenchFor(std::uint64_t step, const rail::core::coupling::WheelState& s,
                        rail::core::coupling::WheelWrench& w) {
   const double k = static_cast<double>(step);
   w.id = s.id;
@@ -75,7 +75,7 @@ struct RunNames {
 };
 
 // The transport `kind` (service, topic, shm) for `role`.
-inline std::unique_ptr<rail::core::coupling::FrameTransport> make_transport(const std::string& kind,
+inline std::unique_ptr<rail::core::coupling::FrameTransport> makeTransport(const std::string& kind,
                                                                             rail::core::coupling::Role role,
                                                                             const RunNames& names,
                                                                             ros::NodeHandle& nh,

@@ -73,7 +73,7 @@ class TrackPeer {
   }
   pid_t pid() const { return pid_; }
   // Exit code once the process ended within `timeout_s`; -1 if it did not (or died of a signal).
-  int wait_exit(double timeout_s) {
+  int waitExit(double timeout_s) {
     const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
     int status = 0;
     while (Clock::now() < end) {
@@ -86,7 +86,7 @@ class TrackPeer {
     }
     return -1;
   }
-  void kill_now() {
+  void killNow() {
     kill(pid_, SIGKILL);
     waitpid(pid_, nullptr, 0);
     reaped_ = true;
@@ -97,7 +97,7 @@ class TrackPeer {
   bool reaped_ = false;
 };
 
-RunNames names_for(const std::string& run) {
+RunNames namesFor(const std::string& run) {
   return {"/cosim_" + run, "cosim" + std::to_string(getpid()) + run};
 }
 
@@ -110,14 +110,14 @@ std::uint64_t bits(double x) {
 
 // One run of kSteps exchanges over `kind`: after each exchange k the vehicle extrapolates the wrenches to
 // t_k + h/2; all of them (steps x wheels x 6 components) are appended to `extrapolated`.
-void run_cosim(const std::string& kind, std::vector<double>& extrapolated) {
+void runCosim(const std::string& kind, std::vector<double>& extrapolated) {
   ros::NodeHandle& nh = node();
-  const RunNames names = names_for(kind);
+  const RunNames names = namesFor(kind);
   const std::string track_node = "/cosim_track_" + kind;
   TrackPeer peer(kind, names, track_node.substr(1), kSteps);
   ASSERT_GT(peer.pid(), 0);
   std::unique_ptr<FrameTransport> transport;
-  ASSERT_NO_THROW(transport = make_transport(kind, Role::kVehicle, names, nh, track_node));
+  ASSERT_NO_THROW(transport = makeTransport(kind, Role::kVehicle, names, nh, track_node));
   VehicleCoupling vehicle(config(10.0), *transport);
   WrenchFrame out(kWheels);
   WheelState g;
@@ -126,17 +126,17 @@ void run_cosim(const std::string& kind, std::vector<double>& extrapolated) {
   extrapolated.reserve(kSteps * kWheels * 6);
   for (long k = 0; k < kSteps; ++k) {
     const double t_k = static_cast<double>(k) * kTrackStep;
-    for (int i = 0; i < kWheels; ++i) wheel_state_at(t_k, i, vehicle.states().wheels[i]);
+    for (int i = 0; i < kWheels; ++i) wheelStateAt(t_k, i, vehicle.states().wheels[i]);
     const Result r = vehicle.exchange();
     ASSERT_TRUE(r.ok()) << kind << ": " << r.message;
     // Step k answered once and in order, with exactly f(k, g(t_k)) (both sides evaluate the same code on
     // the same bits: no tolerance).
-    const WrenchFrame& w = vehicle.last_wrenches();
+    const WrenchFrame& w = vehicle.lastWrenches();
     ASSERT_EQ(w.step, static_cast<std::uint64_t>(k)) << kind;
     ASSERT_EQ(w.count, static_cast<std::uint32_t>(kWheels)) << kind;
     for (int i = 0; i < kWheels; ++i) {
-      wheel_state_at(t_k, i, g);
-      wrench_for(static_cast<std::uint64_t>(k), g, f);
+      wheelStateAt(t_k, i, g);
+      wrenchFor(static_cast<std::uint64_t>(k), g, f);
       ASSERT_EQ(w.wheels[i].f_wheel_in_world, f.f_wheel_in_world) << kind << " step " << k << " wheel " << i;
       ASSERT_EQ(w.wheels[i].n_wheel_in_world, f.n_wheel_in_world) << kind << " step " << k << " wheel " << i;
     }
@@ -146,14 +146,14 @@ void run_cosim(const std::string& kind, std::vector<double>& extrapolated) {
     const double t = t_k + 0.5 * kTrackStep;
     vehicle.extrapolate(t, out);
     for (int i = 0; i < kWheels; ++i) {
-      wheel_state_at(t_k, i, g);
-      wrench_for(static_cast<std::uint64_t>(k), g, f);
+      wheelStateAt(t_k, i, g);
+      wrenchFor(static_cast<std::uint64_t>(k), g, f);
       Eigen::Matrix<double, 6, 1> expected, got, scale;
       expected << f.f_wheel_in_world, f.n_wheel_in_world;
       scale = expected.cwiseAbs();
       if (k > 0) {
-        wheel_state_at(t_k - kTrackStep, i, g);
-        wrench_for(static_cast<std::uint64_t>(k - 1), g, f_previous);
+        wheelStateAt(t_k - kTrackStep, i, g);
+        wrenchFor(static_cast<std::uint64_t>(k - 1), g, f_previous);
         Eigen::Matrix<double, 6, 1> previous;
         previous << f_previous.f_wheel_in_world, f_previous.n_wheel_in_world;
         scale += (expected - previous).cwiseAbs();
@@ -169,14 +169,14 @@ void run_cosim(const std::string& kind, std::vector<double>& extrapolated) {
   vehicle.close();
   transport.reset();
   // The track saw every step once, in order, with exactly g(t_k), and ended on the vehicle's close.
-  EXPECT_EQ(peer.wait_exit(20.0), 0) << kind << ": the track node reported a failure (see its output above)";
+  EXPECT_EQ(peer.waitExit(20.0), 0) << kind << ": the track node reported a failure (see its output above)";
 }
 
 TEST(CosimTransports, SameWrenchesOverServiceTopicAndShm) {
   std::map<std::string, std::vector<double>> runs;
   for (const std::string kind : {"service", "topic", "shm"}) {
     SCOPED_TRACE(kind);
-    ASSERT_NO_FATAL_FAILURE(run_cosim(kind, runs[kind]));
+    ASSERT_NO_FATAL_FAILURE(runCosim(kind, runs[kind]));
     ASSERT_EQ(runs[kind].size(), static_cast<std::size_t>(kSteps * kWheels * 6));
   }
   // Bit for bit: the transports only copy doubles (ROS messages carry them as float64), and the vehicle
@@ -197,26 +197,26 @@ class KilledTrack : public ::testing::TestWithParam<const char*> {};
 TEST_P(KilledTrack, VehicleReportsItWithinTheExchangeTimeout) {
   const std::string kind = GetParam();
   ros::NodeHandle& nh = node();
-  const RunNames names = names_for(kind + "_kill");
+  const RunNames names = namesFor(kind + "_kill");
   const std::string track_node = "/cosim_track_" + kind + "_kill";
   TrackPeer peer(kind, names, track_node.substr(1), kSteps);
   ASSERT_GT(peer.pid(), 0);
   std::unique_ptr<FrameTransport> transport;
-  ASSERT_NO_THROW(transport = make_transport(kind, Role::kVehicle, names, nh, track_node));
+  ASSERT_NO_THROW(transport = makeTransport(kind, Role::kVehicle, names, nh, track_node));
   const double exchange_timeout = 3.0;  // [s]
   VehicleCoupling vehicle(config(exchange_timeout), *transport);
   for (long k = 0; k < 200; ++k) {
-    for (int i = 0; i < kWheels; ++i) wheel_state_at(static_cast<double>(k) * kTrackStep, i, vehicle.states().wheels[i]);
+    for (int i = 0; i < kWheels; ++i) wheelStateAt(static_cast<double>(k) * kTrackStep, i, vehicle.states().wheels[i]);
     const Result r = vehicle.exchange();
     ASSERT_TRUE(r.ok()) << kind << " step " << k << ": " << r.message;
   }
-  peer.kill_now();
-  for (int i = 0; i < kWheels; ++i) wheel_state_at(200 * kTrackStep, i, vehicle.states().wheels[i]);
+  peer.killNow();
+  for (int i = 0; i < kWheels; ++i) wheelStateAt(200 * kTrackStep, i, vehicle.states().wheels[i]);
   const auto t0 = Clock::now();
   const Result r = vehicle.exchange();
   const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
   EXPECT_FALSE(r.ok());
-  EXPECT_TRUE(r.status == Status::kTimeout || r.status == Status::kPeerClosed) << to_string(r.status) << ": " << r.message;
+  EXPECT_TRUE(r.status == Status::kTimeout || r.status == Status::kPeerClosed) << toString(r.status) << ": " << r.message;
   // Slack of 1 s over the timeout for a loaded machine (a timeout itself takes exactly exchange_timeout).
   EXPECT_LT(elapsed, exchange_timeout + 1.0) << r.message;
   EXPECT_NE(r.message.find("the track"), std::string::npos) << r.message;
@@ -236,21 +236,21 @@ class HungTrack : public ::testing::TestWithParam<const char*> {};
 TEST_P(HungTrack, VehicleTimesOutAtTheDeadline) {
   const std::string kind = GetParam();
   ros::NodeHandle& nh = node();
-  const RunNames names = names_for(kind + "_hung");
+  const RunNames names = namesFor(kind + "_hung");
   const std::string track_node = "/cosim_track_" + kind + "_hung";
   TrackPeer peer(kind, names, track_node.substr(1), kSteps);
   ASSERT_GT(peer.pid(), 0);
   std::unique_ptr<FrameTransport> transport;
-  ASSERT_NO_THROW(transport = make_transport(kind, Role::kVehicle, names, nh, track_node));
+  ASSERT_NO_THROW(transport = makeTransport(kind, Role::kVehicle, names, nh, track_node));
   const double exchange_timeout = 1.0;  // [s]
   VehicleCoupling vehicle(config(exchange_timeout), *transport);
   for (long k = 0; k < 50; ++k) {
-    for (int i = 0; i < kWheels; ++i) wheel_state_at(static_cast<double>(k) * kTrackStep, i, vehicle.states().wheels[i]);
+    for (int i = 0; i < kWheels; ++i) wheelStateAt(static_cast<double>(k) * kTrackStep, i, vehicle.states().wheels[i]);
     const Result r = vehicle.exchange();
     ASSERT_TRUE(r.ok()) << kind << " step " << k << ": " << r.message;
   }
   ASSERT_EQ(kill(peer.pid(), SIGSTOP), 0);
-  for (int i = 0; i < kWheels; ++i) wheel_state_at(50 * kTrackStep, i, vehicle.states().wheels[i]);
+  for (int i = 0; i < kWheels; ++i) wheelStateAt(50 * kTrackStep, i, vehicle.states().wheels[i]);
   const auto t0 = Clock::now();
   const Result r = vehicle.exchange();
   const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
@@ -262,7 +262,7 @@ TEST_P(HungTrack, VehicleTimesOutAtTheDeadline) {
   EXPECT_NE(r.message.find("step 50"), std::string::npos) << r.message;
   if (kind != "shm") EXPECT_NE(r.message.find(track_node), std::string::npos) << r.message;
   std::printf("%s: track stopped at step 50, reported after %.3f s: %s\n", kind.c_str(), elapsed, r.message.c_str());
-  peer.kill_now();
+  peer.killNow();
   const auto t1 = Clock::now();
   vehicle.close();
   transport.reset();

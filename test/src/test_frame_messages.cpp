@@ -38,7 +38,7 @@ std::uint64_t bits(double x) {
 }
 
 // Wheel states with values that expose any arithmetic on the way: -0.0, a subnormal, extremes.
-coupling::WheelStateFrame sample_states(std::uint64_t step) {
+coupling::WheelStateFrame sampleStates(std::uint64_t step) {
   coupling::WheelStateFrame f(kWheels);
   f.step = step;
   f.time = static_cast<double>(step) * kStep;
@@ -56,7 +56,7 @@ coupling::WheelStateFrame sample_states(std::uint64_t step) {
   return f;
 }
 
-coupling::WrenchFrame sample_wrenches(std::uint64_t step) {
+coupling::WrenchFrame sampleWrenches(std::uint64_t step) {
   coupling::WrenchFrame f(kWheels);
   f.step = step;
   f.time = static_cast<double>(step) * kStep;
@@ -70,7 +70,7 @@ coupling::WrenchFrame sample_wrenches(std::uint64_t step) {
   return f;
 }
 
-void expect_same_bits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+void expectSameBits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   for (int c = 0; c < 3; ++c) EXPECT_EQ(bits(a[c]), bits(b[c]));
 }
 
@@ -78,10 +78,10 @@ void expect_same_bits(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 // Every double goes through unchanged (bit for bit, -0.0 and subnormals included): the conversions copy.
 TEST(FrameMessages, WheelStatesRoundTripIsExact) {
-  const coupling::WheelStateFrame in = sample_states(62500);
+  const coupling::WheelStateFrame in = sampleStates(62500);
   rail_msgs::WheelStates msg;
-  reserve_message(msg, kWheels);
-  ASSERT_TRUE(to_message(in, msg).ok());
+  reserveMessage(msg, kWheels);
+  ASSERT_TRUE(toMessage(in, msg).ok());
   EXPECT_EQ(msg.header.frame_id, "world");
   EXPECT_EQ(msg.step, 62500u);
   EXPECT_EQ(msg.scene_hash, in.scene_hash);
@@ -95,7 +95,7 @@ TEST(FrameMessages, WheelStatesRoundTripIsExact) {
     EXPECT_EQ(msg.wheels[i].side, i % 2 ? rail_msgs::WheelState::SIDE_RIGHT : rail_msgs::WheelState::SIDE_LEFT);
   }
   coupling::WheelStateFrame out(kWheels);
-  ASSERT_TRUE(from_message(msg, kStep, out, "test").ok());
+  ASSERT_TRUE(fromMessage(msg, kStep, out, "test").ok());
   EXPECT_EQ(out.step, in.step);
   EXPECT_EQ(bits(out.time), bits(in.time));
   EXPECT_EQ(out.scene_hash, in.scene_hash);
@@ -105,27 +105,27 @@ TEST(FrameMessages, WheelStatesRoundTripIsExact) {
     const coupling::WheelState& b = out.wheels[i];
     EXPECT_EQ(a.id, b.id);
     EXPECT_EQ(bits(a.arc_length), bits(b.arc_length));
-    expect_same_bits(a.p_wheel_in_world, b.p_wheel_in_world);
+    expectSameBits(a.p_wheel_in_world, b.p_wheel_in_world);
     for (int c = 0; c < 4; ++c) EXPECT_EQ(bits(a.q_wheelset_to_world.coeffs()[c]), bits(b.q_wheelset_to_world.coeffs()[c]));
-    expect_same_bits(a.v_wheel_in_world, b.v_wheel_in_world);
-    expect_same_bits(a.omega_wheelset_in_world, b.omega_wheelset_in_world);
+    expectSameBits(a.v_wheel_in_world, b.v_wheel_in_world);
+    expectSameBits(a.omega_wheelset_in_world, b.omega_wheelset_in_world);
   }
 }
 
 TEST(FrameMessages, WrenchesRoundTripIsExact) {
-  const coupling::WrenchFrame in = sample_wrenches(17);
+  const coupling::WrenchFrame in = sampleWrenches(17);
   rail_msgs::ContactWrenches msg;
-  reserve_message(msg, kWheels);
-  ASSERT_TRUE(to_message(in, msg).ok());
+  reserveMessage(msg, kWheels);
+  ASSERT_TRUE(toMessage(in, msg).ok());
   coupling::WrenchFrame out(kWheels);
-  ASSERT_TRUE(from_message(msg, kStep, out, "test").ok());
+  ASSERT_TRUE(fromMessage(msg, kStep, out, "test").ok());
   EXPECT_EQ(out.step, 17u);
   EXPECT_EQ(out.scene_hash, in.scene_hash);
   ASSERT_EQ(out.count, in.count);
   for (int i = 0; i < kWheels; ++i) {
     EXPECT_EQ(out.wheels[i].id, in.wheels[i].id);
-    expect_same_bits(out.wheels[i].f_wheel_in_world, in.wheels[i].f_wheel_in_world);
-    expect_same_bits(out.wheels[i].n_wheel_in_world, in.wheels[i].n_wheel_in_world);
+    expectSameBits(out.wheels[i].f_wheel_in_world, in.wheels[i].f_wheel_in_world);
+    expectSameBits(out.wheels[i].n_wheel_in_world, in.wheels[i].n_wheel_in_world);
   }
 }
 
@@ -134,13 +134,13 @@ TEST(FrameMessages, WrenchesRoundTripIsExact) {
 TEST(FrameMessages, TimeRebuiltExactlyFromTheStep) {
   const double h = 1.23456789123e-5;  // [s]
   for (std::uint64_t k : {0ull, 1ull, 3ull, 1234567ull, 4000000000ull}) {
-    coupling::WrenchFrame in = sample_wrenches(k);
+    coupling::WrenchFrame in = sampleWrenches(k);
     in.time = static_cast<double>(k) * h;
     rail_msgs::ContactWrenches msg;
-    reserve_message(msg, kWheels);
-    ASSERT_TRUE(to_message(in, msg).ok()) << k;
+    reserveMessage(msg, kWheels);
+    ASSERT_TRUE(toMessage(in, msg).ok()) << k;
     coupling::WrenchFrame out(kWheels);
-    ASSERT_TRUE(from_message(msg, h, out, "test").ok()) << k;
+    ASSERT_TRUE(fromMessage(msg, h, out, "test").ok()) << k;
     EXPECT_EQ(bits(out.time), bits(static_cast<double>(k) * h)) << k;
   }
 }
@@ -148,14 +148,14 @@ TEST(FrameMessages, TimeRebuiltExactlyFromTheStep) {
 // A stamp 1 ns off (rounding) is accepted; 2 ns off is refused, naming the source, the stamp and k h.
 TEST(FrameMessages, StampNotMatchingTheStepRefused) {
   rail_msgs::WheelStates msg;
-  reserve_message(msg, kWheels);
-  ASSERT_TRUE(to_message(sample_states(100), msg).ok());  // t = 2 ms
+  reserveMessage(msg, kWheels);
+  ASSERT_TRUE(toMessage(sampleStates(100), msg).ok());  // t = 2 ms
   coupling::WheelStateFrame out(kWheels);
   msg.header.stamp.nsec += 1;
-  EXPECT_TRUE(from_message(msg, kStep, out, "/x/states").ok());
+  EXPECT_TRUE(fromMessage(msg, kStep, out, "/x/states").ok());
   msg.header.stamp.nsec += 1;
   out.step = 999;
-  const coupling::Result r = from_message(msg, kStep, out, "/x/states");
+  const coupling::Result r = fromMessage(msg, kStep, out, "/x/states");
   EXPECT_EQ(r.status, coupling::Status::kRefused);
   EXPECT_NE(r.message.find("/x/states"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("0.002000002"), std::string::npos) << r.message;
@@ -165,10 +165,10 @@ TEST(FrameMessages, StampNotMatchingTheStepRefused) {
 
 TEST(FrameMessages, MoreWheelsThanTheCapacityRefused) {
   rail_msgs::WheelStates msg;
-  reserve_message(msg, kWheels);
-  ASSERT_TRUE(to_message(sample_states(5), msg).ok());
+  reserveMessage(msg, kWheels);
+  ASSERT_TRUE(toMessage(sampleStates(5), msg).ok());
   coupling::WheelStateFrame small(4);
-  const coupling::Result r = from_message(msg, kStep, small, "/x/states");
+  const coupling::Result r = fromMessage(msg, kStep, small, "/x/states");
   EXPECT_EQ(r.status, coupling::Status::kRefused);
   EXPECT_NE(r.message.find("8 wheels"), std::string::npos) << r.message;
   EXPECT_NE(r.message.find("capacity 4"), std::string::npos) << r.message;
@@ -177,49 +177,49 @@ TEST(FrameMessages, MoreWheelsThanTheCapacityRefused) {
 
 TEST(FrameMessages, UnrepresentableValuesGiveAnError) {
   rail_msgs::WheelStates msg;
-  reserve_message(msg, kWheels);
-  coupling::WheelStateFrame f = sample_states(5);
+  reserveMessage(msg, kWheels);
+  coupling::WheelStateFrame f = sampleStates(5);
   f.wheels[3].id = 256;  // the message's wheel_id is a uint8
-  coupling::Result r = to_message(f, msg);
+  coupling::Result r = toMessage(f, msg);
   EXPECT_EQ(r.status, coupling::Status::kError);
   EXPECT_NE(r.message.find("wheel id 256"), std::string::npos) << r.message;
   EXPECT_TRUE(msg.wheels.empty());  // unchanged
-  f = sample_states(5);
+  f = sampleStates(5);
   f.time = -1e-3;
-  r = to_message(f, msg);
+  r = toMessage(f, msg);
   EXPECT_EQ(r.status, coupling::Status::kError);
   EXPECT_NE(r.message.find("-0.001"), std::string::npos) << r.message;
 }
 
 TEST(FrameMessages, CloseMarker) {
   rail_msgs::ContactWrenches msg;
-  reserve_message(msg, kWheels);
-  ASSERT_TRUE(to_message(sample_wrenches(3), msg).ok());
-  EXPECT_FALSE(is_close_marker(msg));
-  make_close_marker(msg);
-  EXPECT_TRUE(is_close_marker(msg));
+  reserveMessage(msg, kWheels);
+  ASSERT_TRUE(toMessage(sampleWrenches(3), msg).ok());
+  EXPECT_FALSE(isCloseMarker(msg));
+  makeCloseMarker(msg);
+  EXPECT_TRUE(isCloseMarker(msg));
   EXPECT_EQ(msg.step, kCloseStep);
   EXPECT_GE(msg.wrenches.capacity(), static_cast<std::size_t>(kWheels));  // reusable without allocating
 }
 
 // Once reserved, converting both ways allocates nothing (also after a close marker emptied the array).
 TEST(FrameMessages, NoAllocationOnceReserved) {
-  coupling::WheelStateFrame states = sample_states(0), states_out(kWheels);
-  coupling::WrenchFrame wrenches = sample_wrenches(0), wrenches_out(kWheels);
+  coupling::WheelStateFrame states = sampleStates(0), states_out(kWheels);
+  coupling::WrenchFrame wrenches = sampleWrenches(0), wrenches_out(kWheels);
   rail_msgs::WheelStates sm;
   rail_msgs::ContactWrenches wm;
-  reserve_message(sm, kWheels);
-  reserve_message(wm, kWheels);
+  reserveMessage(sm, kWheels);
+  reserveMessage(wm, kWheels);
   const long before = g_allocations;
   bool ok = true;
   for (std::uint64_t k = 0; k < 1000; ++k) {
     states.step = wrenches.step = k;
     states.time = wrenches.time = static_cast<double>(k) * kStep;
-    ok = ok && to_message(states, sm).ok() && from_message(sm, kStep, states_out, "s").ok();
-    ok = ok && to_message(wrenches, wm).ok() && from_message(wm, kStep, wrenches_out, "w").ok();
+    ok = ok && toMessage(states, sm).ok() && fromMessage(sm, kStep, states_out, "s").ok();
+    ok = ok && toMessage(wrenches, wm).ok() && fromMessage(wm, kStep, wrenches_out, "w").ok();
     if (k == 500) {
-      make_close_marker(sm);
-      make_close_marker(wm);
+      makeCloseMarker(sm);
+      makeCloseMarker(wm);
     }
   }
   const long allocations = g_allocations - before;
@@ -228,6 +228,6 @@ TEST(FrameMessages, NoAllocationOnceReserved) {
   // The counter does count: the first conversion into a message never reserved allocates its array.
   rail_msgs::WheelStates fresh;
   const long before_fresh = g_allocations;
-  ASSERT_TRUE(to_message(states, fresh).ok());
+  ASSERT_TRUE(toMessage(states, fresh).ok());
   EXPECT_GT(g_allocations - before_fresh, 0);
 }

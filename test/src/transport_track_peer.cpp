@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
 
   std::unique_ptr<FrameTransport> transport;
   try {
-    transport = make_transport(kind, Role::kTrack, names, nh, vehicle_node);
+    transport = makeTransport(kind, Role::kTrack, names, nh, vehicle_node);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: %s\n", self.c_str(), e.what());
     return 3;
@@ -58,12 +58,12 @@ int main(int argc, char** argv) {
       break;
     }
     for (int i = 0; i < kWheels; ++i) {
-      wheel_state_at(static_cast<double>(s.step) * kTrackStep, i, expected_state);
+      wheelStateAt(static_cast<double>(s.step) * kTrackStep, i, expected_state);
       if (!same(s.wheels[i], expected_state)) {
         std::fprintf(stderr, "%s: step %ld wheel %d: states differ from g(t_k)\n", self.c_str(), received, i);
         code = 2;
       }
-      wrench_for(s.step, s.wheels[i], track.wrenches().wheels[i]);
+      wrenchFor(s.step, s.wheels[i], track.wrenches().wheels[i]);
     }
     if (code != 0) break;
     ++received;

@@ -14,7 +14,7 @@ constexpr double kPi = 3.14159265358979323846;
 /// geometric mean (Abramowitz & Stegun 17.6): a_0 = 1, b_0 = sqrt(1 - e^2), c_0 = e,
 /// K = pi / (2 a_N), E = K (1 - sum_n 2^(n-1) c_n^2). Quadratic convergence: <= 6 steps to
 /// machine precision for e^2 <= 1 - 1e-8.
-void complete_elliptic(double e, double& Kc, double& Ec) noexcept {
+void completeElliptic(double e, double& Kc, double& Ec) noexcept {
   double a = 1.0, b = std::sqrt((1.0 - e) * (1.0 + e)), c = e;
   double sum = 0.5 * c * c, pow2 = 0.5;
   for (int n = 0; n < 30 && std::abs(c) > 1.0e-17 * a; ++n) {
@@ -31,30 +31,30 @@ void complete_elliptic(double e, double& Kc, double& Ec) noexcept {
 
 /// K(e) - E(e) divided by m = e^2; series near m = 0 (from the power series of K and E):
 /// (K - E)/m = pi/4 (1 + 3m/8 + 15m^2/64 + ...).
-double k_minus_e_over_m(double m, double Kc, double Ec) noexcept {
+double kMinusEOverM(double m, double Kc, double Ec) noexcept {
   if (m < 1.0e-6) return 0.25 * kPi * (1.0 + 0.375 * m + 0.234375 * m * m);
   return (Kc - Ec) / m;
 }
 
 /// g(k) = (E/k^2 - K)/(K - E) for axis ratio k = minor/major in (0,1), where e^2 = 1 - k^2.
 /// Equals B/A (A the smaller relative curvature). g(1) = 1, g(0+) = +inf, decreasing.
-double curvature_ratio_of_axis_ratio(double k) noexcept {
+double curvatureRatioOfAxisRatio(double k) noexcept {
   const double m = 1.0 - k * k;
   if (m < 1.0e-6) {
     // Series: numerator pi/2 m (1/2 + 9m/16), denominator pi/2 m (1/2 + 3m/16).
     return (0.5 + 0.5625 * m) / (0.5 + 0.1875 * m);
   }
   double Kc = 0.0, Ec = 0.0;
-  complete_elliptic(std::sqrt(m), Kc, Ec);
+  completeElliptic(std::sqrt(m), Kc, Ec);
   return (Ec / (k * k) - Kc) / (Kc - Ec);
 }
 
 /// Solves g(k) = ratio (ratio >= 1) for k by the Illinois (modified regula falsi) method on
 /// ln g(k) - ln(ratio), bracketed; the start bracket comes from the Brewe-Hamrock fit
 /// k ~ ratio^-0.636 / 1.0339 (Brewe & Hamrock, J. Lubr. Technol. 99 (1977) 485-487).
-double solve_axis_ratio(double ratio) noexcept {
+double solveAxisRatio(double ratio) noexcept {
   const double target = std::log(ratio);
-  auto f = [target](double k) { return std::log(curvature_ratio_of_axis_ratio(k)) - target; };
+  auto f = [target](double k) { return std::log(curvatureRatioOfAxisRatio(k)) - target; };
   const double guess = std::min(1.0, std::pow(ratio, -0.636) / 1.0339);
   double lo = 0.5 * guess;
   double f_lo = f(lo);
@@ -106,7 +106,7 @@ void validate(const ElasticMaterial& m, const char* what) {
   }
 }
 
-double contact_modulus(const ElasticMaterial& w, const ElasticMaterial& r) {
+double contactModulus(const ElasticMaterial& w, const ElasticMaterial& r) {
   validate(w, "wheel material");
   validate(r, "rail material");
   const double inv = (1.0 - w.poisson_ratio * w.poisson_ratio) / w.youngs_modulus +
@@ -114,7 +114,7 @@ double contact_modulus(const ElasticMaterial& w, const ElasticMaterial& r) {
   return 1.0 / inv;
 }
 
-double combined_shear_modulus(const ElasticMaterial& w, const ElasticMaterial& r) {
+double combinedShearModulus(const ElasticMaterial& w, const ElasticMaterial& r) {
   validate(w, "wheel material");
   validate(r, "rail material");
   const double Gw = w.youngs_modulus / (2.0 * (1.0 + w.poisson_ratio));
@@ -122,14 +122,14 @@ double combined_shear_modulus(const ElasticMaterial& w, const ElasticMaterial& r
   return 2.0 / (1.0 / Gw + 1.0 / Gr);
 }
 
-double combined_poisson_ratio(const ElasticMaterial& w, const ElasticMaterial& r) {
-  const double G = combined_shear_modulus(w, r);
+double combinedPoissonRatio(const ElasticMaterial& w, const ElasticMaterial& r) {
+  const double G = combinedShearModulus(w, r);
   const double Gw = w.youngs_modulus / (2.0 * (1.0 + w.poisson_ratio));
   const double Gr = r.youngs_modulus / (2.0 * (1.0 + r.poisson_ratio));
   return 0.5 * G * (w.poisson_ratio / Gw + r.poisson_ratio / Gr);
 }
 
-void relative_curvatures(const PrincipalCurvatures& k, double& A, double& B) noexcept {
+void relativeCurvatures(const PrincipalCurvatures& k, double& A, double& B) noexcept {
   A = 0.5 * (k.wheel_rolling + k.rail_rolling);
   B = 0.5 * (k.wheel_lateral + k.rail_lateral);
 }
@@ -145,7 +145,7 @@ double HertzGeometry::load(double delta) const noexcept {
   return delta > 0.0 ? K * delta * std::sqrt(delta) : 0.0;
 }
 
-HertzGeometry compute_hertz(double A, double B, double E_star, const HertzOptions& opt) noexcept {
+HertzGeometry computeHertz(double A, double B, double E_star, const HertzOptions& opt) noexcept {
   HertzGeometry g;
   std::uint32_t flags = kHertzOk;
   if (!std::isfinite(A) || !std::isfinite(B)) {
@@ -182,14 +182,14 @@ HertzGeometry compute_hertz(double A, double B, double E_star, const HertzOption
   if (ratio - 1.0 < 1.0e-10) {
     flags |= kHertzCircular;
   } else {
-    k = solve_axis_ratio(ratio);
+    k = solveAxisRatio(ratio);
   }
   const double m = 1.0 - k * k;
   const double e = std::sqrt(std::max(m, 0.0));
   double Kc = 0.5 * kPi * (1.0 + 0.25 * m), Ec = 0.5 * kPi * (1.0 - 0.25 * m);  // series, m -> 0
-  if (m >= 1.0e-6) complete_elliptic(e, Kc, Ec);
+  if (m >= 1.0e-6) completeElliptic(e, Kc, Ec);
   // Johnson eq. 4.37 with p0 = 3N/(2 pi a b): A_small = 3N (K-E) / (2 pi E* a^3 e^2).
-  const double major_coeff = std::cbrt(3.0 * k_minus_e_over_m(m, Kc, Ec) / (2.0 * kPi * E_star * A_small));
+  const double major_coeff = std::cbrt(3.0 * kMinusEOverM(m, Kc, Ec) / (2.0 * kPi * E_star * A_small));
   const double minor_coeff = k * major_coeff;
   // delta = p0 b K(e) / E* = 3 N K(e) / (2 pi a E*).
   g.delta_coeff = 3.0 * Kc / (2.0 * kPi * major_coeff * E_star);
@@ -206,10 +206,10 @@ HertzGeometry compute_hertz(double A, double B, double E_star, const HertzOption
   return g;
 }
 
-HertzGeometry compute_hertz(const PrincipalCurvatures& k, double E_star, const HertzOptions& options) noexcept {
+HertzGeometry computeHertz(const PrincipalCurvatures& k, double E_star, const HertzOptions& options) noexcept {
   double A = 0.0, B = 0.0;
-  relative_curvatures(k, A, B);
-  return compute_hertz(A, B, E_star, options);
+  relativeCurvatures(k, A, B);
+  return computeHertz(A, B, E_star, options);
 }
 
 void validate(const NormalDampingParams& p) {
@@ -230,7 +230,7 @@ void validate(const NormalDampingParams& p) {
   }
 }
 
-double damped_normal_force(double K, double delta, double delta_dot, double delta_dot_impact,
+double dampedNormalForce(double K, double delta, double delta_dot, double delta_dot_impact,
                            const NormalDampingParams& p) noexcept {
   if (!(delta > 0.0) || !(K > 0.0)) return 0.0;
   const double v_impact = std::max(std::abs(delta_dot_impact), p.impact_velocity_floor);
@@ -240,7 +240,7 @@ double damped_normal_force(double K, double delta, double delta_dot, double delt
   return (N > 0.0 && std::isfinite(N)) ? N : 0.0;
 }
 
-void update_impact_memory(ImpactMemory& memory, double delta, double delta_dot) noexcept {
+void updateImpactMemory(ImpactMemory& memory, double delta, double delta_dot) noexcept {
   if (delta > 0.0) {
     if (!memory.in_contact) {
       memory.in_contact = true;
@@ -254,7 +254,7 @@ void update_impact_memory(ImpactMemory& memory, double delta, double delta_dot) 
   }
 }
 
-HertzGeometry limit_lateral_width(const HertzGeometry& hz, double delta, double max_b,
+HertzGeometry limitLateralWidth(const HertzGeometry& hz, double delta, double max_b,
                                   const HertzOptions& options) noexcept {
   const auto width = [delta](const HertzGeometry& h) { return h.b(h.load(delta)); };
   if (!(max_b > 0.0) || !(delta > 0.0) || !(width(hz) > max_b) || !(hz.B > 0.0)) return hz;
@@ -269,7 +269,7 @@ HertzGeometry limit_lateral_width(const HertzGeometry& hz, double delta, double 
     x_lo = x_hi;
     g_lo = g_hi;
     x_hi += std::log(4.0);
-    h = compute_hertz(hz.A, std::exp(x_hi), hz.E_star, options);
+    h = computeHertz(hz.A, std::exp(x_hi), hz.E_star, options);
     g_hi = std::log(width(h)) - target;
   }
   if (g_hi > 0.0) return hz;  // not reached (degenerate input): leave it unclamped
@@ -277,7 +277,7 @@ HertzGeometry limit_lateral_width(const HertzGeometry& hz, double delta, double 
   int side = 0;
   for (int i = 0; i < 30 && std::abs(g_hi) > 1e-4; ++i) {
     const double x = (x_lo * g_hi - x_hi * g_lo) / (g_hi - g_lo);
-    const HertzGeometry m = compute_hertz(hz.A, std::exp(x), hz.E_star, options);
+    const HertzGeometry m = computeHertz(hz.A, std::exp(x), hz.E_star, options);
     const double g = std::log(width(m)) - target;
     if (g > 0.0) {
       x_lo = x;

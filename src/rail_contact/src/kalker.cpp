@@ -13,7 +13,7 @@ namespace {
 
 /// Interpolation coordinate: x = a/b for a <= b and x = 2 - b/a for a > b, so that linear
 /// interpolation in x is linear in the tabulated ratio g on each side of the circle.
-double axis_coordinate(double a_over_b) noexcept {
+double axisCoordinate(double a_over_b) noexcept {
   return a_over_b <= 1.0 ? a_over_b : 2.0 - 1.0 / a_over_b;
 }
 
@@ -47,7 +47,7 @@ constexpr BuiltinRow kBuiltin[] = {
     {1, 0.1, {10.7, 11.7, 12.9, 10.7, 12.8, 16.0, 12.2, 14.6, 18.0, 0.795, 0.526, 0.228}},
 };
 
-KalkerTable::Row make_row(bool b_over_a, double g, const double* c) {
+KalkerTable::Row makeRow(bool b_over_a, double g, const double* c) {
   KalkerTable::Row r;
   r.a_over_b = b_over_a ? 1.0 / g : g;
   for (int j = 0; j < 4; ++j)
@@ -68,7 +68,7 @@ std::string trim(const std::string& s) {
   throw std::runtime_error(os.str());
 }
 
-double parse_number(const std::string& field, const std::string& path, int line, const char* name) {
+double parseNumber(const std::string& field, const std::string& path, int line, const char* name) {
   const std::string t = trim(field);
   if (t.empty()) fail(path, line, std::string("empty value for ") + name);
   errno = 0;
@@ -83,7 +83,7 @@ double parse_number(const std::string& field, const std::string& path, int line,
 
 constexpr std::array<double, KalkerTable::kNumPoisson> KalkerTable::kPoisson;
 
-KalkerTable KalkerTable::from_rows(std::vector<Row> rows, const std::string& origin) {
+KalkerTable KalkerTable::fromRows(std::vector<Row> rows, const std::string& origin) {
   if (rows.size() < 2) throw std::runtime_error(origin + ": Kalker table needs at least 2 rows");
   KalkerTable t;
   t.x_.reserve(rows.size());
@@ -102,7 +102,7 @@ KalkerTable KalkerTable::from_rows(std::vector<Row> rows, const std::string& ori
              << " must be > 0 (got " << r.c[j][i] << ")";
           throw std::runtime_error(os.str());
         }
-    const double x = axis_coordinate(r.a_over_b);
+    const double x = axisCoordinate(r.a_over_b);
     if (!t.x_.empty() && !(x > t.x_.back())) {
       std::ostringstream os;
       os << origin << ": row " << k + 1 << ": a/b not increasing (" << r.a_over_b << " after "
@@ -118,8 +118,8 @@ KalkerTable KalkerTable::from_rows(std::vector<Row> rows, const std::string& ori
 const KalkerTable& KalkerTable::builtin() {
   static const KalkerTable table = [] {
     std::vector<Row> rows;
-    for (const auto& b : kBuiltin) rows.push_back(make_row(b.kind == 1, b.g, b.c));
-    return from_rows(std::move(rows), "builtin Kalker table");
+    for (const auto& b : kBuiltin) rows.push_back(makeRow(b.kind == 1, b.g, b.c));
+    return fromRows(std::move(rows), "builtin Kalker table");
   }();
   return table;
 }
@@ -151,7 +151,7 @@ KalkerTable KalkerTable::load(const std::string& path) {
     }
     const std::string kind = trim(f[0]);
     if (kind != "a/b" && kind != "b/a") fail(path, line_no, "kind must be 'a/b' or 'b/a' (got '" + kind + "')");
-    const double g = parse_number(f[1], path, line_no, "g");
+    const double g = parseNumber(f[1], path, line_no, "g");
     if (!(g > 0.0 && g <= 1.0)) {
       std::ostringstream os;
       os << "g must be in (0, 1] (got " << g << ")";
@@ -161,15 +161,15 @@ KalkerTable KalkerTable::load(const std::string& path) {
     static const char* names[12] = {"c11_nu0", "c11_nu025", "c11_nu05", "c22_nu0", "c22_nu025", "c22_nu05",
                                     "c23_nu0", "c23_nu025", "c23_nu05", "c33_nu0", "c33_nu025", "c33_nu05"};
     for (int k = 0; k < 12; ++k) {
-      c[k] = parse_number(f[2 + k], path, line_no, names[k]);
+      c[k] = parseNumber(f[2 + k], path, line_no, names[k]);
       if (!(c[k] > 0.0)) {
         std::ostringstream os;
         os << names[k] << " must be > 0 (got " << c[k] << ")";
         fail(path, line_no, os.str());
       }
     }
-    Row r = make_row(kind == "b/a", g, c);
-    if (!rows.empty() && !(axis_coordinate(r.a_over_b) > axis_coordinate(rows.back().a_over_b))) {
+    Row r = makeRow(kind == "b/a", g, c);
+    if (!rows.empty() && !(axisCoordinate(r.a_over_b) > axisCoordinate(rows.back().a_over_b))) {
       std::ostringstream os;
       os << "a/b not increasing (" << r.a_over_b << " after " << rows.back().a_over_b << ")";
       fail(path, line_no, os.str());
@@ -178,7 +178,7 @@ KalkerTable KalkerTable::load(const std::string& path) {
   }
   if (!header_seen) fail(path, line_no, "no header line found");
   if (rows.size() < 2) fail(path, line_no, "Kalker table needs at least 2 data rows");
-  return from_rows(std::move(rows), path);
+  return fromRows(std::move(rows), path);
 }
 
 KalkerCoefficients KalkerTable::evaluate(double a_over_b, double nu) const noexcept {
@@ -195,7 +195,7 @@ KalkerCoefficients KalkerTable::evaluate(double a_over_b, double nu) const noexc
     flags |= kKalkerPoissonClamped;
     nu = 0.5;
   }
-  double x = axis_coordinate(a_over_b);
+  double x = axisCoordinate(a_over_b);
   if (x < x_.front()) {
     x = x_.front();
     flags |= kKalkerAxisRatioClamped;

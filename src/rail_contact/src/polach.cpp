@@ -10,13 +10,13 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 
 /// atan(x)/x, finite at x = 0 (Taylor series below 1e-4: error < x^4/5 ~ 2e-17).
-double atan_over_x(double x) noexcept {
+double atanOverX(double x) noexcept {
   const double ax = std::abs(x);
   if (ax < 1.0e-4) return 1.0 - x * x / 3.0;
   return std::atan(x) / x;
 }
 
-void throw_option(const char* name, double value, const char* rule) {
+void throwOption(const char* name, double value, const char* rule) {
   std::ostringstream os;
   os << "Polach options: " << name << " " << rule << " (got " << value << ")";
   throw std::runtime_error(os.str());
@@ -25,13 +25,13 @@ void throw_option(const char* name, double value, const char* rule) {
 }  // namespace
 
 void validate(const PolachOptions& o) {
-  if (!(o.kA > 0.0 && o.kA <= 1.0)) throw_option("kA", o.kA, "must be in (0, 1]");
-  if (!(o.kS > 0.0 && o.kS <= 1.0)) throw_option("kS", o.kS, "must be in (0, 1]");
-  if (!(o.A > 0.0) || !std::isfinite(o.A)) throw_option("A", o.A, "must be > 0");
-  if (!(o.B >= 0.0) || !std::isfinite(o.B)) throw_option("B", o.B, "must be >= 0 s/m");
+  if (!(o.kA > 0.0 && o.kA <= 1.0)) throwOption("kA", o.kA, "must be in (0, 1]");
+  if (!(o.kS > 0.0 && o.kS <= 1.0)) throwOption("kS", o.kS, "must be in (0, 1]");
+  if (!(o.A > 0.0) || !std::isfinite(o.A)) throwOption("A", o.A, "must be > 0");
+  if (!(o.B >= 0.0) || !std::isfinite(o.B)) throwOption("B", o.B, "must be >= 0 s/m");
 }
 
-PolachOptions polach2005_dry_options() noexcept {
+PolachOptions polach2005DryOptions() noexcept {
   PolachOptions o;  // Polach, Wear 258 (2005) 992-1000, recommended parameters, dry rail
   o.kA = 1.00;
   o.kS = 0.40;
@@ -40,7 +40,7 @@ PolachOptions polach2005_dry_options() noexcept {
   return o;
 }
 
-PolachOptions polach2005_wet_options() noexcept {
+PolachOptions polach2005WetOptions() noexcept {
   PolachOptions o;  // Polach, Wear 258 (2005) 992-1000, recommended parameters, wet rail
   o.kA = 0.30;
   o.kS = 0.10;
@@ -49,7 +49,7 @@ PolachOptions polach2005_wet_options() noexcept {
   return o;
 }
 
-PolachResult polach_forces(const PolachInput& in, const PolachOptions& o) noexcept {
+PolachResult polachForces(const PolachInput& in, const PolachOptions& o) noexcept {
   PolachResult r;
   if (!(in.N > 0.0) || !(in.a > 0.0) || !(in.b > 0.0) || !(in.G > 0.0) || !(in.mu0 > 0.0)) return r;
 
@@ -78,7 +78,7 @@ PolachResult polach_forces(const PolachInput& in, const PolachOptions& o) noexce
   // F = 2 mu N / pi (kA eps / (1 + (kA eps)^2) + atan(kS eps)); F / s_C written finite at s_C = 0.
   const double kAe = o.kA * eps;
   const double F_over_sC =
-      (2.0 * muN / kPi) * eps_per_s * (o.kA / (1.0 + kAe * kAe) + o.kS * atan_over_x(o.kS * eps));
+      (2.0 * muN / kPi) * eps_per_s * (o.kA / (1.0 + kAe * kAe) + o.kS * atanOverX(o.kS * eps));
   r.Fx = -F_over_sC * nx;
   r.Fy = -F_over_sC * ny;
 

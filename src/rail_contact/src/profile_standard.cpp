@@ -152,7 +152,7 @@ double sectionC(double S) {
 }
 double circleRoot(double R, double x) { return std::sqrt(std::max(0.0, R * R - x * x)); }
 
-double F(double S) {
+double f(double S) {
   if (S >= S_AB) return AA - BA * S;
   if (S >= S_BC) return sectionB(S);
   if (S >= S_CD) return sectionC(S);
@@ -168,7 +168,7 @@ double s1002Z(double y) {
   const double S = -y * 1e3;
   if (!(S >= s1002::S_MIN - 1e-9 && S <= s1002::S_MAX + 1e-9))
     throw std::out_of_range("s1002Z: y = " + std::to_string(y) + " m outside [-0.060, 0.070]");
-  return -s1002::F(S) * 1e-3;
+  return -s1002::f(S) * 1e-3;
 }
 
 ProfilePoints s1002Points(double ds) {

@@ -436,7 +436,7 @@ double TrackGeometry::designCurvature(double s) const {
   return segmentState(seg, std::min(std::max(s - segment_s0_[j], 0.0), seg.length)).kappa;
 }
 
-double cant_angle(double cant, double cant_reference_width) {
+double cantAngle(double cant, double cant_reference_width) {
   if (!(cant_reference_width > 0.0) || !std::isfinite(cant_reference_width))
     throw std::runtime_error("cant_angle: cant_reference_width = " + fmt(cant_reference_width) +
                              " m must be positive");
@@ -446,7 +446,7 @@ double cant_angle(double cant, double cant_reference_width) {
   return std::asin(cant / cant_reference_width);
 }
 
-double equilibrium_cant(double cant_reference_width, double speed, double radius, double g) {
+double equilibriumCant(double cant_reference_width, double speed, double radius, double g) {
   if (!(cant_reference_width > 0.0) || !std::isfinite(cant_reference_width))
     throw std::runtime_error("equilibrium_cant: cant_reference_width = " + fmt(cant_reference_width) +
                              " m must be positive");
@@ -458,7 +458,7 @@ double equilibrium_cant(double cant_reference_width, double speed, double radius
   return cant_reference_width * speed * speed / (g * radius);
 }
 
-double cant_deficiency(double equilibrium_cant_value, double applied_cant) {
+double cantDeficiency(double equilibrium_cant_value, double applied_cant) {
   return equilibrium_cant_value - applied_cant;
 }
 

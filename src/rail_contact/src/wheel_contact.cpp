@@ -38,9 +38,9 @@ WheelContactModel::WheelContactModel(const WheelProfile& wheel, double nominal_r
   validate(options_);
   polach_ = options_.polach;
   polach_.spin = options_.spin;
-  E_star_ = contact_modulus(options_.wheel_material, options_.rail_material);
-  G_ = combined_shear_modulus(options_.wheel_material, options_.rail_material);
-  nu_ = combined_poisson_ratio(options_.wheel_material, options_.rail_material);
+  E_star_ = contact::contactModulus(options_.wheel_material, options_.rail_material);
+  G_ = combinedShearModulus(options_.wheel_material, options_.rail_material);
+  nu_ = combinedPoissonRatio(options_.wheel_material, options_.rail_material);
   kalker_ = &KalkerTable::builtin();
 }
 
@@ -87,7 +87,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     c.status = input_ok ? g.status : DetectionStatus::kInvalidInput;
     c.penetration = std::isfinite(g.penetration) ? g.penetration : -1.0;
     if (!g.valid || !input_ok) {
-      update_impact_memory(work.impact[k], -1.0, 0.0);
+      updateImpactMemory(work.impact[k], -1.0, 0.0);
       continue;
     }
     if (k == kTread) tread_on_own_surface = g.on_own_surface;
@@ -119,7 +119,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     const Eigen::Vector3d v_wheel_shape =
         ws.v_centre_in_world + omega_without_spin.cross(g.p_wheel_in_world - ws.p_centre_in_world);
     c.penetration_rate = -(v_wheel_shape - v_rail).dot(n);
-    update_impact_memory(work.impact[k], c.penetration, c.penetration_rate);
+    updateImpactMemory(work.impact[k], c.penetration, c.penetration_rate);
     if (!g.in_contact) continue;
 
     // Hertz (eq. 9): principal curvatures, rail longitudinal curvature ~ 0.
@@ -128,7 +128,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     kc.wheel_lateral = g.wheel_curvature;
     kc.rail_rolling = 0.0;
     kc.rail_lateral = g.rail_curvature;
-    const HertzGeometry hz = limit_lateral_width(compute_hertz(kc, E_star_, options_.hertz), c.penetration,
+    const HertzGeometry hz = limitLateralWidth(computeHertz(kc, E_star_, options_.hertz), c.penetration,
                                                  options_.max_lateral_semi_axis, options_.hertz);
     c.hertz_flags = hz.flags;
     if (k == kFlange && out.contact[kTread].penetration > 0.0 &&
@@ -150,7 +150,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
         continue;
       }
     }
-    c.N = damped_normal_force(hz.K, c.penetration, c.penetration_rate, work.impact[k].impact_velocity,
+    c.N = dampedNormalForce(hz.K, c.penetration, c.penetration_rate, work.impact[k].impact_velocity,
                               options_.damping);
     c.active = true;
     c.a = hz.a(c.N);
@@ -158,7 +158,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
 
     // Creepages (rolling speed: wheel centre relative to the rail section along t_rolling).
     const double V = (ws.v_centre_in_world - g.rail_motion.u_dot).dot(t_w);
-    const Creepages cr = compute_creepages(v_wheel, v_rail, ws.omega_in_world, g.rail_motion.theta_dot,
+    const Creepages cr = computeCreepages(v_wheel, v_rail, ws.omega_in_world, g.rail_motion.theta_dot,
                                            c.R_contact_to_world, V, options_.creepage);
     c.nu_x = cr.nu_x;
     c.nu_y = cr.nu_y;
@@ -176,7 +176,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
       pin.mu0 = options_.friction;
       pin.V = cr.V_ref;
       pin.c = kalker_->evaluate(c.a / c.b, nu_);
-      const PolachResult pr = polach_forces(pin, polach_);
+      const PolachResult pr = polachForces(pin, polach_);
       c.F_long = pr.Fx;
       c.F_lat = pr.Fy;
       if (cost != nullptr) {
@@ -184,8 +184,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
         if (polach_.spin) ++cost->spin_evaluations;  // polach_forces evaluated its spin terms (nu_C, F_yS)
       }
     }
-    c.force_on_wheel_in_world = contact_force_in_world(c.R_contact_to_world, c.F_long, c.F_lat, c.N);
-    c.rail_wrench = rail_section_wrench(-c.force_on_wheel_in_world, Eigen::Vector3d::Zero(),
+    c.force_on_wheel_in_world = contactForceInWorld(c.R_contact_to_world, c.F_long, c.F_lat, c.N);
+    c.rail_wrench = railSectionWrench(-c.force_on_wheel_in_world, Eigen::Vector3d::Zero(),
                                         c.p_rail_in_world - c.p_section_centre_in_world, Eigen::Vector3d::Zero());
   }
 
@@ -193,13 +193,13 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const Eigen::Matrix3d& A = ws.R_wheelset_to_world;
   const ContactPointResult& tr = out.contact[kTread];
   const ContactPointResult& fl = out.contact[kFlange];
-  out.wheel_centre = wheel_centre_wrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
+  out.wheel_centre = wheelCentreWrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
                                          A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
                                          A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
   // Eq. 15: both contacts about one section centre (the tread contact's if active, else the flange's).
   const ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
   out.rail_section_s = ref.s_r;
-  out.rail_section = rail_section_wrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
+  out.rail_section = railSectionWrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
                                          tr.p_rail_in_world - ref.p_section_centre_in_world,
                                          fl.p_rail_in_world - ref.p_section_centre_in_world);
   if (!out.wheel_centre.force_in_world.allFinite() || !out.wheel_centre.moment_in_wheelset.allFinite()) {

@@ -4,7 +4,7 @@
 
 namespace rail::contact {
 
-WheelsetWrench wheel_centre_wrench(const Eigen::Vector3d& f_tread_on_wheel_in_world,
+WheelsetWrench wheelCentreWrench(const Eigen::Vector3d& f_tread_on_wheel_in_world,
                                    const Eigen::Vector3d& f_flange_on_wheel_in_world,
                                    const Eigen::Vector3d& s_tread_from_wheel_centre_in_wheelset,
                                    const Eigen::Vector3d& s_flange_from_wheel_centre_in_wheelset,
@@ -18,7 +18,7 @@ WheelsetWrench wheel_centre_wrench(const Eigen::Vector3d& f_tread_on_wheel_in_wo
   return w;
 }
 
-WheelsetWrench wheelset_centre_wrench(const WheelsetWrench& wheel_centre,
+WheelsetWrench wheelsetCentreWrench(const WheelsetWrench& wheel_centre,
                                       const Eigen::Vector3d& s_wheel_centre_from_wheelset_centre_in_wheelset,
                                       const Eigen::Matrix3d& R_wheelset_to_world) noexcept {
   WheelsetWrench w;
@@ -34,7 +34,7 @@ void accumulate(WheelsetWrench& sum, const WheelsetWrench& w) noexcept {
   sum.moment_in_wheelset += w.moment_in_wheelset;
 }
 
-RailWrench rail_section_wrench(const Eigen::Vector3d& f_tread_on_rail_in_world,
+RailWrench railSectionWrench(const Eigen::Vector3d& f_tread_on_rail_in_world,
                                const Eigen::Vector3d& f_flange_on_rail_in_world,
                                const Eigen::Vector3d& s_tread_from_section_centre_in_world,
                                const Eigen::Vector3d& s_flange_from_section_centre_in_world) noexcept {

@@ -248,7 +248,7 @@ class RigidMotionProvider : public rc::RailDeformation {
     out.theta = theta_;
   }
   Vector3d apply(const Vector3d& x) const { return x_ref_ + u0_ + A_ * (x - x_ref_); }
-  const Matrix3d& A() const { return A_; }
+  const Matrix3d& a() const { return A_; }
 
  private:
   const rc::TrackGeometry& track_;
@@ -276,7 +276,7 @@ TEST(ContactDetection, RigidMotionOfRailAndWheelMovesContactByTheSameMotion) {
   RigidMotionProvider motion(track, det.sectionCentre(), x_ref, u0, theta);
   rc::WheelState moved = wl;
   moved.p_centre_in_world = motion.apply(wl.p_centre_in_world);
-  moved.R_wheelset_to_world = motion.A() * wl.R_wheelset_to_world;
+  moved.R_wheelset_to_world = motion.a() * wl.R_wheelset_to_world;
   det.detect(rc::WheelSurface::kTread, poseOf(moved, rc::RailSide::kLeft), track,
              static_cast<const rc::RailDeformation&>(motion), w1, g1);
   ASSERT_TRUE(g1.in_contact);
@@ -285,7 +285,7 @@ TEST(ContactDetection, RigidMotionOfRailAndWheelMovesContactByTheSameMotion) {
   EXPECT_NEAR(g1.penetration, g0.penetration, 1e-12);
   EXPECT_LT((g1.p_rail_in_world - motion.apply(g0.p_rail_in_world)).norm(), 1e-8);
   EXPECT_LT((g1.p_wheel_in_world - motion.apply(g0.p_wheel_in_world)).norm(), 1e-8);
-  EXPECT_LT((g1.n_in_world - motion.A() * g0.n_in_world).norm(), 1e-9);
+  EXPECT_LT((g1.n_in_world - motion.a() * g0.n_in_world).norm(), 1e-9);
   EXPECT_LT((g1.p_section_centre_in_world - motion.apply(g0.p_section_centre_in_world)).norm(), 1e-12);
 }
 

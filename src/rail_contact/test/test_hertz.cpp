@@ -13,9 +13,9 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-double steel_E_star() {
+double steelEStar() {
   const rc::ElasticMaterial steel;  // E = 210 GPa, nu = 0.3
-  return rc::contact_modulus(steel, steel);
+  return rc::contactModulus(steel, steel);
 }
 
 /// Normal surface displacement (sum of both bodies) at (x0, y0) produced by the Hertz pressure
@@ -24,7 +24,7 @@ double steel_E_star() {
 /// Polar coordinates centred at P cancel the 1/r singularity; the radial integral of the
 /// square root of a quadratic is done in closed form, the angular one by the trapezoidal rule
 /// (spectrally accurate for a smooth periodic integrand). Independent of the library.
-double boussinesq_displacement(double a, double b, double p0, double E_star, double x0, double y0) {
+double boussinesqDisplacement(double a, double b, double p0, double E_star, double x0, double y0) {
   const int n = 4096;
   double sum = 0.0;
   for (int k = 0; k < n; ++k) {
@@ -52,11 +52,11 @@ double boussinesq_displacement(double a, double b, double p0, double E_star, dou
 // only rounding differs.
 TEST(Hertz, EqualSpheresMatchClosedForm) {
   const double R1 = 0.05, N = 1000.0;
-  const double E_star = steel_E_star();
+  const double E_star = steelEStar();
   rc::PrincipalCurvatures k;
   k.wheel_rolling = k.wheel_lateral = 1.0 / R1;
   k.rail_rolling = k.rail_lateral = 1.0 / R1;
-  const rc::HertzGeometry g = rc::compute_hertz(k, E_star);
+  const rc::HertzGeometry g = rc::computeHertz(k, E_star);
   const double R = R1 / 2.0;
   const double a = std::cbrt(3.0 * N * R / (4.0 * E_star));
   EXPECT_TRUE(g.flags & rc::kHertzCircular);
@@ -69,11 +69,11 @@ TEST(Hertz, EqualSpheresMatchClosedForm) {
 // Two equal cylinders crossed at right angles: A = B = 1/(2 R1), equivalent sphere R = R1.
 TEST(Hertz, CrossedCylindersMatchClosedForm) {
   const double R1 = 0.46, N = 80.0e3;
-  const double E_star = steel_E_star();
+  const double E_star = steelEStar();
   rc::PrincipalCurvatures k;
   k.wheel_rolling = 1.0 / R1;  // wheel: cylinder along lateral axis
   k.rail_lateral = 1.0 / R1;   // rail: cylinder along track
-  const rc::HertzGeometry g = rc::compute_hertz(k, E_star);
+  const rc::HertzGeometry g = rc::computeHertz(k, E_star);
   const double a = std::cbrt(3.0 * N * R1 / (4.0 * E_star));
   EXPECT_NEAR(g.a(N), a, 1e-12 * a);
   EXPECT_NEAR(g.b(N), a, 1e-12 * a);
@@ -83,7 +83,7 @@ TEST(Hertz, CrossedCylindersMatchClosedForm) {
 
 // a, b scale with N^(1/3), delta with N^(2/3), and N = K delta^1.5 (Hertz). 1e-13: rounding.
 TEST(Hertz, LoadScaling) {
-  const rc::HertzGeometry g = rc::compute_hertz(1.0 / (2 * 0.46), 1.0 / (2 * 0.3), steel_E_star());
+  const rc::HertzGeometry g = rc::computeHertz(1.0 / (2 * 0.46), 1.0 / (2 * 0.3), steelEStar());
   const double N = 50.0e3;
   EXPECT_NEAR(g.a(8 * N), 2 * g.a(N), 1e-13 * g.a(N));
   EXPECT_NEAR(g.b(8 * N), 2 * g.b(N), 1e-13 * g.b(N));
@@ -101,7 +101,7 @@ TEST(Hertz, LoadScaling) {
 // Tolerance 1e-10 relative to delta: the quadrature agrees to ~1e-14; 1e-10 leaves margin
 // while still catching any error in e, K(e), E(e) (an error of 1e-6 in e moves delta ~1e-6).
 TEST(Hertz, EllipticMatchesBoussinesqIntegral) {
-  const double E_star = steel_E_star();
+  const double E_star = steelEStar();
   const double N = 100.0e3;
   struct Case { double A, B; };
   const Case cases[] = {
@@ -111,13 +111,13 @@ TEST(Hertz, EllipticMatchesBoussinesqIntegral) {
       {2.0, 2.0 * (1 + 1e-7)},                // near-circular branch
   };
   for (const Case& c : cases) {
-    const rc::HertzGeometry g = rc::compute_hertz(c.A, c.B, E_star);
+    const rc::HertzGeometry g = rc::computeHertz(c.A, c.B, E_star);
     const double a = g.a(N), b = g.b(N), delta = g.approach(N);
     const double p0 = 3.0 * N / (2.0 * kPi * a * b);
     const double pts[][2] = {{0, 0}, {0.5, 0}, {0, 0.7}, {0.3, -0.4}, {-0.6, 0.5}};
     for (const auto& p : pts) {
       const double x = p[0] * a, y = p[1] * b;
-      const double u = boussinesq_displacement(a, b, p0, E_star, x, y);
+      const double u = boussinesqDisplacement(a, b, p0, E_star, x, y);
       EXPECT_NEAR(u, delta - c.A * x * x - c.B * y * y, 1e-10 * delta)
           << "A=" << c.A << " B=" << c.B << " at (" << p[0] << "a, " << p[1] << "b)";
     }
@@ -130,7 +130,7 @@ TEST(Hertz, EllipticMatchesBoussinesqIntegral) {
 // 1e-10 relative: the root is solved to ~1e-15 in the axis ratio.
 TEST(Hertz, EccentricitySolvesJohnsonEquation) {
   for (double ratio : {1.01, 1.5, 3.0, 10.0, 100.0, 900.0}) {
-    const rc::HertzGeometry g = rc::compute_hertz(0.7, 0.7 * ratio, steel_E_star());
+    const rc::HertzGeometry g = rc::computeHertz(0.7, 0.7 * ratio, steelEStar());
     const double e = g.eccentricity;
     const double Kc = std::comp_ellint_1(e), Ec = std::comp_ellint_2(e);
     EXPECT_NEAR((Ec / (1 - e * e) - Kc) / (Kc - Ec), ratio, 1e-10 * ratio) << "ratio " << ratio;
@@ -142,36 +142,36 @@ TEST(Hertz, EccentricitySolvesJohnsonEquation) {
 // B/A = 1 + 3/4 e^2 + O(e^4) (series of K and E). 1e-3 relative on e^2 covers the O(e^4) term.
 TEST(Hertz, NearCircleSeries) {
   const double ratio = 1.0 + 1.0e-3;
-  const rc::HertzGeometry g = rc::compute_hertz(1.0, ratio, steel_E_star());
+  const rc::HertzGeometry g = rc::computeHertz(1.0, ratio, steelEStar());
   const double e2 = g.eccentricity * g.eccentricity;
   EXPECT_NEAR(e2, (ratio - 1.0) / 0.75, 2e-3 * (ratio - 1.0) / 0.75);
 }
 
 // Degenerate geometry never yields NaN, and is flagged.
 TEST(Hertz, DegenerateCasesAreClampedAndFlagged) {
-  const double E_star = steel_E_star();
+  const double E_star = steelEStar();
   // Convex-concave near the flange root: lateral relative curvature negative.
   rc::PrincipalCurvatures k;
   k.wheel_rolling = 1.0 / 0.45;
   k.wheel_lateral = -1.0 / 0.012;
   k.rail_lateral = 1.0 / 0.013;
-  rc::HertzGeometry g = rc::compute_hertz(k, E_star);
+  rc::HertzGeometry g = rc::computeHertz(k, E_star);
   EXPECT_TRUE(g.flags & rc::kHertzNonPositiveCurvature);
   EXPECT_TRUE(std::isfinite(g.a(1e4)) && std::isfinite(g.b(1e4)) && std::isfinite(g.K));
   EXPECT_GT(g.K, 0.0);
   // Both flat.
-  g = rc::compute_hertz(0.0, 0.0, E_star);
+  g = rc::computeHertz(0.0, 0.0, E_star);
   EXPECT_TRUE(g.flags & rc::kHertzNonPositiveCurvature);
   EXPECT_TRUE(std::isfinite(g.K) && g.K > 0.0);
   // Very flat in one direction.
-  g = rc::compute_hertz(1e-9, 2.0, E_star);
+  g = rc::computeHertz(1e-9, 2.0, E_star);
   EXPECT_TRUE(g.flags & rc::kHertzRatioClamped);
   EXPECT_TRUE(std::isfinite(g.a(1e4)) && g.a(1e4) > g.b(1e4));
   // NaN input and bad modulus.
-  g = rc::compute_hertz(std::nan(""), 1.0, E_star);
+  g = rc::computeHertz(std::nan(""), 1.0, E_star);
   EXPECT_TRUE(g.flags & rc::kHertzBadInput);
   EXPECT_TRUE(std::isfinite(g.K));
-  g = rc::compute_hertz(1.0, 1.0, -5.0);
+  g = rc::computeHertz(1.0, 1.0, -5.0);
   EXPECT_TRUE(g.flags & rc::kHertzBadInput);
   EXPECT_TRUE(std::isfinite(g.K));
 }
@@ -180,7 +180,7 @@ TEST(Hertz, MaterialValidationNamesField) {
   rc::ElasticMaterial bad;
   bad.poisson_ratio = 0.7;
   try {
-    rc::contact_modulus(bad, rc::ElasticMaterial{});
+    rc::contactModulus(bad, rc::ElasticMaterial{});
     FAIL() << "expected std::runtime_error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("wheel material"), std::string::npos);
@@ -188,8 +188,8 @@ TEST(Hertz, MaterialValidationNamesField) {
   }
   // Identical materials: G = E / (2 (1 + nu)), nu unchanged (exact up to rounding).
   const rc::ElasticMaterial s;
-  EXPECT_NEAR(rc::combined_shear_modulus(s, s), 2.10e11 / 2.6, 1e-3);
-  EXPECT_NEAR(rc::combined_poisson_ratio(s, s), 0.3, 1e-15);
+  EXPECT_NEAR(rc::combinedShearModulus(s, s), 2.10e11 / 2.6, 1e-3);
+  EXPECT_NEAR(rc::combinedPoissonRatio(s, s), 0.3, 1e-15);
 }
 
 // Eq. 9 never produces a tensile force, whatever the (separating) velocity.
@@ -199,7 +199,7 @@ TEST(NormalForce, NeverNegative) {
   for (double delta : {-1e-4, 0.0, 1e-9, 1e-5, 1e-4})
     for (double vdot : {-10.0, -0.5, -1e-3, 0.0, 1e-3, 1.0})
       for (double v0 : {0.0, 1e-3, 0.5}) {
-        const double N = rc::damped_normal_force(1e10, delta, vdot, v0, p);
+        const double N = rc::dampedNormalForce(1e10, delta, vdot, v0, p);
         EXPECT_GE(N, 0.0);
         EXPECT_TRUE(std::isfinite(N));
         if (delta <= 0.0) {
@@ -216,10 +216,10 @@ TEST(NormalForce, MatchesEquationNineWithFloor) {
   p.impact_velocity_floor = 0.02;
   const double K = 2e10, d = 5e-5, vd = 0.01;
   const double elastic = K * std::pow(d, 1.5);
-  EXPECT_NEAR(rc::damped_normal_force(K, d, 0.0, 0.3, p), elastic, 1e-12 * elastic);
-  EXPECT_NEAR(rc::damped_normal_force(K, d, vd, 0.3, p), elastic * (1 + 0.75 * (1 - 0.36) * vd / 0.3),
+  EXPECT_NEAR(rc::dampedNormalForce(K, d, 0.0, 0.3, p), elastic, 1e-12 * elastic);
+  EXPECT_NEAR(rc::dampedNormalForce(K, d, vd, 0.3, p), elastic * (1 + 0.75 * (1 - 0.36) * vd / 0.3),
               1e-12 * elastic);
-  EXPECT_NEAR(rc::damped_normal_force(K, d, vd, 0.0, p), elastic * (1 + 0.75 * (1 - 0.36) * vd / 0.02),
+  EXPECT_NEAR(rc::dampedNormalForce(K, d, vd, 0.0, p), elastic * (1 + 0.75 * (1 - 0.36) * vd / 0.02),
               1e-12 * elastic);
 }
 
@@ -234,8 +234,8 @@ TEST(NormalForce, RestitutionOfSingleImpact) {
   rc::ImpactMemory memory;
   double x = 0.0, v = v_in;  // x = penetration, v = penetration rate
   const double dt = 1e-8;
-  auto acc = [&](double xx, double vv) { return -rc::damped_normal_force(K, xx, vv, memory.impact_velocity, p) / m; };
-  rc::update_impact_memory(memory, 1e-300, v);
+  auto acc = [&](double xx, double vv) { return -rc::dampedNormalForce(K, xx, vv, memory.impact_velocity, p) / m; };
+  rc::updateImpactMemory(memory, 1e-300, v);
   EXPECT_DOUBLE_EQ(memory.impact_velocity, v_in);
   for (int i = 0; i < 20000000 && x >= 0.0; ++i) {
     const double k1x = v, k1v = acc(x, v);
@@ -244,11 +244,11 @@ TEST(NormalForce, RestitutionOfSingleImpact) {
     const double k4x = v + dt * k3v, k4v = acc(x + dt * k3x, v + dt * k3v);
     x += dt / 6 * (k1x + 2 * k2x + 2 * k3x + k4x);
     v += dt / 6 * (k1v + 2 * k2v + 2 * k3v + k4v);
-    if (x >= 0.0) rc::update_impact_memory(memory, x, v);  // as the contact evaluation does every call
+    if (x >= 0.0) rc::updateImpactMemory(memory, x, v);  // as the contact evaluation does every call
   }
   // In a true impact the approach rate only falls after onset: the memory keeps the onset rate (eq. 9).
   EXPECT_DOUBLE_EQ(memory.impact_velocity, v_in);
-  rc::update_impact_memory(memory, x, v);
+  rc::updateImpactMemory(memory, x, v);
   EXPECT_FALSE(memory.in_contact);
   EXPECT_LT(x, 0.0);
   EXPECT_NEAR(-v / v_in, 0.95, 0.01);
@@ -259,9 +259,9 @@ TEST(Hertz, NearConformalPatchIsLimitedToTheLateralWidth) {
   // curvatures cancelling to B = 1e-3 /m. Unlimited, a 0.25 mm approach gives an ellipse metres wide and a
   // stiffness many times the tread's; limited to b = 10 mm, B is raised until b is 10 mm at that approach.
   const double E_star = 1.15e11, delta = 250e-6, max_b = 0.010;
-  const rc::HertzGeometry conformal = rc::compute_hertz(1.1, 1e-3, E_star);
+  const rc::HertzGeometry conformal = rc::computeHertz(1.1, 1e-3, E_star);
   ASSERT_GT(conformal.b(conformal.load(delta)), 0.3);
-  const rc::HertzGeometry limited = rc::limit_lateral_width(conformal, delta, max_b);
+  const rc::HertzGeometry limited = rc::limitLateralWidth(conformal, delta, max_b);
   EXPECT_LE(limited.b(limited.load(delta)), max_b);
   EXPECT_GT(limited.b(limited.load(delta)), (1.0 - 2e-4) * max_b);
   EXPECT_TRUE(limited.flags & rc::kHertzWidthClamped);
@@ -269,12 +269,12 @@ TEST(Hertz, NearConformalPatchIsLimitedToTheLateralWidth) {
   EXPECT_GT(limited.B, conformal.B);
   EXPECT_LT(limited.K, 0.5 * conformal.K);
   // A tread contact (rail crown R 0.3 m against the tread: B ~ 0.6 /m) is far inside the limit: unchanged.
-  const rc::HertzGeometry tread = rc::compute_hertz(1.1, 0.6, E_star);
-  const rc::HertzGeometry same = rc::limit_lateral_width(tread, 100e-6, max_b);
+  const rc::HertzGeometry tread = rc::computeHertz(1.1, 0.6, E_star);
+  const rc::HertzGeometry same = rc::limitLateralWidth(tread, 100e-6, max_b);
   EXPECT_EQ(same.K, tread.K);
   EXPECT_EQ(same.B, tread.B);
   EXPECT_FALSE(same.flags & rc::kHertzWidthClamped);
-  EXPECT_EQ(rc::limit_lateral_width(conformal, delta, 0.0).K, conformal.K);  // 0: no limit
+  EXPECT_EQ(rc::limitLateralWidth(conformal, delta, 0.0).K, conformal.K);  // 0: no limit
 }
 
 TEST(NormalForce, MemoryKeepsTheLargestApproachRateSoASoftStartIsNotOverdamped) {
@@ -285,19 +285,19 @@ TEST(NormalForce, MemoryKeepsTheLargestApproachRateSoASoftStartIsNotOverdamped) 
   const rc::NormalDampingParams p;  // e = 0.5, floor 0.01 m/s
   const double elastic = K * delta * std::sqrt(delta);
   rc::ImpactMemory memory;
-  rc::update_impact_memory(memory, 1e-9, 0.0);  // soft onset
+  rc::updateImpactMemory(memory, 1e-9, 0.0);  // soft onset
   EXPECT_DOUBLE_EQ(memory.impact_velocity, 0.0);
-  rc::update_impact_memory(memory, delta, 0.36);
+  rc::updateImpactMemory(memory, delta, 0.36);
   EXPECT_DOUBLE_EQ(memory.impact_velocity, 0.36);
-  const double N = rc::damped_normal_force(K, delta, 0.36, memory.impact_velocity, p);
+  const double N = rc::dampedNormalForce(K, delta, 0.36, memory.impact_velocity, p);
   EXPECT_NEAR(N, elastic * (1.0 + 0.75 * (1.0 - 0.25)), 1e-9 * elastic);
   // Separating at the same rate afterwards: 1 - 0.5625, positive (the onset rate alone gave a negative
   // bracket, N clamped to 0, for any separation faster than 0.018 m/s).
-  rc::update_impact_memory(memory, delta, -0.36);
+  rc::updateImpactMemory(memory, delta, -0.36);
   EXPECT_DOUBLE_EQ(memory.impact_velocity, 0.36);
-  EXPECT_NEAR(rc::damped_normal_force(K, delta, -0.36, memory.impact_velocity, p), elastic * (1.0 - 0.5625),
+  EXPECT_NEAR(rc::dampedNormalForce(K, delta, -0.36, memory.impact_velocity, p), elastic * (1.0 - 0.5625),
               1e-9 * elastic);
-  rc::update_impact_memory(memory, -1e-9, 0.0);  // contact lost: forgotten
+  rc::updateImpactMemory(memory, -1e-9, 0.0);  // contact lost: forgotten
   EXPECT_FALSE(memory.in_contact);
   EXPECT_EQ(memory.impact_velocity, 0.0);
 }

@@ -20,18 +20,18 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string data_file() {
+std::string dataFile() {
   const std::string here = __FILE__;  // .../rail_contact/test/test_polach.cpp
   return here.substr(0, here.rfind("/test/")) + "/data/kalker_coefficients.csv";
 }
 
-std::string write_temp(const std::string& name, const std::string& text) {
+std::string writeTemp(const std::string& name, const std::string& text) {
   const std::string path = ::testing::TempDir() + name;
   std::ofstream(path) << text;
   return path;
 }
 
-std::string load_error(const std::string& path) {
+std::string loadError(const std::string& path) {
   try {
     rc::KalkerTable::load(path);
   } catch (const std::runtime_error& e) {
@@ -41,12 +41,12 @@ std::string load_error(const std::string& path) {
 }
 
 /// Typical wheel-on-rail tread contact used in the Polach tests (SI units).
-rc::PolachInput tread_contact() {
+rc::PolachInput treadContact() {
   rc::PolachInput in;
   in.N = 100.0e3;
   in.a = 7.0e-3;
   in.b = 5.0e-3;
-  in.G = rc::combined_shear_modulus(rc::ElasticMaterial{}, rc::ElasticMaterial{});
+  in.G = rc::combinedShearModulus(rc::ElasticMaterial{}, rc::ElasticMaterial{});
   in.mu0 = 0.4;
   in.V = 20.0;
   in.c = rc::KalkerTable::builtin().evaluate(in.a / in.b, 0.3);
@@ -60,7 +60,7 @@ rc::PolachInput tread_contact() {
 
 // The compiled-in table and the data file carry the same numbers, digit for digit.
 TEST(KalkerTable, BuiltinEqualsDataFile) {
-  const rc::KalkerTable file = rc::KalkerTable::load(data_file());
+  const rc::KalkerTable file = rc::KalkerTable::load(dataFile());
   const rc::KalkerTable& builtin = rc::KalkerTable::builtin();
   ASSERT_EQ(file.rows().size(), 19u);
   ASSERT_EQ(builtin.rows().size(), file.rows().size());
@@ -154,23 +154,23 @@ TEST(KalkerTable, LoaderReportsFileAndLine) {
                              "c23_nu0,c23_nu025,c23_nu05,c33_nu0,c33_nu025,c33_nu05\n";
   const std::string good1 = "a/b,0.1,2.51,3.31,4.85,2.51,2.52,2.53,0.334,0.473,0.731,6.42,8.28,11.7\n";
   const std::string good2 = "a/b,0.2,2.59,3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,5.66\n";
-  std::string p = write_temp("k_bad_number.csv", header + good1 + "a/b,0.2,2.59,x3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,5.66\n");
-  std::string msg = load_error(p);
+  std::string p = writeTemp("k_bad_number.csv", header + good1 + "a/b,0.2,2.59,x3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,5.66\n");
+  std::string msg = loadError(p);
   EXPECT_NE(msg.find(p + ":4:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("c11_nu025"), std::string::npos) << msg;
-  p = write_temp("k_order.csv", header + good2 + good1);
-  msg = load_error(p);
+  p = writeTemp("k_order.csv", header + good2 + good1);
+  msg = loadError(p);
   EXPECT_NE(msg.find(p + ":4: a/b not increasing (0.1 after 0.2)"), std::string::npos) << msg;
-  p = write_temp("k_fields.csv", header + good1 + "a/b,0.2,2.59\n");
-  msg = load_error(p);
+  p = writeTemp("k_fields.csv", header + good1 + "a/b,0.2,2.59\n");
+  msg = loadError(p);
   EXPECT_NE(msg.find(p + ":4: expected 14"), std::string::npos) << msg;
-  p = write_temp("k_kind.csv", header + good1 + "x/y" + good2.substr(3));
-  msg = load_error(p);
+  p = writeTemp("k_kind.csv", header + good1 + "x/y" + good2.substr(3));
+  msg = loadError(p);
   EXPECT_NE(msg.find(p + ":4: kind"), std::string::npos) << msg;
-  p = write_temp("k_neg.csv", header + good1 + "a/b,0.2,2.59,3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,-5.66\n");
-  msg = load_error(p);
+  p = writeTemp("k_neg.csv", header + good1 + "a/b,0.2,2.59,3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,-5.66\n");
+  msg = loadError(p);
   EXPECT_NE(msg.find(p + ":4: c33_nu05 must be > 0 (got -5.66)"), std::string::npos) << msg;
-  msg = load_error("/nonexistent/kalker.csv");
+  msg = loadError("/nonexistent/kalker.csv");
   EXPECT_NE(msg.find("/nonexistent/kalker.csv"), std::string::npos) << msg;
 }
 
@@ -183,19 +183,19 @@ TEST(KalkerTable, LoaderReportsFileAndLine) {
 // deviation is O(eps^2) ~ 1e-6; the required tolerance is 1%.
 TEST(Polach, SmallCreepageTendsToKalkerLinearLaw) {
   const rc::PolachOptions opt;  // kA = kS = 1, constant friction
-  rc::PolachInput in = tread_contact();
+  rc::PolachInput in = treadContact();
   const double Gab = in.G * in.a * in.b;
   in.nu_x = 1e-5;
-  rc::PolachResult r = rc::polach_forces(in, opt);
+  rc::PolachResult r = rc::polachForces(in, opt);
   EXPECT_NEAR(r.Fx, -Gab * in.c.c11 * in.nu_x, 0.01 * Gab * in.c.c11 * in.nu_x);
   EXPECT_NEAR(r.Fy, 0.0, 1e-12);
   in.nu_x = 0.0;
   in.nu_y = -1e-5;
-  r = rc::polach_forces(in, opt);
+  r = rc::polachForces(in, opt);
   EXPECT_NEAR(r.Fy, -Gab * in.c.c22 * in.nu_y, 0.01 * Gab * in.c.c22 * 1e-5);
   in.nu_y = 0.0;
   in.phi = 1e-5 / in.a;  // spin creepage [1/m] giving phi * a = 1e-5
-  r = rc::polach_forces(in, opt);
+  r = rc::polachForces(in, opt);
   const double Fy_lin = -Gab * std::sqrt(in.a * in.b) * in.c.c23 * in.phi;
   EXPECT_NEAR(r.Fy, Fy_lin, 0.01 * std::abs(Fy_lin));
   EXPECT_NEAR(r.Fy_spin, r.Fy, 1e-12 * std::abs(Fy_lin));
@@ -206,16 +206,16 @@ TEST(Polach, SmallCreepageTendsToKalkerLinearLaw) {
 TEST(Polach, LargeCreepageSaturatesAtMuN) {
   rc::PolachOptions opt;
   opt.spin = false;
-  rc::PolachInput in = tread_contact();
+  rc::PolachInput in = treadContact();
   for (double s : {1.0, -1.0}) {
     in.nu_x = s;
-    const rc::PolachResult r = rc::polach_forces(in, opt);
+    const rc::PolachResult r = rc::polachForces(in, opt);
     EXPECT_NEAR(std::abs(r.Fx), in.mu0 * in.N, 1e-3 * in.mu0 * in.N);
     EXPECT_LT(r.Fx * s, 0.0);  // opposes the creepage
   }
   in.nu_x = 0.6;
   in.nu_y = 0.8;
-  const rc::PolachResult r = rc::polach_forces(in, opt);
+  const rc::PolachResult r = rc::polachForces(in, opt);
   EXPECT_NEAR(std::hypot(r.Fx, r.Fy), in.mu0 * in.N, 1e-3 * in.mu0 * in.N);
 }
 
@@ -224,10 +224,10 @@ TEST(Polach, LargeCreepageSaturatesAtMuN) {
 TEST(Polach, ClosedFormAtUnitEpsilon) {
   rc::PolachOptions opt;
   opt.spin = false;
-  rc::PolachInput in = tread_contact();
+  rc::PolachInput in = treadContact();
   in.c.c11 = in.c.c22 = 4.0;
   in.nu_x = 4.0 * in.mu0 * in.N / (in.G * kPi * in.a * in.b * in.c.c11);  // gives eps = 1
-  const rc::PolachResult r = rc::polach_forces(in, opt);
+  const rc::PolachResult r = rc::polachForces(in, opt);
   EXPECT_NEAR(r.epsilon, 1.0, 1e-14);
   EXPECT_NEAR(-r.Fx, in.mu0 * in.N * (1.0 / kPi + 0.5), 1e-12 * in.mu0 * in.N);
 }
@@ -239,9 +239,9 @@ TEST(Polach, ReductionFactorsScaleInitialSlope) {
   opt.spin = false;
   opt.kA = 0.3;
   opt.kS = 0.1;
-  rc::PolachInput in = tread_contact();
+  rc::PolachInput in = treadContact();
   in.nu_x = 1e-7;
-  const rc::PolachResult r = rc::polach_forces(in, opt);
+  const rc::PolachResult r = rc::polachForces(in, opt);
   const double lin = in.G * in.a * in.b * in.c.c11 * in.nu_x * 0.5 * (opt.kA + opt.kS);
   EXPECT_NEAR(-r.Fx, lin, 1e-4 * lin);
 }
@@ -251,11 +251,11 @@ TEST(Polach, ReductionFactorsScaleInitialSlope) {
 // exp(-B w) = exp(-240) ~ 0. For eps -> inf Polach's function approaches 1 as
 // 1 - (2/pi)(1/kS - 1/kA)/eps, i.e. a deficit of ~1e-4 at eps ~ 9e3, so 1e-3 relative.
 TEST(Polach, FallingFrictionLimit) {
-  const rc::PolachOptions opt = rc::polach2005_dry_options();
-  rc::PolachInput in = tread_contact();
+  const rc::PolachOptions opt = rc::polach2005DryOptions();
+  rc::PolachInput in = treadContact();
   in.mu0 = rc::kPolach2005DryMu0;
   in.nu_x = 20.0;
-  const rc::PolachResult r = rc::polach_forces(in, opt);
+  const rc::PolachResult r = rc::polachForces(in, opt);
   EXPECT_NEAR(r.mu, opt.A * in.mu0, 1e-12);
   EXPECT_NEAR(-r.Fx, opt.A * in.mu0 * in.N, 1e-3 * opt.A * in.mu0 * in.N);
 }
@@ -268,14 +268,14 @@ TEST(Polach, FallingFrictionLimit) {
 // The wet curve lies below the dry curve at every creepage.
 TEST(Polach, CurveWithFallingFrictionHasAdhesionOptimum) {
   for (int wet = 0; wet < 2; ++wet) {
-    const rc::PolachOptions opt = wet ? rc::polach2005_wet_options() : rc::polach2005_dry_options();
-    rc::PolachInput in = tread_contact();
+    const rc::PolachOptions opt = wet ? rc::polach2005WetOptions() : rc::polach2005DryOptions();
+    rc::PolachInput in = treadContact();
     in.mu0 = wet ? rc::kPolach2005WetMu0 : rc::kPolach2005DryMu0;
     double F_max = 0.0, s_max = 0.0, prev = 0.0;
     bool falling = false, rose_after_fall = false;
     for (int i = 1; i <= 4000; ++i) {
       in.nu_x = 1e-5 * std::pow(3.0e4, i / 4000.0);  // 1e-5 .. 0.3
-      const double F = -rc::polach_forces(in, opt).Fx;
+      const double F = -rc::polachForces(in, opt).Fx;
       if (F > F_max) {
         F_max = F;
         s_max = in.nu_x;
@@ -292,31 +292,31 @@ TEST(Polach, CurveWithFallingFrictionHasAdhesionOptimum) {
     EXPECT_FALSE(rose_after_fall);
     EXPECT_LT(prev, 0.85 * F_max);
   }
-  rc::PolachInput dry = tread_contact(), wet = tread_contact();
+  rc::PolachInput dry = treadContact(), wet = treadContact();
   dry.mu0 = rc::kPolach2005DryMu0;
   wet.mu0 = rc::kPolach2005WetMu0;
   for (double s : {1e-4, 1e-3, 1e-2, 1e-1, 1.0}) {
     dry.nu_x = wet.nu_x = s;
-    EXPECT_LT(-rc::polach_forces(wet, rc::polach2005_wet_options()).Fx,
-              -rc::polach_forces(dry, rc::polach2005_dry_options()).Fx);
+    EXPECT_LT(-rc::polachForces(wet, rc::polach2005WetOptions()).Fx,
+              -rc::polachForces(dry, rc::polach2005DryOptions()).Fx);
   }
 }
 
 // Zero creepage gives zero, finite forces (no division by zero), with and without spin;
 // zero or negative normal load gives zero forces.
 TEST(Polach, FiniteAtZeroCreepageAndNoLoad) {
-  rc::PolachInput in = tread_contact();
+  rc::PolachInput in = treadContact();
   for (bool spin : {true, false}) {
     rc::PolachOptions opt;
     opt.spin = spin;
-    const rc::PolachResult r = rc::polach_forces(in, opt);
+    const rc::PolachResult r = rc::polachForces(in, opt);
     EXPECT_EQ(r.Fx, 0.0);
     EXPECT_EQ(r.Fy, 0.0);
     EXPECT_TRUE(std::isfinite(r.mu));
   }
   in.nu_x = 0.01;
   in.N = 0.0;
-  const rc::PolachResult r = rc::polach_forces(in, rc::PolachOptions{});
+  const rc::PolachResult r = rc::polachForces(in, rc::PolachOptions{});
   EXPECT_EQ(r.Fx, 0.0);
   EXPECT_EQ(r.Fy, 0.0);
 }
@@ -324,20 +324,20 @@ TEST(Polach, FiniteAtZeroCreepageAndNoLoad) {
 // Spin off: spin terms are not computed; nu_C equals the translational creepage.
 // Spin on: nu_C uses the shifted lateral creepage only when it increases |nu_y| (Polach 1999).
 TEST(Polach, SpinSwitchAndModifiedCreepage) {
-  rc::PolachInput in = tread_contact();
+  rc::PolachInput in = treadContact();
   in.nu_x = 1e-3;
   in.nu_y = 2e-3;
   in.phi = 0.5;  // 1/m, phi a = 3.5e-3
   rc::PolachOptions off;
   off.spin = false;
-  rc::PolachResult r = rc::polach_forces(in, off);
+  rc::PolachResult r = rc::polachForces(in, off);
   EXPECT_EQ(r.Fy_spin, 0.0);
   EXPECT_DOUBLE_EQ(r.nu_C, std::hypot(1e-3, 2e-3));
-  r = rc::polach_forces(in, rc::PolachOptions{});
+  r = rc::polachForces(in, rc::PolachOptions{});
   EXPECT_DOUBLE_EQ(r.nu_C, std::hypot(1e-3, 2e-3 + 0.5 * in.a));
   EXPECT_LT(r.Fy_spin, 0.0);
   in.phi = -0.1;  // |nu_y + phi a| = 1.3e-3 < |nu_y|: no shift
-  r = rc::polach_forces(in, rc::PolachOptions{});
+  r = rc::polachForces(in, rc::PolachOptions{});
   EXPECT_DOUBLE_EQ(r.nu_C, std::hypot(1e-3, 2e-3));
   EXPECT_GT(r.Fy_spin, 0.0);
 }
@@ -346,11 +346,11 @@ TEST(Polach, SpinSwitchAndModifiedCreepage) {
 // about the contact centre has zero resultant), so Polach's F_yS must rise and then decay
 // towards zero: at phi a = 1 it is below 1% of its maximum over the sweep.
 TEST(Polach, PureSpinForceDecaysInFullSliding) {
-  rc::PolachInput in = tread_contact();
+  rc::PolachInput in = treadContact();
   double F_peak = 0.0, F_last = 0.0;
   for (int i = 0; i <= 600; ++i) {
     in.phi = 1e-6 * std::pow(10.0, 6.0 * i / 600.0) / in.a;  // phi a from 1e-6 to 1
-    const rc::PolachResult r = rc::polach_forces(in, rc::PolachOptions{});
+    const rc::PolachResult r = rc::polachForces(in, rc::PolachOptions{});
     EXPECT_TRUE(std::isfinite(r.Fy));
     F_peak = std::max(F_peak, std::abs(r.Fy));
     F_last = std::abs(r.Fy);
@@ -367,8 +367,8 @@ TEST(Polach, OptionValidation) {
   o = {};
   o.B = -1.0;
   EXPECT_THROW(rc::validate(o), std::runtime_error);
-  EXPECT_NO_THROW(rc::validate(rc::polach2005_dry_options()));
-  EXPECT_NO_THROW(rc::validate(rc::polach2005_wet_options()));
+  EXPECT_NO_THROW(rc::validate(rc::polach2005DryOptions()));
+  EXPECT_NO_THROW(rc::validate(rc::polach2005WetOptions()));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -386,8 +386,8 @@ TEST(Creepage, DefinitionAndFrames) {
   const Eigen::Vector3d w_wheel = w_rail + R.col(2) * w_rel_n + R.col(0) * 7.0;  // + rolling spin
   rc::CreepageOptions opt;
   opt.mode = rc::SpeedRegularisation::kMax;
-  const rc::Creepages a = rc::compute_creepages(v_rel_c, w_rel_n, 30.0, opt);
-  const rc::Creepages b = rc::compute_creepages(v_rail + R * v_rel_c, v_rail, w_wheel, w_rail, R, 30.0, opt);
+  const rc::Creepages a = rc::computeCreepages(v_rel_c, w_rel_n, 30.0, opt);
+  const rc::Creepages b = rc::computeCreepages(v_rail + R * v_rel_c, v_rail, w_wheel, w_rail, R, 30.0, opt);
   EXPECT_NEAR(a.nu_x, 0.02 / 30.0, 1e-15);
   EXPECT_NEAR(a.nu_y, -0.01 / 30.0, 1e-15);
   EXPECT_NEAR(a.phi, 0.4 / 30.0, 1e-15);
@@ -395,7 +395,7 @@ TEST(Creepage, DefinitionAndFrames) {
   EXPECT_NEAR(b.nu_y, a.nu_y, 1e-15);
   EXPECT_NEAR(b.phi, a.phi, 1e-14);
   // Smooth regularisation: V_ref = sqrt(V^2 + v_eps^2), relative change (v_eps/V)^2/2 ~ 5.6e-6.
-  const rc::Creepages s = rc::compute_creepages(v_rel_c, w_rel_n, 30.0, rc::CreepageOptions{});
+  const rc::Creepages s = rc::computeCreepages(v_rel_c, w_rel_n, 30.0, rc::CreepageOptions{});
   EXPECT_NEAR(s.V_ref, std::sqrt(900.0 + 0.01), 1e-12);
 }
 
@@ -404,16 +404,16 @@ TEST(Creepage, StandstillIsFinite) {
   for (auto mode : {rc::SpeedRegularisation::kSmooth, rc::SpeedRegularisation::kMax}) {
     rc::CreepageOptions opt;
     opt.mode = mode;
-    const rc::Creepages c = rc::compute_creepages(Eigen::Vector3d(1e-3, 0, 0), 0.01, 0.0, opt);
+    const rc::Creepages c = rc::computeCreepages(Eigen::Vector3d(1e-3, 0, 0), 0.01, 0.0, opt);
     EXPECT_DOUBLE_EQ(c.V_ref, opt.v_eps);
     EXPECT_DOUBLE_EQ(c.nu_x, 1e-3 / opt.v_eps);
-    rc::PolachInput in = tread_contact();
+    rc::PolachInput in = treadContact();
     in.nu_x = c.nu_x;
     in.phi = c.phi;
     in.V = c.V_ref;
-    const rc::PolachResult r = rc::polach_forces(in, rc::PolachOptions{});
+    const rc::PolachResult r = rc::polachForces(in, rc::PolachOptions{});
     EXPECT_TRUE(std::isfinite(r.Fx) && std::isfinite(r.Fy));
   }
-  const rc::Creepages n = rc::compute_creepages(Eigen::Vector3d(1, 1, 1), 1.0, std::nan(""), rc::CreepageOptions{});
+  const rc::Creepages n = rc::computeCreepages(Eigen::Vector3d(1, 1, 1), 1.0, std::nan(""), rc::CreepageOptions{});
   EXPECT_TRUE(std::isfinite(n.nu_x) && std::isfinite(n.phi));
 }

@@ -479,18 +479,18 @@ TEST(TrackGeometry, BadSpecThrowsNamingFieldAndValue) {
 // practical form D_eq[mm] = 11.8 V[km/h]^2 / R[m] for e = 1500 mm (11.8 is 1500 / (9.81 * 3.6^2) = 11.797
 // rounded, hence the 0.1 % tolerance).
 TEST(CantHelpers, CantAngleEquilibriumCantAndDeficiency) {
-  EXPECT_NEAR(rc::cant_angle(0.15, 1.5), std::asin(0.1), 1e-15);
-  EXPECT_NEAR(rc::cant_angle(-0.15, 1.5), -std::asin(0.1), 1e-15);
-  EXPECT_THROW(rc::cant_angle(1.6, 1.5), std::runtime_error);
-  EXPECT_THROW(rc::cant_angle(0.1, 0.0), std::runtime_error);
+  EXPECT_NEAR(rc::cantAngle(0.15, 1.5), std::asin(0.1), 1e-15);
+  EXPECT_NEAR(rc::cantAngle(-0.15, 1.5), -std::asin(0.1), 1e-15);
+  EXPECT_THROW(rc::cantAngle(1.6, 1.5), std::runtime_error);
+  EXPECT_THROW(rc::cantAngle(0.1, 0.0), std::runtime_error);
   // Hand value: 1.5 * 50^2 / (9.81 * 1000) = 3750 / 9810 = 0.38226299694...
-  EXPECT_NEAR(rc::equilibrium_cant(1.5, 50.0, 1000.0), 0.382262996942, 1e-12);
+  EXPECT_NEAR(rc::equilibriumCant(1.5, 50.0, 1000.0), 0.382262996942, 1e-12);
   const double V_kmh = 200.0, R = 2000.0;
-  const double D_eq = rc::equilibrium_cant(1.5, V_kmh / 3.6, R);
+  const double D_eq = rc::equilibriumCant(1.5, V_kmh / 3.6, R);
   const double practical = 11.8 * V_kmh * V_kmh / R * 1e-3;  // m
   EXPECT_NEAR(D_eq, practical, 1e-3 * practical);
   // Deficiency I = D_eq - D: 0.236 m equilibrium with 0.150 m applied is 0.086 m deficient.
-  EXPECT_NEAR(rc::cant_deficiency(0.236, 0.150), 0.086, 1e-15);
-  EXPECT_NEAR(rc::cant_deficiency(0.100, 0.150), -0.050, 1e-15);  // excess cant is negative deficiency
-  EXPECT_THROW(rc::equilibrium_cant(1.5, 50.0, 0.0), std::runtime_error);
+  EXPECT_NEAR(rc::cantDeficiency(0.236, 0.150), 0.086, 1e-15);
+  EXPECT_NEAR(rc::cantDeficiency(0.100, 0.150), -0.050, 1e-15);  // excess cant is negative deficiency
+  EXPECT_THROW(rc::equilibriumCant(1.5, 50.0, 0.0), std::runtime_error);
 }

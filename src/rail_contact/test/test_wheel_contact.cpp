@@ -79,7 +79,7 @@ TEST(WheelContact, StaticNormalForceIsHertzOfThePenetration) {
   k.wheel_rolling = std::abs(c.normal_in_world.z()) / c.rolling_radius;  // Meusnier: cos(angle) / radius
   k.wheel_lateral = tread.curvature(tread.closestParameter(Eigen::Vector2d(g.wheel_y, g.wheel_z)));
   k.rail_lateral = setup().rail.curvature(setup().rail.closestParameter(Eigen::Vector2d(g.rail_y, g.rail_z)));
-  const rc::HertzGeometry hz = rc::compute_hertz(k, m.contactModulus());
+  const rc::HertzGeometry hz = rc::computeHertz(k, m.contactModulus());
   // Zero penetration rate: the damping term vanishes, N = K delta^1.5 (1e-6 relative: the curvatures
   // here come from closest-point projections of the reported points).
   EXPECT_NEAR(c.N, hz.K * std::pow(c.penetration, 1.5), 1e-6 * c.N);

@@ -24,7 +24,7 @@ struct Rng {
   }
 };
 
-void expect_vec_near(const Vector3d& a, const Vector3d& b, double tol) {
+void expectVecNear(const Vector3d& a, const Vector3d& b, double tol) {
   EXPECT_NEAR((a - b).norm(), 0.0, tol) << "a=" << a.transpose() << " b=" << b.transpose();
 }
 
@@ -45,8 +45,8 @@ TEST(WrenchTransfer, WheelsetEquivalentForceSystem) {
       const Vector3d s_w = Vector3d(0.0, side ? -0.75 : 0.75, 0.0) + rng.vec(0.01);  // wheel centre, body
       const Vector3d s_tr = rng.vec(0.5), s_fl = rng.vec(0.5);  // contact points from wheel centre, body
       const Vector3d f_tr = rng.vec(1e5), f_fl = rng.vec(5e4);  // forces on wheel, world
-      const rc::WheelsetWrench wheel = rc::wheel_centre_wrench(f_tr, f_fl, s_tr, s_fl, A_ws);
-      rc::accumulate(total, rc::wheelset_centre_wrench(wheel, s_w, A_ws));
+      const rc::WheelsetWrench wheel = rc::wheelCentreWrench(f_tr, f_fl, s_tr, s_fl, A_ws);
+      rc::accumulate(total, rc::wheelsetCentreWrench(wheel, s_w, A_ws));
       // Reference: each force at its world application point.
       const Vector3d r_tr = r_ws + A_ws * (s_w + s_tr);
       const Vector3d r_fl = r_ws + A_ws * (s_w + s_fl);
@@ -54,9 +54,9 @@ TEST(WrenchTransfer, WheelsetEquivalentForceSystem) {
       M_ref_about_P += (r_tr - P).cross(f_tr) + (r_fl - P).cross(f_fl);
     }
     const double scale = 1e5 * 200.0;
-    expect_vec_near(total.force_in_world, F_ref, 1e-12 * 1e5);
+    expectVecNear(total.force_in_world, F_ref, 1e-12 * 1e5);
     const Vector3d M_eq_about_P = A_ws * total.moment_in_wheelset + (r_ws - P).cross(total.force_in_world);
-    expect_vec_near(M_eq_about_P, M_ref_about_P, 1e-12 * scale);
+    expectVecNear(M_eq_about_P, M_ref_about_P, 1e-12 * scale);
   }
 }
 
@@ -66,12 +66,12 @@ TEST(WrenchTransfer, WheelCentreMomentInBodyFrame) {
   const Matrix3d A_ws = rng.rot();
   const Vector3d s_tr(0.01, 0.02, -0.46), s_fl(0.0, -0.03, -0.47);
   const Vector3d f_tr(1e3, 2e3, 8e4), f_fl(0.0, -3e4, 1e4);
-  const rc::WheelsetWrench w = rc::wheel_centre_wrench(f_tr, f_fl, s_tr, s_fl, A_ws);
+  const rc::WheelsetWrench w = rc::wheelCentreWrench(f_tr, f_fl, s_tr, s_fl, A_ws);
   const Vector3d M_world = (A_ws * s_tr).cross(f_tr) + (A_ws * s_fl).cross(f_fl);
-  expect_vec_near(A_ws * w.moment_in_wheelset, M_world, 1e-12 * 1e5);
+  expectVecNear(A_ws * w.moment_in_wheelset, M_world, 1e-12 * 1e5);
   // Inactive flange: passing a zero force leaves only the tread contribution.
-  const rc::WheelsetWrench t = rc::wheel_centre_wrench(f_tr, Vector3d::Zero(), s_tr, s_fl, A_ws);
-  expect_vec_near(A_ws * t.moment_in_wheelset, (A_ws * s_tr).cross(f_tr), 1e-12 * 1e5);
+  const rc::WheelsetWrench t = rc::wheelCentreWrench(f_tr, Vector3d::Zero(), s_tr, s_fl, A_ws);
+  expectVecNear(A_ws * t.moment_in_wheelset, (A_ws * s_tr).cross(f_tr), 1e-12 * 1e5);
 }
 
 // Eq. 15 on the rail: forces on the rail (opposite to the wheel forces) at the contact points,
@@ -85,20 +85,20 @@ TEST(WrenchTransfer, RailSectionEquivalentForceSystem) {
     const Vector3d r_sec = rng.vec(500.0), P = rng.vec(500.0);
     const Vector3d s_tr_sec = rng.vec(0.05), s_fl_sec = rng.vec(0.05);
     const Vector3d f_tr_wheel = rng.vec(1e5), f_fl_wheel = rng.vec(5e4);
-    const Vector3d s_tr = rc::section_offset_to_world(A_r, s_tr_sec);
-    const Vector3d s_fl = rc::section_offset_to_world(A_r, s_fl_sec);
-    const rc::RailWrench w = rc::rail_section_wrench(-f_tr_wheel, -f_fl_wheel, s_tr, s_fl);
+    const Vector3d s_tr = rc::sectionOffsetToWorld(A_r, s_tr_sec);
+    const Vector3d s_fl = rc::sectionOffsetToWorld(A_r, s_fl_sec);
+    const rc::RailWrench w = rc::railSectionWrench(-f_tr_wheel, -f_fl_wheel, s_tr, s_fl);
     const Vector3d M_ref = (r_sec + s_tr - P).cross(-f_tr_wheel) + (r_sec + s_fl - P).cross(-f_fl_wheel);
-    expect_vec_near(w.force_in_world, -(f_tr_wheel + f_fl_wheel), 1e-12 * 1e5);
-    expect_vec_near(w.moment_in_world + (r_sec - P).cross(w.force_in_world), M_ref, 1e-12 * 1e5 * 1000.0);
+    expectVecNear(w.force_in_world, -(f_tr_wheel + f_fl_wheel), 1e-12 * 1e5);
+    expectVecNear(w.moment_in_world + (r_sec - P).cross(w.force_in_world), M_ref, 1e-12 * 1e5 * 1000.0);
     // Wheel side of the same contacts, wheel centre chosen at the section centre + offset.
     const Matrix3d A_ws = rng.rot();
     const Vector3d r_wc = r_sec + rng.vec(0.5);
-    const rc::WheelsetWrench ww = rc::wheel_centre_wrench(
+    const rc::WheelsetWrench ww = rc::wheelCentreWrench(
         f_tr_wheel, f_fl_wheel, A_ws.transpose() * (r_sec + s_tr - r_wc), A_ws.transpose() * (r_sec + s_fl - r_wc), A_ws);
     const Vector3d M_wheel_about_P = A_ws * ww.moment_in_wheelset + (r_wc - P).cross(ww.force_in_world);
     const Vector3d M_rail_about_P = w.moment_in_world + (r_sec - P).cross(w.force_in_world);
-    expect_vec_near(M_wheel_about_P + M_rail_about_P, Vector3d::Zero(), 1e-12 * 1e5 * 1000.0);
+    expectVecNear(M_wheel_about_P + M_rail_about_P, Vector3d::Zero(), 1e-12 * 1e5 * 1000.0);
   }
 }
 
@@ -106,6 +106,6 @@ TEST(WrenchTransfer, RailSectionEquivalentForceSystem) {
 TEST(WrenchTransfer, ContactForceComposition) {
   Rng rng;
   const Matrix3d R = rng.rot();
-  const Vector3d f = rc::contact_force_in_world(R, 1.0e3, -2.0e3, 8.0e4);
-  expect_vec_near(f, 8.0e4 * R.col(2) + 1.0e3 * R.col(0) - 2.0e3 * R.col(1), 1e-10);
+  const Vector3d f = rc::contactForceInWorld(R, 1.0e3, -2.0e3, 8.0e4);
+  expectVecNear(f, 8.0e4 * R.col(2) + 1.0e3 * R.col(0) - 2.0e3 * R.col(1), 1e-10);
 }

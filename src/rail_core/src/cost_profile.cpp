@@ -46,7 +46,7 @@ const char* CostClock::name(Count c) {
   return "?";
 }
 
-int CostProfile::finer_lines(const CostClock& k, std::array<FinerLine, kMaxFinerLines>& lines) const {
+int CostProfile::finerLines(const CostClock& k, std::array<FinerLine, kMaxFinerLines>& lines) const {
   const bool track_side = calls_[kTrackStep] > 0;
   const Component contact_parent = track_side ? kTrackStep : kVehicleIntegration;
   int n = 0;
@@ -72,17 +72,17 @@ int CostProfile::finer_lines(const CostClock& k, std::array<FinerLine, kMaxFiner
 }
 
 namespace {
-const char* on_off(bool b) { return b ? "on" : "off"; }
+const char* onOff(bool b) { return b ? "on" : "off"; }
 
 // Within a coarse component: its finer parts that are not nested in other parts. The contact parts are
 // inside vehicle_rhs + vehicle_jacobian on the vehicle side, so they are not subtracted there again.
-bool direct_child(const CostProfile::FinerLine& l, bool track_side) {
+bool directChild(const CostProfile::FinerLine& l, bool track_side) {
   const bool contact = std::string(l.name).rfind("contact_", 0) == 0 && std::string(l.name) != "contact_point_output";
   return !(contact && !track_side);
 }
 }  // namespace
 
-std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, double loop_wall,
+std::string CostProfile::toYaml(const std::string& node, const Scene& scene, double loop_wall,
                                  double simulated, const CostClock* clock) const {
   std::ostringstream o;
   o.precision(6);
@@ -106,7 +106,7 @@ std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, do
     // Each finer part: seconds, share of the run loop, calls, the component it is part of; then per
     // component the rest ("other") so that the shares add up within it.
     std::array<FinerLine, kMaxFinerLines> lines;
-    const int n = finer_lines(*clock, lines);
+    const int n = finerLines(*clock, lines);
     const bool track_side = calls_[kTrackStep] > 0;
     o << "finer:   # nested in the components above (vehicle side: contact_* inside vehicle_rhs + vehicle_jacobian)\n";
     for (int i = 0; i < n; ++i) {
@@ -119,7 +119,7 @@ std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, do
       bool any = false;
       for (int i = 0; i < n; ++i) {
         const FinerLine& l = lines[static_cast<std::size_t>(i)];
-        if (l.parent != c || !direct_child(l, track_side)) continue;
+        if (l.parent != c || !directChild(l, track_side)) continue;
         parts += l.seconds;
         any = any || l.calls > 0;
       }
@@ -140,23 +140,23 @@ std::string CostProfile::to_yaml(const std::string& node, const Scene& scene, do
   }
   const Effects& e = scene.effects;
   o << "effects:\n"
-    << "  track_model: " << to_string(e.track_model) << "\n"
-    << "  irregularities: " << on_off(e.irregularities) << "\n"
-    << "  flange_contact: " << on_off(e.flange_contact) << "\n"
-    << "  spin_creepage: " << on_off(e.spin_creepage) << "\n"
-    << "  creep_law: " << to_string(e.creep_law) << "\n"
-    << "  track_damping: " << on_off(e.track_damping) << "\n"
-    << "  absorbing_ends: " << on_off(e.absorbing_ends) << "\n"
-    << "  rail_deflection_output: " << on_off(e.rail_deflection_output) << "\n"
-    << "  contact_point_output: " << on_off(e.contact_point_output) << "\n"
-    << "  rviz_markers: " << on_off(e.rviz_markers) << "\n"
-    << "  floor_acceleration_output: " << on_off(e.floor_acceleration_output) << "\n"
-    << "  pad_force_output: " << on_off(e.pad_force_output) << "\n"
-    << "  energy_output: " << on_off(e.energy_output) << "\n";
+    << "  track_model: " << toString(e.track_model) << "\n"
+    << "  irregularities: " << onOff(e.irregularities) << "\n"
+    << "  flange_contact: " << onOff(e.flange_contact) << "\n"
+    << "  spin_creepage: " << onOff(e.spin_creepage) << "\n"
+    << "  creep_law: " << toString(e.creep_law) << "\n"
+    << "  track_damping: " << onOff(e.track_damping) << "\n"
+    << "  absorbing_ends: " << onOff(e.absorbing_ends) << "\n"
+    << "  rail_deflection_output: " << onOff(e.rail_deflection_output) << "\n"
+    << "  contact_point_output: " << onOff(e.contact_point_output) << "\n"
+    << "  rviz_markers: " << onOff(e.rviz_markers) << "\n"
+    << "  floor_acceleration_output: " << onOff(e.floor_acceleration_output) << "\n"
+    << "  pad_force_output: " << onOff(e.pad_force_output) << "\n"
+    << "  energy_output: " << onOff(e.energy_output) << "\n";
   return o.str();
 }
 
-std::string CostProfile::to_text(const std::string& node, double loop_wall, double simulated,
+std::string CostProfile::toText(const std::string& node, double loop_wall, double simulated,
                                  const CostClock* clock) const {
   std::ostringstream o;
   char line[160];
@@ -171,7 +171,7 @@ std::string CostProfile::to_text(const std::string& node, double loop_wall, doub
     o << line;
     if (clock == nullptr) continue;
     std::array<FinerLine, kMaxFinerLines> lines;
-    const int n = finer_lines(*clock, lines);
+    const int n = finerLines(*clock, lines);
     for (int i = 0; i < n; ++i) {
       const FinerLine& l = lines[static_cast<std::size_t>(i)];
       if (l.parent != k || l.calls == 0) continue;

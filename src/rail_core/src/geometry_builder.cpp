@@ -24,7 +24,7 @@ constexpr int kMinHarmonics = 4096;           // PSD harmonics, the rail_contact
 }
 
 // "track geometry: segments[2].length = ..." -> "track.segments[2].length"; other messages -> "track".
-std::string geometry_field(const std::string& message) {
+std::string geometryField(const std::string& message) {
   const std::string prefix = "track geometry: ";
   if (message.compare(0, prefix.size(), prefix) != 0) return "track";
   const std::string rest = message.substr(prefix.size());
@@ -35,7 +35,7 @@ std::string geometry_field(const std::string& message) {
   return "track";
 }
 
-rc::SegmentSpec::Type segment_type(SegmentType t) {
+rc::SegmentSpec::Type segmentType(SegmentType t) {
   switch (t) {
     case SegmentType::kStraight: return rc::SegmentSpec::Type::Straight;
     case SegmentType::kTransition: return rc::SegmentSpec::Type::Transition;
@@ -44,13 +44,13 @@ rc::SegmentSpec::Type segment_type(SegmentType t) {
   return rc::SegmentSpec::Type::Straight;
 }
 
-bool irregularities_on(const Scene& scene) {
+bool irregularitiesOn(const Scene& scene) {
   return scene.effects.irregularities && scene.track.irregularities.source != IrregularitySource::kNone;
 }
 
 }  // namespace
 
-rc::ProfileCurve rail_profile_curve(const Scene& scene) {
+rc::ProfileCurve railProfileCurve(const Scene& scene) {
   try {
     if (scene.track.rail_profile_file.empty()) return rc::makeUic60Rail(0.0);
     return rc::loadRailProfile(scene.track.rail_profile_file.path);
@@ -59,7 +59,7 @@ rc::ProfileCurve rail_profile_curve(const Scene& scene) {
   }
 }
 
-rc::WheelProfile wheel_profile(const Scene& scene) {
+rc::WheelProfile wheelProfile(const Scene& scene) {
   try {
     if (scene.vehicle.wheel_profile_file.empty()) return rc::makeS1002();
     return rc::loadWheelProfile(scene.vehicle.wheel_profile_file.path);
@@ -68,7 +68,7 @@ rc::WheelProfile wheel_profile(const Scene& scene) {
   }
 }
 
-rc::WheelContactOptions contact_options(const Scene& scene, rc::WheelContactOptions base) {
+rc::WheelContactOptions contactOptions(const Scene& scene, rc::WheelContactOptions base) {
   base.flange_contact = scene.effects.flange_contact;
   base.spin = scene.effects.spin_creepage;
   base.creep_law = rc::CreepLaw::kPolach;  // the scene's contact.creep_law has Polach only
@@ -78,7 +78,7 @@ rc::WheelContactOptions contact_options(const Scene& scene, rc::WheelContactOpti
   return base;
 }
 
-Eigen::Vector2d gauge_point_in_track_plane(const rc::ProfileCurve& rail_own_frame, double inclination,
+Eigen::Vector2d gaugePointInTrackPlane(const rc::ProfileCurve& rail_own_frame, double inclination,
                                            double depth) {
   // tiltProfile takes the tan of the tilt.
   const rc::ProfilePoints tilted = rc::tiltProfile(rail_own_frame.nodes(), std::tan(inclination));
@@ -86,13 +86,13 @@ Eigen::Vector2d gauge_point_in_track_plane(const rc::ProfileCurve& rail_own_fram
   return rc::gaugePoint(curve, depth);
 }
 
-double rail_half_spacing(double gauge, const Eigen::Vector2d& gauge_point_in_track_plane) {
+double railHalfSpacing(double gauge, const Eigen::Vector2d& gauge_point_in_track_plane) {
   // Left rail: the profile's y points toward the centre (-n), so its gauge point sits at h - y_g from the
   // centre line; the two gauge points are 2 (h - y_g) = gauge apart.
   return 0.5 * gauge + gauge_point_in_track_plane.x();
 }
 
-rc::GeometrySpec geometry_spec(const Scene& scene) {
+rc::GeometrySpec geometrySpec(const Scene& scene) {
   const Track& t = scene.track;
   rc::GeometrySpec spec;
   spec.s_start = t.start_arc_length;
@@ -101,25 +101,25 @@ rc::GeometrySpec geometry_spec(const Scene& scene) {
   spec.rail_vertical_offset = 0.0;
   for (const Segment& s : t.segments) {
     rc::SegmentSpec g;
-    g.type = segment_type(s.type);
+    g.type = segmentType(s.type);
     g.length = s.length;
-    g.curvature_start = s.curvature_at_start();
-    g.curvature_end = s.curvature_at_end();
-    g.cant_start = s.signed_cant_at_start();
-    g.cant_end = s.signed_cant_at_end();
+    g.curvature_start = s.curvatureAtStart();
+    g.curvature_end = s.curvatureAtEnd();
+    g.cant_start = s.signedCantAtStart();
+    g.cant_end = s.signedCantAtEnd();
     g.gradient = s.gradient;
     spec.segments.push_back(g);
   }
-  const rc::ProfileCurve rail = rail_profile_curve(scene);
+  const rc::ProfileCurve rail = railProfileCurve(scene);
   Eigen::Vector2d gp;
   try {
-    gp = gauge_point_in_track_plane(rail, spec.rail_inclination, t.gauge_measuring_depth);
+    gp = gaugePointInTrackPlane(rail, spec.rail_inclination, t.gauge_measuring_depth);
   } catch (const std::exception& e) {
     fail(scene, "track.gauge_measuring_depth", e.what());
   }
-  spec.rail_half_spacing = rail_half_spacing(t.gauge, gp);
+  spec.rail_half_spacing = railHalfSpacing(t.gauge, gp);
   spec.table_step = kDefaultTableStep;
-  if (irregularities_on(scene)) {
+  if (irregularitiesOn(scene)) {
     const Irregularities& irr = t.irregularities;
     if (irr.source == IrregularitySource::kPsd)
       spec.table_step = std::min(spec.table_step, irr.wavelength_min / 8.0);
@@ -128,8 +128,8 @@ rc::GeometrySpec geometry_spec(const Scene& scene) {
   return spec;
 }
 
-rc::Irregularities build_irregularities(const Scene& scene) {
-  if (!irregularities_on(scene)) return rc::Irregularities();
+rc::Irregularities buildIrregularities(const Scene& scene) {
+  if (!irregularitiesOn(scene)) return rc::Irregularities();
   const Irregularities& irr = scene.track.irregularities;
   if (irr.source == IrregularitySource::kFile) {
     try {
@@ -159,14 +159,14 @@ rc::Irregularities build_irregularities(const Scene& scene) {
   }
 }
 
-rc::TrackGeometry build_track_geometry(const Scene& scene) {
-  rc::GeometrySpec spec = geometry_spec(scene);
-  const rc::Irregularities irr = build_irregularities(scene);
+rc::TrackGeometry buildTrackGeometry(const Scene& scene) {
+  rc::GeometrySpec spec = geometrySpec(scene);
+  const rc::Irregularities irr = buildIrregularities(scene);
   if (!irr.empty()) spec.table_step = std::min(spec.table_step, irr.shortestWavelength() / 8.0);
   try {
     return rc::TrackGeometry(spec, irr);
   } catch (const std::exception& e) {
-    fail(scene, geometry_field(e.what()), e.what());
+    fail(scene, geometryField(e.what()), e.what());
   }
 }
 

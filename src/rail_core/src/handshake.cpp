@@ -5,14 +5,14 @@
 
 namespace rail::core {
 
-HandshakeInfo handshake_info(const Scene& scene, const std::string& node) {
+HandshakeInfo handshakeInfo(const Scene& scene, const std::string& node) {
   HandshakeInfo h;
   h.node = node;
   h.scene_file = scene.file;
   h.scene_hash = scene.hash;
-  h.wheel_count = static_cast<std::uint32_t>(scene.wheel_count());
+  h.wheel_count = static_cast<std::uint32_t>(scene.wheelCount());
   h.track_step = scene.solver.track_step;
-  h.transport = to_string(scene.solver.transport);
+  h.transport = toString(scene.solver.transport);
   return h;
 }
 
@@ -29,7 +29,7 @@ std::string num(double v) {
 }
 }  // namespace
 
-std::string compare_handshake(const HandshakeInfo& mine, const HandshakeInfo& theirs) {
+std::string compareHandshake(const HandshakeInfo& mine, const HandshakeInfo& theirs) {
   std::string diffs;
   auto add = [&](const std::string& what, const std::string& a, const std::string& b) {
     diffs += (diffs.empty() ? "" : "; ") + what + " " + a + " here, " + b + " there";

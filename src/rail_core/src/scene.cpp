@@ -12,30 +12,30 @@
 
 namespace rail::core {
 
-using detail::format_double;
+using detail::formatDouble;
 
 namespace {
-double side_sign(Direction d) { return d == Direction::kRight ? -1.0 : 1.0; }
-double curvature_of(double radius, Direction d) { return radius > 0.0 ? side_sign(d) / radius : 0.0; }
+double sideSign(Direction d) { return d == Direction::kRight ? -1.0 : 1.0; }
+double curvatureOf(double radius, Direction d) { return radius > 0.0 ? sideSign(d) / radius : 0.0; }
 }  // namespace
 
-double Segment::curvature_at_start() const {
+double Segment::curvatureAtStart() const {
   switch (type) {
     case SegmentType::kStraight: return 0.0;
-    case SegmentType::kCircular: return curvature_of(radius, direction);
-    case SegmentType::kTransition: return curvature_of(radius_start, direction);
+    case SegmentType::kCircular: return curvatureOf(radius, direction);
+    case SegmentType::kTransition: return curvatureOf(radius_start, direction);
   }
   return 0.0;
 }
-double Segment::curvature_at_end() const {
-  return type == SegmentType::kTransition ? curvature_of(radius_end, direction) : curvature_at_start();
+double Segment::curvatureAtEnd() const {
+  return type == SegmentType::kTransition ? curvatureOf(radius_end, direction) : curvatureAtStart();
 }
 // The outer rail of a left curve is the right rail: positive cant raises the right rail.
-double Segment::signed_cant_at_start() const {
-  return side_sign(direction) * (type == SegmentType::kTransition ? cant_start : cant);
+double Segment::signedCantAtStart() const {
+  return sideSign(direction) * (type == SegmentType::kTransition ? cant_start : cant);
 }
-double Segment::signed_cant_at_end() const {
-  return side_sign(direction) * (type == SegmentType::kTransition ? cant_end : cant);
+double Segment::signedCantAtEnd() const {
+  return sideSign(direction) * (type == SegmentType::kTransition ? cant_end : cant);
 }
 
 double Track::length() const {
@@ -44,7 +44,7 @@ double Track::length() const {
   return l;
 }
 
-const char* to_string(TrackModel v) {
+const char* toString(TrackModel v) {
   switch (v) {
     case TrackModel::kRigid: return "rigid";
     case TrackModel::kRigidFe: return "rigid_fe";
@@ -52,7 +52,7 @@ const char* to_string(TrackModel v) {
   }
   return "?";
 }
-const char* to_string(Transport v) {
+const char* toString(Transport v) {
   switch (v) {
     case Transport::kService: return "service";
     case Transport::kTopic: return "topic";
@@ -60,8 +60,8 @@ const char* to_string(Transport v) {
   }
   return "?";
 }
-const char* to_string(CreepLaw) { return "polach"; }
-const char* to_string(SegmentType v) {
+const char* toString(CreepLaw) { return "polach"; }
+const char* toString(SegmentType v) {
   switch (v) {
     case SegmentType::kStraight: return "straight";
     case SegmentType::kTransition: return "transition";
@@ -69,7 +69,7 @@ const char* to_string(SegmentType v) {
   }
   return "?";
 }
-const char* to_string(Direction v) {
+const char* toString(Direction v) {
   switch (v) {
     case Direction::kNone: return "none";
     case Direction::kLeft: return "left";
@@ -77,7 +77,7 @@ const char* to_string(Direction v) {
   }
   return "?";
 }
-const char* to_string(IrregularitySource v) {
+const char* toString(IrregularitySource v) {
   switch (v) {
     case IrregularitySource::kNone: return "none";
     case IrregularitySource::kFile: return "file";
@@ -85,7 +85,7 @@ const char* to_string(IrregularitySource v) {
   }
   return "?";
 }
-const char* to_string(VehicleMethod v) {
+const char* toString(VehicleMethod v) {
   switch (v) {
     case VehicleMethod::kAuto: return "auto";
     case VehicleMethod::kBdf: return "bdf";
@@ -93,8 +93,8 @@ const char* to_string(VehicleMethod v) {
   }
   return "?";
 }
-const char* to_string(EndKind v) { return v == EndKind::kTime ? "time" : "arc_length"; }
-const char* to_string(LoadRail v) {
+const char* toString(EndKind v) { return v == EndKind::kTime ? "time" : "arc_length"; }
+const char* toString(LoadRail v) {
   switch (v) {
     case LoadRail::kBoth: return "both";
     case LoadRail::kLeft: return "left";
@@ -107,18 +107,18 @@ namespace {
 
 // Emits numbers in their shortest exact form so the resolved scene reads back bit for bit.
 YAML::Emitter& num(YAML::Emitter& e, const char* key, double v) {
-  return e << YAML::Key << key << YAML::Value << format_double(v);
+  return e << YAML::Key << key << YAML::Value << formatDouble(v);
 }
 template <typename T>
 YAML::Emitter& kv(YAML::Emitter& e, const char* key, const T& v) {
   return e << YAML::Key << key << YAML::Value << v;
 }
 
-void emit_segment(YAML::Emitter& e, const Segment& s) {
+void emitSegment(YAML::Emitter& e, const Segment& s) {
   e << YAML::BeginMap;
-  kv(e, "type", to_string(s.type));
+  kv(e, "type", toString(s.type));
   num(e, "length", s.length);
-  if (s.direction != Direction::kNone) kv(e, "direction", to_string(s.direction));
+  if (s.direction != Direction::kNone) kv(e, "direction", toString(s.direction));
   switch (s.type) {
     case SegmentType::kStraight: num(e, "cant", s.cant); break;
     case SegmentType::kCircular:
@@ -139,7 +139,7 @@ void emit_segment(YAML::Emitter& e, const Segment& s) {
 
 }  // namespace
 
-std::string to_yaml(const Scene& s) {
+std::string toYaml(const Scene& s) {
   YAML::Emitter e;
   e << YAML::BeginMap;
   kv(e, "name", s.name);
@@ -157,11 +157,11 @@ std::string to_yaml(const Scene& s) {
   num(e, "start_arc_length", t.start_arc_length);
   if (!t.data.empty()) kv(e, "data", t.data.as_written);
   e << YAML::Key << "segments" << YAML::Value << YAML::BeginSeq;
-  for (const auto& seg : t.segments) emit_segment(e, seg);
+  for (const auto& seg : t.segments) emitSegment(e, seg);
   e << YAML::EndSeq;
   const Irregularities& irr = t.irregularities;
   e << YAML::Key << "irregularities" << YAML::Value << YAML::BeginMap;
-  kv(e, "source", to_string(irr.source));
+  kv(e, "source", toString(irr.source));
   if (irr.source == IrregularitySource::kFile) kv(e, "file", irr.file.as_written);
   if (irr.source == IrregularitySource::kPsd) {
     kv(e, "psd", irr.psd);
@@ -191,7 +191,7 @@ std::string to_yaml(const Scene& s) {
     for (const auto& l : m.loads) {
       e << YAML::BeginMap;
       num(e, "offset", l.offset);
-      kv(e, "rail", to_string(l.rail));
+      kv(e, "rail", toString(l.rail));
       num(e, "vertical", l.vertical);
       num(e, "lateral", l.lateral);
       e << YAML::EndMap;
@@ -210,11 +210,11 @@ std::string to_yaml(const Scene& s) {
 
   const Effects& f = s.effects;
   e << YAML::Key << "effects" << YAML::Value << YAML::BeginMap;
-  kv(e, "track_model", to_string(f.track_model));
+  kv(e, "track_model", toString(f.track_model));
   kv(e, "irregularities", f.irregularities);
   kv(e, "flange_contact", f.flange_contact);
   kv(e, "spin_creepage", f.spin_creepage);
-  kv(e, "creep_law", to_string(f.creep_law));
+  kv(e, "creep_law", toString(f.creep_law));
   kv(e, "track_damping", f.track_damping);
   kv(e, "absorbing_ends", f.absorbing_ends);
   kv(e, "rail_deflection_output", f.rail_deflection_output);
@@ -231,12 +231,12 @@ std::string to_yaml(const Scene& s) {
   num(e, "vehicle_rtol", v.vehicle_rtol);
   num(e, "vehicle_atol", v.vehicle_atol);
   num(e, "vehicle_max_step", v.vehicle_max_step);
-  kv(e, "vehicle_method", to_string(v.vehicle_method));
-  kv(e, "transport", to_string(v.transport));
+  kv(e, "vehicle_method", toString(v.vehicle_method));
+  kv(e, "transport", toString(v.transport));
   num(e, "exchange_timeout", v.exchange_timeout);
   num(e, "handshake_timeout", v.handshake_timeout);
   e << YAML::Key << "end" << YAML::Value << YAML::BeginMap;
-  num(e, to_string(v.end.kind), v.end.value);
+  num(e, toString(v.end.kind), v.end.value);
   e << YAML::EndMap;
   e << YAML::Key << "track_window" << YAML::Value << YAML::BeginMap;
   kv(e, "enabled", v.track_window.enabled);
@@ -252,7 +252,7 @@ std::string to_yaml(const Scene& s) {
   num(e, "rate", o.rate);
   e << YAML::Key << "topics" << YAML::Value << YAML::Flow << o.topics;
   e << YAML::Key << "deflection_sections" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (double d : o.deflection_sections) e << format_double(d);
+  for (double d : o.deflection_sections) e << formatDouble(d);
   e << YAML::EndSeq;
   num(e, "pad_force_margin", o.pad_force_margin);
   e << YAML::EndMap;
@@ -269,19 +269,19 @@ std::string fixed(double v, int digits) {
   return buf;
 }
 
-std::string segment_line(const Segment& s) {
-  std::string out = std::string(to_string(s.type)) + " " + fixed(s.length, 1) + " m";
+std::string segmentLine(const Segment& s) {
+  std::string out = std::string(toString(s.type)) + " " + fixed(s.length, 1) + " m";
   switch (s.type) {
     case SegmentType::kStraight:
       if (s.cant > 0) out += ", cant " + fixed(s.cant * 1e3, 0) + " mm";
       break;
     case SegmentType::kCircular:
-      out += ", R " + fixed(s.radius, 0) + " m " + to_string(s.direction) + ", cant " + fixed(s.cant * 1e3, 0) + " mm";
+      out += ", R " + fixed(s.radius, 0) + " m " + toString(s.direction) + ", cant " + fixed(s.cant * 1e3, 0) + " mm";
       break;
     case SegmentType::kTransition: {
       auto r = [](double x) { return x > 0 ? "R " + fixed(x, 0) + " m" : std::string("straight"); };
       out += ", " + r(s.radius_start) + " -> " + r(s.radius_end);
-      if (s.direction != Direction::kNone) out += std::string(" ") + to_string(s.direction);
+      if (s.direction != Direction::kNone) out += std::string(" ") + toString(s.direction);
       out += ", cant " + fixed(s.cant_start * 1e3, 0) + " -> " + fixed(s.cant_end * 1e3, 0) + " mm";
       break;
     }
@@ -305,7 +305,7 @@ std::string describe(const Scene& s, Role role) {
                                   : " at 1/" + fixed(1.0 / t.rail_inclination, 0))
     << ", sleepers every " << fixed(t.sleeper_spacing, 2) << " m\n";
   for (std::size_t i = 0; i < t.segments.size(); ++i) {
-    o << "  segment " << i << ": " << segment_line(t.segments[i]) << "\n";
+    o << "  segment " << i << ": " << segmentLine(t.segments[i]) << "\n";
   }
   if (s.has_vehicle) {
     const Vehicle& v = s.vehicle;
@@ -316,17 +316,17 @@ std::string describe(const Scene& s, Role role) {
     o << "moving loads: " << s.moving_loads.loads.size() << " load(s) at " << fixed(s.moving_loads.speed, 2)
       << " m/s from s = " << fixed(s.moving_loads.start_arc_length, 1) << " m\n";
   }
-  std::vector<std::string> on{std::string("track_model=") + to_string(f.track_model)}, off;
+  std::vector<std::string> on{std::string("track_model=") + toString(f.track_model)}, off;
   auto flag = [&](const char* name, bool v) { (v ? on : off).push_back(name); };
   flag("irregularities", f.irregularities);
   // Contact exists only with a vehicle (moving loads are prescribed forces).
   flag("flange_contact", f.flange_contact && s.has_vehicle);
   flag("spin_creepage", f.spin_creepage && s.has_vehicle);
-  if (s.has_vehicle) on.push_back(std::string("creep_law=") + to_string(f.creep_law));
+  if (s.has_vehicle) on.push_back(std::string("creep_law=") + toString(f.creep_law));
   // The track's own effects exist only where the FE track is integrated.
-  flag("track_damping", f.track_damping && s.runs_fe_integration());
-  flag("absorbing_ends", f.absorbing_ends && s.runs_fe_integration());
-  flag("rail_deflection_output", f.rail_deflection_output && s.runs_fe_integration());
+  flag("track_damping", f.track_damping && s.runsFeIntegration());
+  flag("absorbing_ends", f.absorbing_ends && s.runsFeIntegration());
+  flag("rail_deflection_output", f.rail_deflection_output && s.runsFeIntegration());
   flag("contact_point_output", f.contact_point_output && s.has_vehicle);
   flag("rviz_markers", f.rviz_markers);
   flag("floor_acceleration_output", f.floor_acceleration_output && s.has_vehicle);
@@ -337,17 +337,17 @@ std::string describe(const Scene& s, Role role) {
   const Solver& v = s.solver;
   o << "solver: " << (v.end.kind == EndKind::kTime ? "until t = " + fixed(v.end.value, 3) + " s"
                                                    : "until s = " + fixed(v.end.value, 1) + " m");
-  if (s.needs_track_node()) o << ", track step " << format_double(v.track_step) << " s";
-  if (s.runs_fe_integration() && s.has_vehicle) {
+  if (s.needsTrackNode()) o << ", track step " << formatDouble(v.track_step) << " s";
+  if (s.runsFeIntegration() && s.has_vehicle) {
     o << (v.track_window.enabled ? ", moving track window (" + fixed(v.track_window.behind, 1) + " m behind, " +
                                        fixed(v.track_window.ahead, 1) + " m ahead)"
                                  : ", whole track integrated");
   }
   if (s.has_vehicle) {
-    o << ", vehicle rtol " << format_double(v.vehicle_rtol) << " atol " << format_double(v.vehicle_atol)
-      << " max step " << format_double(v.vehicle_max_step) << " s (" << to_string(v.vehicle_method) << ")";
+    o << ", vehicle rtol " << formatDouble(v.vehicle_rtol) << " atol " << formatDouble(v.vehicle_atol)
+      << " max step " << formatDouble(v.vehicle_max_step) << " s (" << toString(v.vehicle_method) << ")";
   }
-  if (s.cosimulation()) o << ", transport " << to_string(v.transport) << ", timeout " << fixed(v.exchange_timeout, 1) << " s";
+  if (s.cosimulation()) o << ", transport " << toString(v.transport) << ", timeout " << fixed(v.exchange_timeout, 1) << " s";
   o << "\n";
 
   // Components this process builds (the FE sizes follow the mesh rules of the track model).
@@ -361,39 +361,39 @@ std::string describe(const Scene& s, Role role) {
   const bool vehicle_side = role == Role::kVehicle || role == Role::kValidator;
   const bool track_side = role == Role::kTrack || role == Role::kValidator;
   if (vehicle_side && s.has_vehicle) {
-    add("vehicle: multibody model from " + s.vehicle.data.as_written + ", " + std::to_string(s.wheel_count()) +
+    add("vehicle: multibody model from " + s.vehicle.data.as_written + ", " + std::to_string(s.wheelCount()) +
         " wheels, integrated by CVODE");
     if (f.track_model == TrackModel::kRigid) {
       add(std::string("wheel-rail contact on the rigid track geometry: tread") +
           (f.flange_contact ? " and flange" : " only") + ", Hertz normal force, Polach creep forces" +
           (f.spin_creepage ? " with spin" : " without spin"));
     } else {
-      add(std::string("wheel-centre wrenches from the track node over ") + to_string(v.transport) +
+      add(std::string("wheel-centre wrenches from the track node over ") + toString(v.transport) +
           ", extrapolated between track steps");
     }
   }
-  if (track_side && s.needs_track_node()) {
-    if (s.runs_fe_integration()) {
+  if (track_side && s.needsTrackNode()) {
+    if (s.runsFeIntegration()) {
       add("FE track: " + std::to_string(sleepers) + " sleepers, " + std::to_string(2 * rail_nodes) +
           " rail nodes, about " + std::to_string(6 * free_nodes) + " DOF, Newmark step " +
-          format_double(v.track_step) + " s, CHOLMOD factor");
+          formatDouble(v.track_step) + " s, CHOLMOD factor");
       add(std::string("track damping ") + (f.track_damping ? "on" : "off") + ", absorbing ends " +
           (f.absorbing_ends ? "on" : "off"));
     } else {
       add("rigid FE rails: contact on the undeformed rails, no FE integration");
     }
     if (s.has_vehicle) {
-      add(std::string("wheel-rail contact on the ") + (s.runs_fe_integration() ? "deformed" : "undeformed") +
+      add(std::string("wheel-rail contact on the ") + (s.runsFeIntegration() ? "deformed" : "undeformed") +
           " rails: tread" + (f.flange_contact ? " and flange" : " only") + ", Polach" +
           (f.spin_creepage ? " with spin" : " without spin"));
     } else {
       add(std::to_string(s.moving_loads.loads.size()) + " prescribed moving load(s)");
     }
-    if (f.rail_deflection_output && s.runs_fe_integration()) {
+    if (f.rail_deflection_output && s.runsFeIntegration()) {
       add("rail deflection output at " + std::to_string(s.output.deflection_sections.size()) + " section(s)");
     }
   }
-  if (role == Role::kTrack && !s.needs_track_node()) add("nothing: track_model is rigid, the vehicle runs alone");
+  if (role == Role::kTrack && !s.needsTrackNode()) add("nothing: track_model is rigid, the vehicle runs alone");
   if (role == Role::kVehicle && !s.has_vehicle) add("nothing: the scene has no vehicle");
   if (!builds.empty()) o << "builds:\n" << builds;
   o << "output: " << (s.output.bag.empty() ? "no bag" : "bag " + s.output.bag) << ", "

@@ -19,8 +19,8 @@
 
 namespace rail::core {
 
-using detail::fail_at;
-using detail::format_double;
+using detail::failAt;
+using detail::formatDouble;
 using detail::join;
 using detail::MapReader;
 
@@ -46,18 +46,18 @@ bool contains(const std::vector<std::string>& v, const std::string& s) {
   return false;
 }
 
-std::string got(double v) { return ", got " + format_double(v); }
+std::string got(double v) { return ", got " + formatDouble(v); }
 
 // Value checks: each names the rule and the offending value.
 void positive(MapReader& r, const char* key, double v) {
   if (!(v > 0.0)) r.fail(key, "must be > 0" + got(v));
 }
-void non_negative(MapReader& r, const char* key, double v) {
+void nonNegative(MapReader& r, const char* key, double v) {
   if (!(v >= 0.0)) r.fail(key, "must be >= 0" + got(v));
 }
-void in_range(MapReader& r, const char* key, double v, double lo, double hi, const char* unit) {
+void inRange(MapReader& r, const char* key, double v, double lo, double hi, const char* unit) {
   if (!(v >= lo && v <= hi)) {
-    r.fail(key, "must be between " + format_double(lo) + " and " + format_double(hi) + " " + unit + got(v));
+    r.fail(key, "must be between " + formatDouble(lo) + " and " + formatDouble(hi) + " " + unit + got(v));
   }
 }
 
@@ -68,19 +68,19 @@ constexpr double kMaxTrackLength = 1e6;  // [m]
 // A curve radius tighter than any track a rail vehicle runs on (tram depots reach ~15 m; EN 13803 main
 // lines 150 m and up) is a typing error, not a scenario: refused before it becomes a curvature of 1e300.
 constexpr double kMinCurveRadius = 10.0;  // [m]
-void min_radius(MapReader& r, const char* key, double v) {
+void minRadius(MapReader& r, const char* key, double v) {
   if (v < kMinCurveRadius) {
-    r.fail(key, "must be >= " + format_double(kMinCurveRadius) + " m (0 = straight where allowed)" + got(v));
+    r.fail(key, "must be >= " + formatDouble(kMinCurveRadius) + " m (0 = straight where allowed)" + got(v));
   }
 }
 
-std::string dir_of(const std::string& path) {
+std::string dirOf(const std::string& path) {
   const auto pos = path.find_last_of('/');
   if (pos == std::string::npos) return ".";
   return pos == 0 ? "/" : path.substr(0, pos);
 }
 
-std::string stem_of(const std::string& path) {
+std::string stemOf(const std::string& path) {
   std::string base = path.substr(path.find_last_of('/') == std::string::npos ? 0 : path.find_last_of('/') + 1);
   const auto dot = base.find_last_of('.');
   return dot == std::string::npos ? base : base.substr(0, dot);
@@ -92,7 +92,7 @@ struct Context {
 };
 
 // A data file named by the scene must exist and be readable.
-DataFile resolve_file(MapReader& r, const char* key, const std::string& as_written, const Context& ctx) {
+DataFile resolveFile(MapReader& r, const char* key, const std::string& as_written, const Context& ctx) {
   DataFile f;
   f.as_written = as_written;
   f.path = (!as_written.empty() && as_written[0] == '/') ? as_written : ctx.base_dir + "/" + as_written;
@@ -103,20 +103,20 @@ DataFile resolve_file(MapReader& r, const char* key, const std::string& as_writt
   return f;
 }
 
-DataFile read_file_key(MapReader& r, const char* key, bool required, const Context& ctx) {
+DataFile readFileKey(MapReader& r, const char* key, bool required, const Context& ctx) {
   if (required) r.require(key);
   std::string s;
   r.string(key, s);
   if (s.empty()) return {};
-  return resolve_file(r, key, s, ctx);
+  return resolveFile(r, key, s, ctx);
 }
 
-void read_direction(MapReader& r, Segment& seg, bool required) {
+void readDirection(MapReader& r, Segment& seg, bool required) {
   if (required) r.require("direction");
   r.choice("direction", seg.direction, {{"left", Direction::kLeft}, {"right", Direction::kRight}});
 }
 
-Segment read_segment(const YAML::Node& node, const std::string& path, const Context& ctx) {
+Segment readSegment(const YAML::Node& node, const std::string& path, const Context& ctx) {
   MapReader r(node, path, ctx.file);
   Segment seg;
   r.require("type");
@@ -128,42 +128,42 @@ Segment read_segment(const YAML::Node& node, const std::string& path, const Cont
   r.number("length", seg.length);
   positive(r, "length", seg.length);
   if (seg.length > kMaxTrackLength) {
-    r.fail("length", "must be <= " + format_double(kMaxTrackLength) + " m (the longest track a run builds)" +
+    r.fail("length", "must be <= " + formatDouble(kMaxTrackLength) + " m (the longest track a run builds)" +
                          got(seg.length));
   }
   r.number("gradient", seg.gradient);
-  in_range(r, "gradient", seg.gradient, -0.1, 0.1, "(rise over run)");
+  inRange(r, "gradient", seg.gradient, -0.1, 0.1, "(rise over run)");
   r.boolean("jump_allowed", seg.jump_allowed);
   switch (seg.type) {
     case SegmentType::kStraight:
       r.number("cant", seg.cant);
-      in_range(r, "cant", seg.cant, 0.0, 0.25, "m");
-      read_direction(r, seg, seg.cant != 0.0);
+      inRange(r, "cant", seg.cant, 0.0, 0.25, "m");
+      readDirection(r, seg, seg.cant != 0.0);
       break;
     case SegmentType::kCircular:
-      read_direction(r, seg, true);
+      readDirection(r, seg, true);
       r.require("radius");
       r.number("radius", seg.radius);
       positive(r, "radius", seg.radius);
-      min_radius(r, "radius", seg.radius);
+      minRadius(r, "radius", seg.radius);
       r.number("cant", seg.cant);
-      in_range(r, "cant", seg.cant, 0.0, 0.25, "m");
+      inRange(r, "cant", seg.cant, 0.0, 0.25, "m");
       break;
     case SegmentType::kTransition:
       r.number("radius_start", seg.radius_start);
-      non_negative(r, "radius_start", seg.radius_start);
-      if (seg.radius_start > 0.0) min_radius(r, "radius_start", seg.radius_start);
+      nonNegative(r, "radius_start", seg.radius_start);
+      if (seg.radius_start > 0.0) minRadius(r, "radius_start", seg.radius_start);
       r.number("radius_end", seg.radius_end);
-      non_negative(r, "radius_end", seg.radius_end);
-      if (seg.radius_end > 0.0) min_radius(r, "radius_end", seg.radius_end);
+      nonNegative(r, "radius_end", seg.radius_end);
+      if (seg.radius_end > 0.0) minRadius(r, "radius_end", seg.radius_end);
       r.number("cant_start", seg.cant_start);
-      in_range(r, "cant_start", seg.cant_start, 0.0, 0.25, "m");
+      inRange(r, "cant_start", seg.cant_start, 0.0, 0.25, "m");
       r.number("cant_end", seg.cant_end);
-      in_range(r, "cant_end", seg.cant_end, 0.0, 0.25, "m");
-      read_direction(r, seg,
+      inRange(r, "cant_end", seg.cant_end, 0.0, 0.25, "m");
+      readDirection(r, seg,
                      seg.radius_start > 0 || seg.radius_end > 0 || seg.cant_start > 0 || seg.cant_end > 0);
       if (seg.radius_start == 0.0 && seg.radius_end == 0.0 && seg.cant_start == seg.cant_end) {
-        r.fail_here("a transition must change the curvature or the cant (both ends straight and equal cant)");
+        r.failHere("a transition must change the curvature or the cant (both ends straight and equal cant)");
       }
       break;
   }
@@ -171,7 +171,7 @@ Segment read_segment(const YAML::Node& node, const std::string& path, const Cont
   return seg;
 }
 
-void check_chain(const Track& t, const YAML::Node& seq, const std::string& file) {
+void checkChain(const Track& t, const YAML::Node& seq, const std::string& file) {
   for (std::size_t i = 1; i < t.segments.size(); ++i) {
     const Segment& a = t.segments[i - 1];
     const Segment& b = t.segments[i];
@@ -179,19 +179,19 @@ void check_chain(const Track& t, const YAML::Node& seq, const std::string& file)
     const std::string path = "track.segments[" + std::to_string(i) + "]";
     const std::string prev = "track.segments[" + std::to_string(i - 1) + "]";
     const int line = seq[i].Mark().line >= 0 ? seq[i].Mark().line + 1 : 0;
-    const double k0 = a.curvature_at_end(), k1 = b.curvature_at_start();
+    const double k0 = a.curvatureAtEnd(), k1 = b.curvatureAtStart();
     if (std::abs(k0 - k1) > 1e-9) {
-      fail_at(file, path,
-              "curvature jumps at its start from " + format_double(k0) + " to " + format_double(k1) +
+      failAt(file, path,
+              "curvature jumps at its start from " + formatDouble(k0) + " to " + formatDouble(k1) +
                   " 1/m (" + prev + " ends there); make the chain continuous (a transition) or mark the "
                   "jump with jump_allowed: true",
               line);
     }
-    const double c0 = a.signed_cant_at_end(), c1 = b.signed_cant_at_start();
+    const double c0 = a.signedCantAtEnd(), c1 = b.signedCantAtStart();
     if (std::abs(c0 - c1) > 1e-6) {
-      fail_at(file, path,
-              "cant jumps at its start from " + format_double(std::abs(c0)) + " to " +
-                  format_double(std::abs(c1)) + " m (" + prev +
+      failAt(file, path,
+              "cant jumps at its start from " + formatDouble(std::abs(c0)) + " to " +
+                  formatDouble(std::abs(c1)) + " m (" + prev +
                   " ends there); make the chain continuous (a cant ramp) or mark the jump with "
                   "jump_allowed: true",
               line);
@@ -199,7 +199,7 @@ void check_chain(const Track& t, const YAML::Node& seq, const std::string& file)
   }
 }
 
-double parse_inclination(MapReader& r, const char* key, double fallback) {
+double parseInclination(MapReader& r, const char* key, double fallback) {
   if (!r.has(key)) {
     r.child(key);  // mark as read
     return fallback;
@@ -220,52 +220,52 @@ double parse_inclination(MapReader& r, const char* key, double fallback) {
   return v;
 }
 
-void read_track(MapReader& root, Scene& s, const Context& ctx) {
-  MapReader r(root.require_child("track"), "track", ctx.file);
+void readTrack(MapReader& root, Scene& s, const Context& ctx) {
+  MapReader r(root.requireChild("track"), "track", ctx.file);
   Track& t = s.track;
   r.number("gauge", t.gauge);
-  in_range(r, "gauge", t.gauge, 0.6, 2.0, "m");
+  inRange(r, "gauge", t.gauge, 0.6, 2.0, "m");
   r.number("gauge_measuring_depth", t.gauge_measuring_depth);
-  in_range(r, "gauge_measuring_depth", t.gauge_measuring_depth, 0.0, 0.03, "m");
+  inRange(r, "gauge_measuring_depth", t.gauge_measuring_depth, 0.0, 0.03, "m");
   r.number("cant_reference_width", t.cant_reference_width);
   if (t.cant_reference_width == 0.0) t.cant_reference_width = t.gauge + 0.065;
   if (!(t.cant_reference_width >= t.gauge && t.cant_reference_width <= t.gauge + 0.2)) {
     // Named against the gauge, and the gauge's origin when the scene left it to its default.
-    r.fail("cant_reference_width", "must be between track.gauge (" + format_double(t.gauge) + " m) and track.gauge + 0.2 m" +
+    r.fail("cant_reference_width", "must be between track.gauge (" + formatDouble(t.gauge) + " m) and track.gauge + 0.2 m" +
                                        got(t.cant_reference_width) +
                                        (r.has("gauge") ? std::string()
                                                        : "; track.gauge is not set, so its default " +
-                                                             format_double(t.gauge) + " m applies"));
+                                                             formatDouble(t.gauge) + " m applies"));
   }
   r.string("rail_profile", t.rail_profile);
   if (!contains(kBuiltinRailProfiles, t.rail_profile)) {
-    t.rail_profile_file = resolve_file(r, "rail_profile", t.rail_profile, ctx);
+    t.rail_profile_file = resolveFile(r, "rail_profile", t.rail_profile, ctx);
   }
-  t.rail_inclination = parse_inclination(r, "rail_inclination", t.rail_inclination);
-  in_range(r, "rail_inclination", t.rail_inclination, 0.0, 0.1, "(tan of the tilt, e.g. 1/20)");
+  t.rail_inclination = parseInclination(r, "rail_inclination", t.rail_inclination);
+  inRange(r, "rail_inclination", t.rail_inclination, 0.0, 0.1, "(tan of the tilt, e.g. 1/20)");
   r.number("sleeper_spacing", t.sleeper_spacing);
-  in_range(r, "sleeper_spacing", t.sleeper_spacing, 0.3, 1.5, "m");
+  inRange(r, "sleeper_spacing", t.sleeper_spacing, 0.3, 1.5, "m");
   r.integer("rail_elements_between_sleepers", t.rail_elements_between_sleepers);
   if (t.rail_elements_between_sleepers < 1 || t.rail_elements_between_sleepers > 50) {
     r.fail("rail_elements_between_sleepers",
            "must be between 1 and 50, got " + std::to_string(t.rail_elements_between_sleepers));
   }
   r.number("start_arc_length", t.start_arc_length);
-  t.data = read_file_key(r, "data", s.needs_track_node() || s.moving_loads.present, ctx);
+  t.data = readFileKey(r, "data", s.needsTrackNode() || s.moving_loads.present, ctx);
 
-  const YAML::Node seq = r.require_child("segments");
+  const YAML::Node seq = r.requireChild("segments");
   if (!seq.IsSequence() || seq.size() == 0) r.fail("segments", "must be a non-empty list of segments");
   for (std::size_t i = 0; i < seq.size(); ++i) {
-    t.segments.push_back(read_segment(seq[i], "track.segments[" + std::to_string(i) + "]", ctx));
+    t.segments.push_back(readSegment(seq[i], "track.segments[" + std::to_string(i) + "]", ctx));
   }
-  check_chain(t, seq, ctx.file);
+  checkChain(t, seq, ctx.file);
   if (t.length() > kMaxTrackLength) {
-    r.fail("segments", "the track must be at most " + format_double(kMaxTrackLength) + " m long, got " +
-                           format_double(t.length()) + " m");
+    r.fail("segments", "the track must be at most " + formatDouble(kMaxTrackLength) + " m long, got " +
+                           formatDouble(t.length()) + " m");
   }
   if (t.length() < 2.0 * t.sleeper_spacing) {
     r.fail("segments", "the track must be at least two sleeper spacings long, got " +
-                           format_double(t.length()) + " m");
+                           formatDouble(t.length()) + " m");
   }
 
   Irregularities& irr = t.irregularities;
@@ -276,7 +276,7 @@ void read_track(MapReader& root, Scene& s, const Context& ctx) {
                {"file", IrregularitySource::kFile},
                {"psd", IrregularitySource::kPsd}});
     if (irr.source == IrregularitySource::kFile) {
-      irr.file = read_file_key(ir, "file", true, ctx);
+      irr.file = readFileKey(ir, "file", true, ctx);
     } else if (irr.source == IrregularitySource::kPsd) {
       ir.require("psd");
       ir.string("psd", irr.psd);
@@ -288,7 +288,7 @@ void read_track(MapReader& root, Scene& s, const Context& ctx) {
       positive(ir, "wavelength_min", irr.wavelength_min);
       ir.number("wavelength_max", irr.wavelength_max);
       if (!(irr.wavelength_max > irr.wavelength_min)) {
-        ir.fail("wavelength_max", "must be > wavelength_min (" + format_double(irr.wavelength_min) + ")" +
+        ir.fail("wavelength_max", "must be > wavelength_min (" + formatDouble(irr.wavelength_min) + ")" +
                                       got(irr.wavelength_max));
       }
     }
@@ -297,29 +297,29 @@ void read_track(MapReader& root, Scene& s, const Context& ctx) {
   r.finish();
 }
 
-void read_vehicle(MapReader& root, Scene& s, const Context& ctx) {
+void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
   MapReader r(root.child("vehicle"), "vehicle", ctx.file);
   Vehicle& v = s.vehicle;
-  v.data = read_file_key(r, "data", true, ctx);
+  v.data = readFileKey(r, "data", true, ctx);
   r.require("start_arc_length");
   r.number("start_arc_length", v.start_arc_length);
-  if (v.start_arc_length < s.track.start_arc_length || v.start_arc_length >= s.track.end_arc_length()) {
-    r.fail("start_arc_length", "must lie on the track [" + format_double(s.track.start_arc_length) + ", " +
-                                   format_double(s.track.end_arc_length()) + ") m" + got(v.start_arc_length));
+  if (v.start_arc_length < s.track.start_arc_length || v.start_arc_length >= s.track.endArcLength()) {
+    r.fail("start_arc_length", "must lie on the track [" + formatDouble(s.track.start_arc_length) + ", " +
+                                   formatDouble(s.track.endArcLength()) + ") m" + got(v.start_arc_length));
   }
   r.require("speed");
   r.number("speed", v.speed);
-  in_range(r, "speed", v.speed, 0.0, 150.0, "m/s");
+  inRange(r, "speed", v.speed, 0.0, 150.0, "m/s");
   r.string("wheel_profile", v.wheel_profile);
   if (!contains(kBuiltinWheelProfiles, v.wheel_profile)) {
-    v.wheel_profile_file = resolve_file(r, "wheel_profile", v.wheel_profile, ctx);
+    v.wheel_profile_file = resolveFile(r, "wheel_profile", v.wheel_profile, ctx);
   }
   r.number("nominal_radius", v.nominal_radius);
-  in_range(r, "nominal_radius", v.nominal_radius, 0.2, 0.7, "m");
+  inRange(r, "nominal_radius", v.nominal_radius, 0.2, 0.7, "m");
   r.number("back_to_back", v.back_to_back);
   if (!(v.back_to_back > s.track.gauge - 0.2 && v.back_to_back < s.track.gauge)) {
     r.fail("back_to_back", "must be between track.gauge - 0.2 and track.gauge (" +
-                               format_double(s.track.gauge) + ") m" + got(v.back_to_back));
+                               formatDouble(s.track.gauge) + ") m" + got(v.back_to_back));
   }
   r.integer("wheelsets", v.wheelsets);
   if (v.wheelsets < 1 || v.wheelsets > 16) {
@@ -328,7 +328,7 @@ void read_vehicle(MapReader& root, Scene& s, const Context& ctx) {
   r.finish();
 }
 
-void read_contact(MapReader& root, Scene& s) {
+void readContact(MapReader& root, Scene& s) {
   const YAML::Node n = root.child("contact");
   if (!n) return;
   MapReader r(n, "contact", root.file());
@@ -338,40 +338,40 @@ void read_contact(MapReader& root, Scene& s) {
   r.number("friction", c.friction);
   if (!(c.friction > 0.0 && c.friction <= 1.0)) r.fail("friction", "must be > 0 and <= 1" + got(c.friction));
   r.number("restitution", c.restitution);
-  in_range(r, "restitution", c.restitution, 0.0, 1.0, "(-)");
+  inRange(r, "restitution", c.restitution, 0.0, 1.0, "(-)");
   r.number("impact_velocity_floor", c.impact_velocity_floor);
-  in_range(r, "impact_velocity_floor", c.impact_velocity_floor, 1e-6, 10.0, "m/s");
+  inRange(r, "impact_velocity_floor", c.impact_velocity_floor, 1e-6, 10.0, "m/s");
   r.finish();
 }
 
-void read_moving_loads(MapReader& root, Scene& s, const Context& ctx) {
+void readMovingLoads(MapReader& root, Scene& s, const Context& ctx) {
   MapReader r(root.child("moving_loads"), "moving_loads", ctx.file);
   MovingLoads& m = s.moving_loads;
   r.number("start_arc_length", m.start_arc_length);
-  if (m.start_arc_length < s.track.start_arc_length || m.start_arc_length > s.track.end_arc_length()) {
+  if (m.start_arc_length < s.track.start_arc_length || m.start_arc_length > s.track.endArcLength()) {
     r.fail("start_arc_length", "must lie on the track" + got(m.start_arc_length));
   }
   r.number("speed", m.speed);
-  in_range(r, "speed", m.speed, 0.0, 150.0, "m/s");
-  const YAML::Node seq = r.require_child("loads");
+  inRange(r, "speed", m.speed, 0.0, 150.0, "m/s");
+  const YAML::Node seq = r.requireChild("loads");
   if (!seq.IsSequence() || seq.size() == 0) r.fail("loads", "must be a non-empty list of loads");
   for (std::size_t i = 0; i < seq.size(); ++i) {
     MapReader lr(seq[i], "moving_loads.loads[" + std::to_string(i) + "]", ctx.file);
     MovingLoad l;
     lr.number("offset", l.offset);
-    non_negative(lr, "offset", l.offset);
+    nonNegative(lr, "offset", l.offset);
     lr.choice("rail", l.rail, {{"both", LoadRail::kBoth}, {"left", LoadRail::kLeft}, {"right", LoadRail::kRight}});
     lr.number("vertical", l.vertical);
-    in_range(lr, "vertical", l.vertical, -1e6, 1e6, "N");
+    inRange(lr, "vertical", l.vertical, -1e6, 1e6, "N");
     lr.number("lateral", l.lateral);
-    in_range(lr, "lateral", l.lateral, -1e6, 1e6, "N");
+    inRange(lr, "lateral", l.lateral, -1e6, 1e6, "N");
     lr.finish();
     m.loads.push_back(l);
   }
   r.finish();
 }
 
-void read_effects(MapReader& root, Scene& s) {
+void readEffects(MapReader& root, Scene& s) {
   const YAML::Node n = root.child("effects");
   if (!n) return;
   MapReader r(n, "effects", root.file());
@@ -393,45 +393,45 @@ void read_effects(MapReader& root, Scene& s) {
   r.finish();
 }
 
-void read_solver(MapReader& root, Scene& s) {
+void readSolver(MapReader& root, Scene& s) {
   const YAML::Node n = root.child("solver");
   Solver& v = s.solver;
   if (!n) return;
   MapReader r(n, "solver", root.file());
   r.number("track_step", v.track_step);
-  in_range(r, "track_step", v.track_step, 1e-7, 1e-2, "s");
+  inRange(r, "track_step", v.track_step, 1e-7, 1e-2, "s");
   r.number("vehicle_rtol", v.vehicle_rtol);
-  in_range(r, "vehicle_rtol", v.vehicle_rtol, 1e-12, 1e-1, "");
+  inRange(r, "vehicle_rtol", v.vehicle_rtol, 1e-12, 1e-1, "");
   r.number("vehicle_atol", v.vehicle_atol);
-  in_range(r, "vehicle_atol", v.vehicle_atol, 1e-15, 1e-1, "");
+  inRange(r, "vehicle_atol", v.vehicle_atol, 1e-15, 1e-1, "");
   r.number("vehicle_max_step", v.vehicle_max_step);
-  in_range(r, "vehicle_max_step", v.vehicle_max_step, 1e-8, 1e-1, "s");
+  inRange(r, "vehicle_max_step", v.vehicle_max_step, 1e-8, 1e-1, "s");
   r.choice("vehicle_method", v.vehicle_method,
            {{"auto", VehicleMethod::kAuto}, {"bdf", VehicleMethod::kBdf}, {"adams", VehicleMethod::kAdams}});
   r.choice("transport", v.transport,
            {{"service", Transport::kService}, {"topic", Transport::kTopic}, {"shm", Transport::kShm}});
   r.number("exchange_timeout", v.exchange_timeout);
-  in_range(r, "exchange_timeout", v.exchange_timeout, 0.01, 3600.0, "s");
+  inRange(r, "exchange_timeout", v.exchange_timeout, 0.01, 3600.0, "s");
   r.number("handshake_timeout", v.handshake_timeout);
-  in_range(r, "handshake_timeout", v.handshake_timeout, 0.01, 3600.0, "s");
+  inRange(r, "handshake_timeout", v.handshake_timeout, 0.01, 3600.0, "s");
   if (const YAML::Node wn = r.child("track_window")) {
     MapReader wr(wn, "solver.track_window", root.file());
     TrackWindow& w = v.track_window;
     wr.boolean("enabled", w.enabled);
     wr.number("behind", w.behind);
-    in_range(wr, "behind", w.behind, 0.0, 1e4, "m");
+    inRange(wr, "behind", w.behind, 0.0, 1e4, "m");
     wr.number("ahead", w.ahead);
-    in_range(wr, "ahead", w.ahead, 0.0, 1e4, "m");
+    inRange(wr, "ahead", w.ahead, 0.0, 1e4, "m");
     wr.number("shift", w.shift);
-    in_range(wr, "shift", w.shift, 1e-3, 1e4, "m");
+    inRange(wr, "shift", w.shift, 1e-3, 1e4, "m");
     wr.number("length", w.length);
-    in_range(wr, "length", w.length, 0.0, 1e6, "m");
+    inRange(wr, "length", w.length, 0.0, 1e6, "m");
     wr.finish();
   }
   if (const YAML::Node en = r.child("end")) {
     MapReader er(en, "solver.end", root.file());
     const bool has_time = er.has("time"), has_s = er.has("arc_length");
-    if (has_time == has_s) er.fail_here("give exactly one of time [s] or arc_length [m]");
+    if (has_time == has_s) er.failHere("give exactly one of time [s] or arc_length [m]");
     if (has_time) {
       v.end.kind = EndKind::kTime;
       er.number("time", v.end.value);
@@ -445,15 +445,15 @@ void read_solver(MapReader& root, Scene& s) {
   r.finish();
 }
 
-void read_output(MapReader& root, Scene& s) {
+void readOutput(MapReader& root, Scene& s) {
   const YAML::Node n = root.child("output");
   if (!n) return;
   MapReader r(n, "output", root.file());
   Output& o = s.output;
   r.string("bag", o.bag);
   r.number("rate", o.rate);
-  in_range(r, "rate", o.rate, 0.1, 1e5, "Hz");
-  r.string_list("topics", o.topics);
+  inRange(r, "rate", o.rate, 0.1, 1e5, "Hz");
+  r.stringList("topics", o.topics);
   for (std::size_t i = 0; i < o.topics.size(); ++i) {
     const std::string key = "topics[" + std::to_string(i) + "]";
     const std::string& name = o.topics[i];
@@ -463,40 +463,40 @@ void read_output(MapReader& root, Scene& s) {
     for (std::size_t j = 0; j < i; ++j)
       if (o.topics[j] == name) r.fail(key.c_str(), "'" + name + "' is listed twice");
   }
-  r.number_list("deflection_sections", o.deflection_sections);
+  r.numberList("deflection_sections", o.deflection_sections);
   for (std::size_t i = 0; i < o.deflection_sections.size(); ++i) {
     const double sec = o.deflection_sections[i];
-    if (sec < s.track.start_arc_length || sec > s.track.end_arc_length()) {
+    if (sec < s.track.start_arc_length || sec > s.track.endArcLength()) {
       const std::string key = "deflection_sections[" + std::to_string(i) + "]";
-      r.fail(key.c_str(), "must lie on the track [" + format_double(s.track.start_arc_length) + ", " +
-                              format_double(s.track.end_arc_length()) + "] m" + got(sec));
+      r.fail(key.c_str(), "must lie on the track [" + formatDouble(s.track.start_arc_length) + ", " +
+                              formatDouble(s.track.endArcLength()) + "] m" + got(sec));
     }
   }
   r.number("pad_force_margin", o.pad_force_margin);
-  in_range(r, "pad_force_margin", o.pad_force_margin, 0.0, 100.0, "m");
+  inRange(r, "pad_force_margin", o.pad_force_margin, 0.0, 100.0, "m");
   r.finish();
 }
 
 // Rules that involve more than one section.
-void check_consistency(MapReader& root, Scene& s, const YAML::Node& doc) {
+void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   const std::string& file = root.file();
   auto line_of = [&](const char* a, const char* b) {
     const YAML::Node n = doc[a][b];
     return n.IsDefined() && n.Mark().line >= 0 ? n.Mark().line + 1 : 0;
   };
   if (s.moving_loads.present && s.effects.track_model != TrackModel::kFlexible) {
-    fail_at(file, "effects.track_model",
+    failAt(file, "effects.track_model",
             std::string("moving_loads need the finite-element track (flexible), got ") +
-                to_string(s.effects.track_model),
+                toString(s.effects.track_model),
             line_of("effects", "track_model"));
   }
   if (s.effects.irregularities && s.track.irregularities.source == IrregularitySource::kNone) {
-    fail_at(file, "effects.irregularities",
+    failAt(file, "effects.irregularities",
             "is on but track.irregularities gives no source (file or psd)", line_of("effects", "irregularities"));
   }
   if (s.cosimulation() && s.solver.vehicle_max_step > s.solver.track_step) {
-    fail_at(file, "solver.vehicle_max_step",
-            "must be <= solver.track_step (" + format_double(s.solver.track_step) +
+    failAt(file, "solver.vehicle_max_step",
+            "must be <= solver.track_step (" + formatDouble(s.solver.track_step) +
                 " s) in co-simulation" + got(s.solver.vehicle_max_step),
             line_of("solver", "vehicle_max_step"));
   }
@@ -505,15 +505,15 @@ void check_consistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   if (sol.end.kind == EndKind::kArcLength) {
     const double start = s.has_vehicle ? s.vehicle.start_arc_length : s.moving_loads.start_arc_length;
     const double speed = s.has_vehicle ? s.vehicle.speed : s.moving_loads.speed;
-    if (sol.end.value == 0.0) sol.end.value = s.track.end_arc_length();
-    if (sol.end.value <= start || sol.end.value > s.track.end_arc_length()) {
-      fail_at(file, "solver.end.arc_length",
-              "must lie after the start (" + format_double(start) + " m) and on the track (end " +
-                  format_double(s.track.end_arc_length()) + " m)" + got(sol.end.value),
+    if (sol.end.value == 0.0) sol.end.value = s.track.endArcLength();
+    if (sol.end.value <= start || sol.end.value > s.track.endArcLength()) {
+      failAt(file, "solver.end.arc_length",
+              "must lie after the start (" + formatDouble(start) + " m) and on the track (end " +
+                  formatDouble(s.track.endArcLength()) + " m)" + got(sol.end.value),
               0);
     }
     if (speed <= 0.0) {
-      fail_at(file, s.has_vehicle ? "vehicle.speed" : "moving_loads.speed",
+      failAt(file, s.has_vehicle ? "vehicle.speed" : "moving_loads.speed",
               "must be > 0 when solver.end is an arc length (the run would never end), got 0", 0);
     }
   }
@@ -529,26 +529,26 @@ void check_consistency(MapReader& root, Scene& s, const YAML::Node& doc) {
       needs = "effects.floor_acceleration_output: true";
     if (t == "pad_forces" && !s.effects.pad_force_output) needs = "effects.pad_force_output: true";
     if ((t == "vehicle_energy" || t == "track_energy") && !s.effects.energy_output) needs = "effects.energy_output: true";
-    if (needs) fail_at(file, key, "'" + t + "' is recorded only with " + needs, 0);
+    if (needs) failAt(file, key, "'" + t + "' is recorded only with " + needs, 0);
     if (t == "rail_deflection" && s.effects.track_model == TrackModel::kRigid) {
-      fail_at(file, key,
+      failAt(file, key,
               "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
               "move: zeros)", 0);
     }
     if (t == "track_energy" && s.effects.track_model != TrackModel::kFlexible) {
-      fail_at(file, key, "'track_energy' needs the integrated FE track: effects.track_model flexible", 0);
+      failAt(file, key, "'track_energy' needs the integrated FE track: effects.track_model flexible", 0);
     }
     if (t == "pad_forces" && s.effects.track_model != TrackModel::kFlexible) {
-      fail_at(file, key, "'pad_forces' needs the integrated FE track: effects.track_model flexible", 0);
+      failAt(file, key, "'pad_forces' needs the integrated FE track: effects.track_model flexible", 0);
     }
     if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches" ||
          t == "floor_accelerations") && !s.has_vehicle) {
-      fail_at(file, key, "'" + t + "' needs a vehicle in the scene", 0);
+      failAt(file, key, "'" + t + "' needs a vehicle in the scene", 0);
     }
   }
 }
 
-std::string read_all(const std::string& path) {
+std::string readAll(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream ss;
   ss << in.rdbuf();
@@ -566,7 +566,7 @@ std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t seed) {
   return h;
 }
 
-SceneOverrides split_overrides(const std::string& text) {
+SceneOverrides splitOverrides(const std::string& text) {
   // Whitespace separates overrides except inside quotes and YAML flow collections, so that
   // "solver.end={time: 1.5} output.bag='a b.bag'" gives two.
   SceneOverrides out;
@@ -597,7 +597,7 @@ namespace {
 
 // Sets node[parts[i]][parts[i+1]]... = value, creating missing maps. yaml-cpp nodes are handles: each
 // level gets a fresh handle (a parameter), never a reassigned one.
-void set_at(YAML::Node node, const std::vector<std::string>& parts, std::size_t i, const YAML::Node& value,
+void setAt(YAML::Node node, const std::vector<std::string>& parts, std::size_t i, const YAML::Node& value,
             const std::string& file, const std::string& item) {
   if (i + 1 == parts.size()) {
     node[parts[i]] = value;
@@ -607,13 +607,13 @@ void set_at(YAML::Node node, const std::vector<std::string>& parts, std::size_t 
   if (!child.IsDefined() || child.IsNull()) {
     node[parts[i]] = YAML::Node(YAML::NodeType::Map);
   } else if (!child.IsMap()) {
-    fail_at(file, item.substr(0, item.find('=')), "override '" + item + "': " + parts[i] + " is not a map of keys", 0);
+    failAt(file, item.substr(0, item.find('=')), "override '" + item + "': " + parts[i] + " is not a map of keys", 0);
   }
-  set_at(node[parts[i]], parts, i + 1, value, file, item);
+  setAt(node[parts[i]], parts, i + 1, value, file, item);
 }
 
 // "{a:1, b:{c:2}}" -> "{a: 1, b: {c: 2}}": a space after each ':' outside quotes that has none.
-std::string spaced_colons(const std::string& text) {
+std::string spacedColons(const std::string& text) {
   std::string out;
   char quote = 0;
   for (std::size_t i = 0; i < text.size(); ++i) {
@@ -631,11 +631,11 @@ std::string spaced_colons(const std::string& text) {
 }
 
 // Applies "a.b.c=value" to doc (a map). Throws SceneError naming the override.
-void apply_override(YAML::Node& doc, const std::string& file, const std::string& item) {
+void applyOverride(YAML::Node& doc, const std::string& file, const std::string& item) {
   const std::size_t eq = item.find('=');
   const std::string key = eq == std::string::npos ? std::string() : item.substr(0, eq);
   if (eq == std::string::npos || key.empty()) {
-    fail_at(file, "", "override '" + item + "': expected key=value (e.g. effects.track_model=flexible)", 0);
+    failAt(file, "", "override '" + item + "': expected key=value (e.g. effects.track_model=flexible)", 0);
   }
   // "key=" (nothing after '='): the key keeps the file's value (launch arguments left empty).
   if (eq + 1 == item.size()) return;
@@ -646,10 +646,10 @@ void apply_override(YAML::Node& doc, const std::string& file, const std::string&
     if (value.IsMap() && std::any_of(value.begin(), value.end(), [](const auto& kv) {
           return kv.first.IsScalar() && kv.first.Scalar().find(':') != std::string::npos && kv.second.IsNull();
         })) {
-      value = YAML::Load(spaced_colons(item.substr(eq + 1)));
+      value = YAML::Load(spacedColons(item.substr(eq + 1)));
     }
   } catch (const YAML::Exception& e) {
-    fail_at(file, key, "override '" + item + "': the value is not valid YAML: " + e.msg, 0);
+    failAt(file, key, "override '" + item + "': the value is not valid YAML: " + e.msg, 0);
   }
   std::vector<std::string> parts;
   for (std::size_t start = 0;;) {
@@ -659,73 +659,73 @@ void apply_override(YAML::Node& doc, const std::string& file, const std::string&
     start = dot + 1;
   }
   for (const std::string& part : parts) {
-    if (part.empty()) fail_at(file, key, "override '" + item + "': empty key", 0);
+    if (part.empty()) failAt(file, key, "override '" + item + "': empty key", 0);
   }
-  set_at(doc, parts, 0, value, file, item);
+  setAt(doc, parts, 0, value, file, item);
 }
 
 }  // namespace
 
-Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir,
+Scene loadSceneText(const std::string& text, const std::string& file, const std::string& base_dir,
                       const SceneOverrides& overrides) {
   YAML::Node doc;
   try {
     doc = YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    fail_at(file, "", "not valid YAML: " + e.msg, e.mark.line >= 0 ? e.mark.line + 1 : 0);
+    failAt(file, "", "not valid YAML: " + e.msg, e.mark.line >= 0 ? e.mark.line + 1 : 0);
   }
-  if (const auto dup = find_duplicate_key(doc)) fail_at(file, dup->field, dup->describe(), dup->second_line);
-  if (!doc.IsDefined() || doc.IsNull()) fail_at(file, "", "is empty", 0);
-  if (!overrides.empty() && !doc.IsMap()) fail_at(file, "", "must be a map of keys to values", 1);
-  for (const std::string& item : overrides) apply_override(doc, file, item);
+  if (const auto dup = findDuplicateKey(doc)) failAt(file, dup->field, dup->describe(), dup->second_line);
+  if (!doc.IsDefined() || doc.IsNull()) failAt(file, "", "is empty", 0);
+  if (!overrides.empty() && !doc.IsMap()) failAt(file, "", "must be a map of keys to values", 1);
+  for (const std::string& item : overrides) applyOverride(doc, file, item);
   const Context ctx{file, base_dir.empty() ? "." : base_dir};
   MapReader root(doc, "", file);
   Scene s;
   s.file = file;
-  s.name = stem_of(file);
+  s.name = stemOf(file);
   root.string("name", s.name);
   root.string("description", s.description);
 
   // Effects first: they decide which other parts are required.
-  read_effects(root, s);
+  readEffects(root, s);
   s.has_vehicle = root.has("vehicle");
   s.moving_loads.present = root.has("moving_loads");
   if (s.has_vehicle == s.moving_loads.present) {
-    fail_at(file, "", "a scene has exactly one of vehicle (a run with a train) or moving_loads (the track alone)", 0);
+    failAt(file, "", "a scene has exactly one of vehicle (a run with a train) or moving_loads (the track alone)", 0);
   }
-  read_track(root, s, ctx);
+  readTrack(root, s, ctx);
   if (s.has_vehicle) {
     root.child("moving_loads");  // known, absent
-    read_vehicle(root, s, ctx);
-    read_contact(root, s);
+    readVehicle(root, s, ctx);
+    readContact(root, s);
   } else {
     root.child("vehicle");
     if (root.has("contact")) {
-      fail_at(file, "contact", "a moving-load scene has no wheel-rail contact; remove the section", 0);
+      failAt(file, "contact", "a moving-load scene has no wheel-rail contact; remove the section", 0);
     }
-    read_moving_loads(root, s, ctx);
+    readMovingLoads(root, s, ctx);
   }
-  read_solver(root, s);
-  read_output(root, s);
+  readSolver(root, s);
+  readOutput(root, s);
   root.finish();
-  check_consistency(root, s, doc);
+  checkConsistency(root, s, doc);
 
   // The hash covers the resolved scene and the bytes of every data file it names, so two nodes agree
   // only when they would build the same models.
-  std::uint64_t h = fnv1a64(to_yaml(s));
+  std::uint64_t h = fnv1a64(toYaml(s));
   for (const DataFile* f : {&s.track.data, &s.track.rail_profile_file, &s.track.irregularities.file,
                             &s.vehicle.data, &s.vehicle.wheel_profile_file}) {
-    if (!f->empty()) h = fnv1a64(read_all(f->path), h);
+    if (!f->empty()) h = fnv1a64(readAll(f->path), h);
   }
   s.hash = h;
   return s;
 }
 
-Scene load_scene_handed_over(const std::string& text, const std::string& file, const SceneOverrides& overrides) {
-  return load_scene_text(text, file, dir_of(file), overrides);
+Scene loadSceneHandedOver(const std::string& text, const std::string& file, const SceneOverrides& overrides) {
+  return loadSceneText(text, file, dirOf(file), overrides);
 }
 
-Scene load_scene_file(const std::string& path, const SceneOverrides& overrides) {
+Scene loadSceneFile(const std::string& path, const SceneOverrides& overrides) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     const std::string why = std::strerror(errno);
@@ -739,7 +739,7 @@ Scene load_scene_file(const std::string& path, const SceneOverrides& overrides) 
   }
   std::ostringstream ss;
   ss << in.rdbuf();
-  return load_scene_text(ss.str(), path, dir_of(path), overrides);
+  return loadSceneText(ss.str(), path, dirOf(path), overrides);
 }
 
 }  // namespace rail::core

@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
   rail::core::SceneOverrides overrides;
   if (argc == 3 && std::strcmp(argv[1], "--split") == 0) {
     // One override per line, as the launch files' `overrides` argument splits them (for scripts).
-    for (const std::string& o : rail::core::split_overrides(argv[2])) std::cout << o << "\n";
+    for (const std::string& o : rail::core::splitOverrides(argv[2])) std::cout << o << "\n";
     return 0;
   }
   for (int i = 1; i < argc; ++i) {
@@ -49,7 +49,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   try {
-    const rail::core::Scene scene = rail::core::load_scene_file(path, overrides);
+    const rail::core::Scene scene = rail::core::loadSceneFile(path, overrides);
     if (plan) {
       std::cout << (!scene.has_vehicle ? "track_standalone" : scene.cosimulation() ? "cosim" : "vehicle_standalone")
                 << "\n";
@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
       std::cout << rail::core::describe(scene, rail::core::Role::kValidator);
     } else {
       std::cout << "# resolved scene, hash " << std::hex << scene.hash << std::dec << "\n"
-                << rail::core::to_yaml(scene);
+                << rail::core::toYaml(scene);
     }
     return 0;
   } catch (const rail::core::SceneError& e) {

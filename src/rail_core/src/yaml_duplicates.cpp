@@ -6,7 +6,7 @@ namespace rail::core {
 
 namespace {
 
-std::optional<DuplicateKey> find_in(const YAML::Node& node, const std::string& path) {
+std::optional<DuplicateKey> findIn(const YAML::Node& node, const std::string& path) {
   if (node.IsMap()) {
     std::map<std::string, int> line_of_key;
     for (const auto& kv : node) {
@@ -16,11 +16,11 @@ std::optional<DuplicateKey> find_in(const YAML::Node& node, const std::string& p
       const auto it = line_of_key.find(key);
       if (it != line_of_key.end()) return DuplicateKey{field, it->second, line};
       line_of_key.emplace(key, line);
-      if (auto inner = find_in(kv.second, field)) return inner;
+      if (auto inner = findIn(kv.second, field)) return inner;
     }
   } else if (node.IsSequence()) {
     for (std::size_t i = 0; i < node.size(); ++i) {
-      if (auto inner = find_in(node[i], path + "[" + std::to_string(i) + "]")) return inner;
+      if (auto inner = findIn(node[i], path + "[" + std::to_string(i) + "]")) return inner;
     }
   }
   return std::nullopt;
@@ -32,6 +32,6 @@ std::string DuplicateKey::describe() const {
   return "given twice (lines " + std::to_string(first_line) + " and " + std::to_string(second_line) + "): remove one";
 }
 
-std::optional<DuplicateKey> find_duplicate_key(const YAML::Node& node) { return find_in(node, ""); }
+std::optional<DuplicateKey> findDuplicateKey(const YAML::Node& node) { return findIn(node, ""); }
 
 }  // namespace rail::core

@@ -7,7 +7,7 @@
 
 namespace rail::core::detail {
 
-std::string format_double(double v) {
+std::string formatDouble(double v) {
   if (std::isnan(v)) return ".nan";
   if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
   char buf[64];
@@ -24,7 +24,7 @@ std::string join(const std::vector<std::string>& items) {
   return out;
 }
 
-void fail_at(const std::string& file, const std::string& path, const std::string& what, int line) {
+void failAt(const std::string& file, const std::string& path, const std::string& what, int line) {
   std::string msg = file + ": " + (path.empty() ? std::string() : path + ": ") + what;
   if (line > 0) msg += " (line " + std::to_string(line) + ")";
   throw SceneError(msg);
@@ -34,7 +34,7 @@ MapReader::MapReader(const YAML::Node& node, std::string path, std::string file)
     : node_(node), path_(std::move(path)), file_(std::move(file)) {
   if (!node_.IsMap()) {
     const int line = node_.IsDefined() ? node_.Mark().line + 1 : 0;
-    fail_at(file_, path_, "must be a map of keys to values", line);
+    failAt(file_, path_, "must be a map of keys to values", line);
   }
 }
 
@@ -44,18 +44,18 @@ YAML::Node MapReader::lookup(const char* key) const {
   return n[key];
 }
 
-int MapReader::line_of(const char* key) const {
+int MapReader::lineOf(const char* key) const {
   const YAML::Node n = lookup(key);
   if (n.IsDefined() && n.Mark().line >= 0) return n.Mark().line + 1;
   return node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0;
 }
 
 void MapReader::fail(const char* key, const std::string& what) const {
-  fail_at(file_, field(key), what, line_of(key));
+  failAt(file_, field(key), what, lineOf(key));
 }
 
-void MapReader::fail_here(const std::string& what) const {
-  fail_at(file_, path_, what, node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0);
+void MapReader::failHere(const std::string& what) const {
+  failAt(file_, path_, what, node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0);
 }
 
 bool MapReader::scalar(const char* key, std::string& text) {
@@ -73,7 +73,7 @@ void MapReader::require(const char* key) {
 
 namespace {
 // Reads a YAML number; YAML spells infinity and NaN with a dot. Returns false on anything else.
-bool parse_number(const std::string& text, double& v) {
+bool parseNumber(const std::string& text, double& v) {
   if (text == ".inf" || text == "+.inf" || text == ".Inf") {
     v = std::numeric_limits<double>::infinity();
   } else if (text == "-.inf" || text == "-.Inf") {
@@ -95,7 +95,7 @@ void MapReader::number(const char* key, double& value) {
   std::string text;
   if (!scalar(key, text)) return;
   double v = 0.0;
-  if (!parse_number(text, v)) fail(key, "must be a number, got '" + text + "'");
+  if (!parseNumber(text, v)) fail(key, "must be a number, got '" + text + "'");
   if (!std::isfinite(v)) fail(key, "must be a finite number, got " + text);
   value = v;
 }
@@ -143,22 +143,22 @@ YAML::Node MapReader::child(const char* key) {
   return n;
 }
 
-YAML::Node MapReader::require_child(const char* key) {
+YAML::Node MapReader::requireChild(const char* key) {
   require(key);
   return child(key);
 }
 
-void MapReader::number_list(const char* key, std::vector<double>& value) {
+void MapReader::numberList(const char* key, std::vector<double>& value) {
   const YAML::Node n = child(key);
   if (!n) return;
   if (!n.IsSequence()) fail(key, "must be a list of numbers");
   value.clear();
   for (std::size_t i = 0; i < n.size(); ++i) {
     const std::string item = field(key) + "[" + std::to_string(i) + "]";
-    const int line = n[i].Mark().line >= 0 ? n[i].Mark().line + 1 : line_of(key);
+    const int line = n[i].Mark().line >= 0 ? n[i].Mark().line + 1 : lineOf(key);
     double v = 0.0;
-    if (!n[i].IsScalar() || !parse_number(n[i].Scalar(), v) || !std::isfinite(v)) {
-      fail_at(file_, item,
+    if (!n[i].IsScalar() || !parseNumber(n[i].Scalar(), v) || !std::isfinite(v)) {
+      failAt(file_, item,
               "must be a finite number, got '" + (n[i].IsScalar() ? n[i].Scalar() : "a list or map") + "'",
               line);
     }
@@ -166,15 +166,15 @@ void MapReader::number_list(const char* key, std::vector<double>& value) {
   }
 }
 
-void MapReader::string_list(const char* key, std::vector<std::string>& value) {
+void MapReader::stringList(const char* key, std::vector<std::string>& value) {
   const YAML::Node n = child(key);
   if (!n) return;
   if (!n.IsSequence()) fail(key, "must be a list of names");
   value.clear();
   for (std::size_t i = 0; i < n.size(); ++i) {
     if (!n[i].IsScalar()) {
-      fail_at(file_, field(key) + "[" + std::to_string(i) + "]", "must be a name",
-              n[i].Mark().line >= 0 ? n[i].Mark().line + 1 : line_of(key));
+      failAt(file_, field(key) + "[" + std::to_string(i) + "]", "must be a name",
+              n[i].Mark().line >= 0 ? n[i].Mark().line + 1 : lineOf(key));
     }
     value.push_back(n[i].Scalar());
   }
@@ -186,7 +186,7 @@ void MapReader::finish() const {
     if (read_.count(key) == 0) {
       std::string known;
       for (const auto& k : read_) known += (known.empty() ? "" : ", ") + k;
-      fail_at(file_, field(key.c_str()), "unknown key (known here: " + known + ")",
+      failAt(file_, field(key.c_str()), "unknown key (known here: " + known + ")",
               kv.first.Mark().line >= 0 ? kv.first.Mark().line + 1 : 0);
     }
   }

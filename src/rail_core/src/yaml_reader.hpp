@@ -16,7 +16,7 @@
 namespace rail::core::detail {
 
 // Shortest text that reads back to the same double.
-std::string format_double(double v);
+std::string formatDouble(double v);
 
 // "a, b, c".
 std::string join(const std::vector<std::string>& items);
@@ -37,14 +37,14 @@ class MapReader {
   void unsigned64(const char* key, std::uint64_t& value);
   void boolean(const char* key, bool& value);
   void string(const char* key, std::string& value);
-  void number_list(const char* key, std::vector<double>& value);
-  void string_list(const char* key, std::vector<std::string>& value);
+  void numberList(const char* key, std::vector<double>& value);
+  void stringList(const char* key, std::vector<std::string>& value);
   template <typename E>
   void choice(const char* key, E& value, std::initializer_list<std::pair<const char*, E>> choices);
 
   // A nested map or list (marked as read); the node is returned for the caller to read.
   YAML::Node child(const char* key);
-  YAML::Node require_child(const char* key);
+  YAML::Node requireChild(const char* key);
   void require(const char* key);
 
   // Refuses keys that were not read: call after reading everything.
@@ -52,12 +52,12 @@ class MapReader {
 
   // Throws SceneError "<file>: <path.key>: <what> (line N)".
   [[noreturn]] void fail(const char* key, const std::string& what) const;
-  [[noreturn]] void fail_here(const std::string& what) const;
+  [[noreturn]] void failHere(const std::string& what) const;
 
  private:
   bool scalar(const char* key, std::string& text);  // false when absent or null
   YAML::Node lookup(const char* key) const;
-  int line_of(const char* key) const;
+  int lineOf(const char* key) const;
 
   YAML::Node node_;
   std::string path_;
@@ -65,7 +65,7 @@ class MapReader {
   std::set<std::string> read_;
 };
 
-[[noreturn]] void fail_at(const std::string& file, const std::string& path, const std::string& what,
+[[noreturn]] void failAt(const std::string& file, const std::string& path, const std::string& what,
                           int line);
 
 template <typename E>

@@ -32,11 +32,11 @@ TEST(CostProfile, YamlListsEveryComponentTheCountsAndTheEffects) {
   CostProfile p;
   p.add(CostProfile::kVehicleIntegration, 3.0);
   p.add(CostProfile::kPublish, 1.0);
-  p.set_count("cvode_steps", 1200);
+  p.setCount("cvode_steps", 1200);
   Scene scene;
   scene.file = "s.yaml";
   scene.effects.flange_contact = false;
-  const std::string y = p.to_yaml("/v", scene, 5.0, 2.0);
+  const std::string y = p.toYaml("/v", scene, 5.0, 2.0);
   EXPECT_NE(y.find("wall_per_simulated_second: 2.5"), std::string::npos) << y;
   EXPECT_NE(y.find("vehicle_integration: {seconds: 3, share: 0.6, calls: 1}"), std::string::npos) << y;
   EXPECT_NE(y.find("track_step: {seconds: 0, share: 0, calls: 0}"), std::string::npos) << y;
@@ -50,14 +50,14 @@ TEST(CostProfile, TimedTransportTimesBothDirectionsAndForwardsFrames) {
   using namespace rail::core::coupling;
   LoopbackLink link(2);
   CostProfile pv, pt;
-  TimedTransport tv(link.vehicle_end(), pv), tt(link.track_end(), pt);
+  TimedTransport tv(link.vehicleEnd(), pv), tt(link.trackEnd(), pt);
   WheelStateFrame s(2), s_in(2);
   s.step = 7;
   s.count = 2;
   s.wheels[1].p_wheel_in_world = Eigen::Vector3d(1.0, 2.0, 3.0);
   const Deadline d = Clock::now() + std::chrono::seconds(1);
-  ASSERT_TRUE(tv.send_states(s, d));
-  ASSERT_TRUE(tt.receive_states(s_in, d));
+  ASSERT_TRUE(tv.sendStates(s, d));
+  ASSERT_TRUE(tt.receiveStates(s_in, d));
   EXPECT_EQ(s_in.step, 7u);
   EXPECT_EQ(s_in.wheels[1].p_wheel_in_world, s.wheels[1].p_wheel_in_world);
   EXPECT_EQ(pv.calls(CostProfile::kTransportWait), 1);
@@ -73,11 +73,11 @@ TEST(CostClock, TimedOutputOffProducesNothingAndCostsNothing) {
   for (CostClock::Part part : {CostClock::kMarkers, CostClock::kContactPointOutput, CostClock::kEnergyOutput}) {
     CostClock clock;
     int produced = 0;
-    EXPECT_FALSE(TimedOutput(&clock, part, false, [&] { ++produced; }));
+    EXPECT_FALSE(timedOutput(&clock, part, false, [&] { ++produced; }));
     EXPECT_EQ(produced, 0);
     EXPECT_EQ(clock.calls[part], 0);
     EXPECT_EQ(clock.seconds[part], 0.0);
-    EXPECT_TRUE(TimedOutput(&clock, part, true, [&] {
+    EXPECT_TRUE(timedOutput(&clock, part, true, [&] {
       ++produced;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }));
@@ -87,7 +87,7 @@ TEST(CostClock, TimedOutputOffProducesNothingAndCostsNothing) {
     EXPECT_GE(clock.seconds[part], 0.002);
     EXPECT_LT(clock.seconds[part], 2.0);
     // No clock: still produced, nothing recorded anywhere.
-    EXPECT_TRUE(TimedOutput(nullptr, part, true, [&] { ++produced; }));
+    EXPECT_TRUE(timedOutput(nullptr, part, true, [&] { ++produced; }));
     EXPECT_EQ(produced, 2);
   }
 }
@@ -107,7 +107,7 @@ TEST(CostClock, FinerSplitAddsUpWithinItsComponent) {
   k.add(CostClock::kRailDeflection, 0.25);
   Scene scene;
   scene.file = "s.yaml";
-  const std::string y = p.to_yaml("/t", scene, 10.0, 1.0, &k);
+  const std::string y = p.toYaml("/t", scene, 10.0, 1.0, &k);
   EXPECT_NE(y.find("contact_detection: {seconds: 1, share: 0.1, calls: 8, within: track_step}"), std::string::npos) << y;
   EXPECT_NE(y.find("track_solve: {seconds: 1.5, share: 0.15, calls: 1, within: track_step}"), std::string::npos) << y;
   EXPECT_NE(y.find("track_step_other: {seconds: 0.5, share: 0.05}"), std::string::npos) << y;  // 4 - 1 - 0.5 - 0.5 - 1.5
@@ -120,7 +120,7 @@ TEST(CostClock, FinerSplitAddsUpWithinItsComponent) {
   kv.add(CostClock::kVehicleRhs, 2.0);
   kv.contact.detection_seconds = 1.0;
   kv.contact.evaluations = 8;
-  const std::string yv = v.to_yaml("/v", scene, 4.0, 1.0, &kv);
+  const std::string yv = v.toYaml("/v", scene, 4.0, 1.0, &kv);
   EXPECT_NE(yv.find("contact_detection: {seconds: 1, share: 0.25, calls: 8, within: vehicle_integration}"),
             std::string::npos) << yv;
   EXPECT_NE(yv.find("vehicle_integration_other: {seconds: 1, share: 0.25}"), std::string::npos) << yv;  // 3 - 2

@@ -59,7 +59,7 @@ CouplingConfig config() {
 }
 
 // Returns the allocations made by the track during the counted steps, or -1 on a failed step.
-long track_side(FrameTransport& t, std::atomic<long>* counted_out) {
+long trackSide(FrameTransport& t, std::atomic<long>* counted_out) {
   TrackCoupling track(config(), t);
   long before = 0;
   for (long k = 0; k < kWarmup + kCounted; ++k) {
@@ -75,7 +75,7 @@ long track_side(FrameTransport& t, std::atomic<long>* counted_out) {
 }
 
 // Allocations made by the process during the vehicle's counted exchanges, or -1 on a failed exchange.
-long vehicle_side(FrameTransport& t) {
+long vehicleSide(FrameTransport& t) {
   VehicleCoupling v(config(), t);
   WrenchFrame out(kWheels);
   long before = 0;
@@ -83,7 +83,7 @@ long vehicle_side(FrameTransport& t) {
     if (k == kWarmup) before = g_allocations.load();
     for (int i = 0; i < kWheels; ++i) v.states().wheels[i].p_wheel_in_world = Eigen::Vector3d(k, i, 0.0);
     if (!v.exchange()) return -1;
-    v.extrapolate(v.next_exchange_time(), out);
+    v.extrapolate(v.nextExchangeTime(), out);
   }
   return g_allocations.load() - before;
 }
@@ -100,8 +100,8 @@ TEST(CouplingAllocation, CounterSeesAllocations) {  // the counter itself works
 TEST(CouplingAllocation, LoopbackSteadyStateAllocatesNothing) {
   LoopbackLink link(kWheels);
   long track_result = -2;
-  std::thread track([&] { track_result = track_side(link.track_end(), nullptr); });
-  const long vehicle_allocations = vehicle_side(link.vehicle_end());
+  std::thread track([&] { track_result = trackSide(link.trackEnd(), nullptr); });
+  const long vehicle_allocations = vehicleSide(link.vehicleEnd());
   track.join();
   // Both threads count into one counter: the vehicle's figure includes the track's.
   EXPECT_EQ(vehicle_allocations, 0);
@@ -121,7 +121,7 @@ TEST(CouplingAllocation, ShmSteadyStateAllocatesNothing) {
     long n = -1;
     try {
       ShmTransport t(track_options);
-      n = track_side(t, nullptr);
+      n = trackSide(t, nullptr);
     } catch (...) {
     }
     _exit(n == 0 ? 0 : (n < 0 ? 2 : 1));  // 1: the track allocated, 2: it failed
@@ -130,7 +130,7 @@ TEST(CouplingAllocation, ShmSteadyStateAllocatesNothing) {
   try {
     o.role = Role::kVehicle;
     ShmTransport t(o);
-    vehicle_allocations = vehicle_side(t);
+    vehicle_allocations = vehicleSide(t);
   } catch (const std::exception& e) {
     ADD_FAILURE() << e.what();
   }

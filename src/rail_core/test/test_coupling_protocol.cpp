@@ -61,12 +61,12 @@ struct ScriptedTrack {
   Result last;
 };
 
-void fill_states(VehicleCoupling& v, int wheels) {
+void fillStates(VehicleCoupling& v, int wheels) {
   for (int i = 0; i < wheels; ++i)
-    v.states().wheels[i].arc_length = 100.0 * static_cast<double>(v.next_step()) + i;
+    v.states().wheels[i].arc_length = 100.0 * static_cast<double>(v.nextStep()) + i;
 }
 
-double seconds_since(Clock::time_point t0) {
+double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
@@ -76,24 +76,24 @@ double seconds_since(Clock::time_point t0) {
 TEST(CouplingProtocol, FirstStepHoldsTheInitialWrench) {
   const CouplingConfig c = config(2);
   LoopbackLink link(2);
-  ScriptedTrack track(c, link.track_end(), [](double t, int i, Eigen::Vector3d& f, Eigen::Vector3d& n) {
+  ScriptedTrack track(c, link.trackEnd(), [](double t, int i, Eigen::Vector3d& f, Eigen::Vector3d& n) {
     f = Eigen::Vector3d(1.0 + i, 2.0, 3.0) * (1.0 + 1e5 * t);
     n = Eigen::Vector3d(-1.0, 0.5 * i, 7.0) * (1.0 + 1e5 * t);
   });
-  VehicleCoupling v(c, link.vehicle_end());
+  VehicleCoupling v(c, link.vehicleEnd());
   Eigen::Vector3d f, n;
-  EXPECT_EQ(v.frames_received(), 0);
-  v.wrench_at(0.0, 1, f, n);
+  EXPECT_EQ(v.framesReceived(), 0);
+  v.wrenchAt(0.0, 1, f, n);
   EXPECT_EQ(f, Eigen::Vector3d::Zero());
   EXPECT_EQ(n, Eigen::Vector3d::Zero());
-  EXPECT_EQ(v.next_exchange_time(), 0.0);
+  EXPECT_EQ(v.nextExchangeTime(), 0.0);
 
-  fill_states(v, 2);
+  fillStates(v, 2);
   ASSERT_TRUE(v.exchange()) << v.exchange().message;
-  EXPECT_EQ(v.frames_received(), 1);
-  EXPECT_EQ(v.next_exchange_time(), c.track_step);
+  EXPECT_EQ(v.framesReceived(), 1);
+  EXPECT_EQ(v.nextExchangeTime(), c.track_step);
   for (double t : {0.0, 0.5 * c.track_step, c.track_step}) {
-    v.wrench_at(t, 1, f, n);  // exactly the step-0 values, whatever t
+    v.wrenchAt(t, 1, f, n);  // exactly the step-0 values, whatever t
     EXPECT_EQ(f, Eigen::Vector3d(2.0, 2.0, 3.0));
     EXPECT_EQ(n, Eigen::Vector3d(-1.0, 0.5, 7.0));
   }
@@ -109,18 +109,18 @@ TEST(CouplingProtocol, ExtrapolationIsExactForLinearHistory) {
     f = Eigen::Vector3d(1e4 + 100 * i, -2e3, 5e4) + t * Eigen::Vector3d(3e6, -1e6 * (i + 1), 2e5);
     n = Eigen::Vector3d(10.0 * i, 20.0, -30.0) + t * Eigen::Vector3d(-4e4, 1e3, 7e3 * i);
   };
-  ScriptedTrack track(c, link.track_end(), linear);
-  VehicleCoupling v(c, link.vehicle_end());
+  ScriptedTrack track(c, link.trackEnd(), linear);
+  VehicleCoupling v(c, link.vehicleEnd());
   for (int k = 0; k < 20; ++k) {
-    fill_states(v, 4);
+    fillStates(v, 4);
     ASSERT_TRUE(v.exchange());
-    if (v.frames_received() < 2) continue;
+    if (v.framesReceived() < 2) continue;
     const double tk = static_cast<double>(k) * c.track_step;
     for (double theta : {0.0, 0.25, 0.5, 1.0}) {
       const double t = tk + theta * c.track_step;
       for (int i = 0; i < 4; ++i) {
         Eigen::Vector3d f, n, f_exact, n_exact;
-        v.wrench_at(t, i, f, n);
+        v.wrenchAt(t, i, f, n);
         linear(t, i, f_exact, n_exact);
         EXPECT_LE((f - f_exact).norm(), 1e-12 * f_exact.norm()) << "k " << k << " theta " << theta;
         EXPECT_LE((n - n_exact).norm(), 1e-12 * std::max(1.0, n_exact.norm())) << "k " << k;
@@ -139,21 +139,21 @@ TEST(CouplingProtocol, ExtrapolationErrorIsSecondOrderForQuadraticHistory) {
   auto run = [&](double h, double theta) {
     const CouplingConfig c = config(1, h);
     LoopbackLink link(1);
-    ScriptedTrack track(c, link.track_end(), [&](double t, int, Eigen::Vector3d& f, Eigen::Vector3d& n) {
+    ScriptedTrack track(c, link.trackEnd(), [&](double t, int, Eigen::Vector3d& f, Eigen::Vector3d& n) {
       f = Eigen::Vector3d(a * t * t, 0.0, -a * t * t);
       n = Eigen::Vector3d::Zero();
     });
-    VehicleCoupling v(c, link.vehicle_end());
+    VehicleCoupling v(c, link.vehicleEnd());
     const int steps = static_cast<int>(std::lround(1e-3 / h));  // end at t_k = 1 ms whatever h
     for (int k = 0; k <= steps; ++k) {
-      fill_states(v, 1);
+      fillStates(v, 1);
       EXPECT_TRUE(v.exchange());
     }
     v.close();
     const double tk = static_cast<double>(steps) * h;
     const double t = tk + theta * h;
     Eigen::Vector3d f, n;
-    v.wrench_at(t, 0, f, n);
+    v.wrenchAt(t, 0, f, n);
     const double error = a * t * t - f.x();
     const double predicted = a * (t - tk) * (t - (tk - h));
     EXPECT_NEAR(error, predicted, 1e-9 * a * t * t) << "h " << h << " theta " << theta;
@@ -176,15 +176,15 @@ TEST(CouplingProtocol, LoopbackThousandStepsInOrder) {
     f = Eigen::Vector3d(k, -k, 1000.0 + i);
     n = Eigen::Vector3d(2 * k, i, 0.0);
   };
-  ScriptedTrack track(c, link.track_end(), f_of_step);
-  VehicleCoupling v(c, link.vehicle_end());
+  ScriptedTrack track(c, link.trackEnd(), f_of_step);
+  VehicleCoupling v(c, link.vehicleEnd());
   for (std::uint64_t k = 0; k < 1000; ++k) {
-    ASSERT_EQ(v.next_step(), k);
-    ASSERT_EQ(v.next_exchange_time(), static_cast<double>(k) * c.track_step);
-    fill_states(v, 8);
+    ASSERT_EQ(v.nextStep(), k);
+    ASSERT_EQ(v.nextExchangeTime(), static_cast<double>(k) * c.track_step);
+    fillStates(v, 8);
     const Result r = v.exchange();
     ASSERT_TRUE(r) << r.message;
-    const WrenchFrame& w = v.last_wrenches();
+    const WrenchFrame& w = v.lastWrenches();
     ASSERT_EQ(w.step, k);
     ASSERT_EQ(w.scene_hash, kHash);
     for (int i = 0; i < 8; ++i) {
@@ -201,7 +201,7 @@ TEST(CouplingProtocol, LoopbackThousandStepsInOrder) {
   EXPECT_EQ(track.last.status, Status::kPeerClosed);
   EXPECT_EQ(track.last.message,
             "track: waiting for the wheel states of step 1000: the vehicle closed the connection");
-  EXPECT_EQ(exit_code(track.last.status), kExitPeerTimeout);
+  EXPECT_EQ(exitCode(track.last.status), kExitPeerTimeout);
 }
 
 // The track refuses a frame with another scene hash, a skipped step and a repeated step.
@@ -218,27 +218,27 @@ TEST(CouplingProtocol, TrackRefusesWrongHashAndStep) {
   const Deadline soon = Clock::now() + std::chrono::seconds(5);
   {
     LoopbackLink link(2);
-    TrackCoupling track(c, link.track_end());
-    ASSERT_TRUE(link.vehicle_end().send_states(frame(0, 0xabcdef), soon));
+    TrackCoupling track(c, link.trackEnd());
+    ASSERT_TRUE(link.vehicleEnd().sendStates(frame(0, 0xabcdef), soon));
     const Result r = track.receive();
     EXPECT_EQ(r.status, Status::kRefused);
     EXPECT_EQ(r.message,
               "track: wheel states from the vehicle refused at step 0: scene hash 0000000000abcdef received, "
               "00c0ffee12345678 expected");
-    EXPECT_EQ(exit_code(r.status), kExitPeerRefused);
+    EXPECT_EQ(exitCode(r.status), kExitPeerRefused);
     // The coupling stays failed.
     EXPECT_EQ(track.receive().status, Status::kError);
   }
   for (std::uint64_t bad : {2u, 0u}) {
     LoopbackLink link(2);
-    TrackCoupling track(c, link.track_end());
+    TrackCoupling track(c, link.trackEnd());
     WrenchFrame answer(2);
-    ASSERT_TRUE(link.vehicle_end().send_states(frame(0, kHash), soon));
+    ASSERT_TRUE(link.vehicleEnd().sendStates(frame(0, kHash), soon));
     ASSERT_TRUE(track.receive());
     ASSERT_TRUE(track.send());
-    ASSERT_TRUE(link.vehicle_end().receive_wrenches(answer, soon));
+    ASSERT_TRUE(link.vehicleEnd().receiveWrenches(answer, soon));
     EXPECT_EQ(answer.step, 0u);
-    ASSERT_TRUE(link.vehicle_end().send_states(frame(bad, kHash), soon));
+    ASSERT_TRUE(link.vehicleEnd().sendStates(frame(bad, kHash), soon));
     const Result r = track.receive();
     EXPECT_EQ(r.status, Status::kRefused);
     EXPECT_EQ(r.message, "track: wheel states from the vehicle refused at step 1: step " + std::to_string(bad) +
@@ -246,20 +246,20 @@ TEST(CouplingProtocol, TrackRefusesWrongHashAndStep) {
   }
   {  // Another wheel count.
     LoopbackLink link(2);
-    TrackCoupling track(c, link.track_end());
+    TrackCoupling track(c, link.trackEnd());
     WheelStateFrame f = frame(0, kHash);
     f.count = 1;
-    ASSERT_TRUE(link.vehicle_end().send_states(f, soon));
+    ASSERT_TRUE(link.vehicleEnd().sendStates(f, soon));
     const Result r = track.receive();
     EXPECT_EQ(r.status, Status::kRefused);
     EXPECT_EQ(r.message, "track: wheel states from the vehicle refused at step 0: 1 wheels received, 2 expected");
   }
   {  // A time that does not belong to the step.
     LoopbackLink link(2);
-    TrackCoupling track(c, link.track_end());
+    TrackCoupling track(c, link.trackEnd());
     WheelStateFrame f = frame(0, kHash);
     f.time = 0.25;
-    ASSERT_TRUE(link.vehicle_end().send_states(f, soon));
+    ASSERT_TRUE(link.vehicleEnd().sendStates(f, soon));
     const Result r = track.receive();
     EXPECT_EQ(r.status, Status::kRefused);
     EXPECT_EQ(r.message,
@@ -273,16 +273,16 @@ TEST(CouplingProtocol, VehicleRefusesWrongAnswer) {
   const CouplingConfig c = config(2, 0.5);
   const Deadline soon = Clock::now() + std::chrono::seconds(5);
   LoopbackLink link(2);
-  VehicleCoupling v(c, link.vehicle_end());
+  VehicleCoupling v(c, link.vehicleEnd());
   WheelStateFrame got(2);
   std::thread fake_track([&] {
-    ASSERT_TRUE(link.track_end().receive_states(got, soon));
+    ASSERT_TRUE(link.trackEnd().receiveStates(got, soon));
     WrenchFrame w(2);
     w.step = 7;
     w.time = 3.5;
     w.scene_hash = kHash;
     w.count = 2;
-    ASSERT_TRUE(link.track_end().send_wrenches(w, soon));
+    ASSERT_TRUE(link.trackEnd().sendWrenches(w, soon));
   });
   const Result r = v.exchange();
   fake_track.join();
@@ -290,7 +290,7 @@ TEST(CouplingProtocol, VehicleRefusesWrongAnswer) {
   EXPECT_EQ(r.message,
             "vehicle: contact wrenches from the track refused at step 0: step 7 received, 0 expected (step "
             "skipped)");
-  EXPECT_EQ(v.frames_received(), 0);  // the refused frame did not enter the extrapolation
+  EXPECT_EQ(v.framesReceived(), 0);  // the refused frame did not enter the extrapolation
 }
 
 // A track that never answers: the exchange returns kTimeout after the exchange timeout. Slack 0.25 s
@@ -298,25 +298,25 @@ TEST(CouplingProtocol, VehicleRefusesWrongAnswer) {
 TEST(CouplingProtocol, SilentPeerTimesOut) {
   const CouplingConfig c = config(2, 2e-5, 0.3);
   LoopbackLink link(2);
-  VehicleCoupling v(c, link.vehicle_end());
+  VehicleCoupling v(c, link.vehicleEnd());
   const auto t0 = Clock::now();
   const Result r = v.exchange();
-  const double elapsed = seconds_since(t0);
+  const double elapsed = secondsSince(t0);
   EXPECT_EQ(r.status, Status::kTimeout);
   EXPECT_GE(elapsed, 0.3);
   EXPECT_LE(elapsed, 0.3 + 0.25);
   EXPECT_EQ(r.message,
             "vehicle: waiting for the contact wrenches of step 0: the track did not answer within 0.3 s "
             "(solver.exchange_timeout)");
-  EXPECT_EQ(exit_code(r.status), kExitPeerTimeout);
+  EXPECT_EQ(exitCode(r.status), kExitPeerTimeout);
 
-  TrackCoupling track(c, link.track_end());  // nothing more comes from the (failed) vehicle
+  TrackCoupling track(c, link.trackEnd());  // nothing more comes from the (failed) vehicle
   const auto t1 = Clock::now();
   const Result rt = track.receive();
   EXPECT_EQ(rt.status, Status::kOk) << rt.message;  // the states of step 0 were handed over
   ASSERT_TRUE(track.send());
   const Result r2 = track.receive();
-  const double elapsed2 = seconds_since(t1);
+  const double elapsed2 = secondsSince(t1);
   EXPECT_EQ(r2.status, Status::kTimeout);
   EXPECT_LE(elapsed2, 0.3 + 0.25);
   EXPECT_EQ(r2.message,
@@ -329,7 +329,7 @@ TEST(CouplingProtocol, InterruptEndsTheWait) {
   std::atomic<bool> stop{false};
   const CouplingConfig c = config(2, 2e-5, 30.0);
   LoopbackLink link(2, &stop);
-  TrackCoupling track(c, link.track_end());
+  TrackCoupling track(c, link.trackEnd());
   std::thread raiser([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     stop = true;
@@ -338,9 +338,9 @@ TEST(CouplingProtocol, InterruptEndsTheWait) {
   const Result r = track.receive();
   raiser.join();
   EXPECT_EQ(r.status, Status::kInterrupted);
-  EXPECT_LE(seconds_since(t0), 0.1 + 0.25);
+  EXPECT_LE(secondsSince(t0), 0.1 + 0.25);
   EXPECT_EQ(r.message, "track: waiting for the wheel states of step 0: interrupted");
-  EXPECT_EQ(exit_code(r.status), kExitInterrupted);
+  EXPECT_EQ(exitCode(r.status), kExitInterrupted);
 }
 
 TEST(CouplingProtocol, NonPhysicalConfigIsRefused) {
@@ -348,21 +348,21 @@ TEST(CouplingProtocol, NonPhysicalConfigIsRefused) {
   CouplingConfig c = config(2);
   c.track_step = -1e-5;
   try {
-    VehicleCoupling v(c, link.vehicle_end());
+    VehicleCoupling v(c, link.vehicleEnd());
     FAIL() << "no exception";
   } catch (const std::runtime_error& e) {
     EXPECT_STREQ(e.what(), "coupling: solver.track_step must be > 0 s (got -1e-05)");
   }
   c = config(2);
   c.exchange_timeout = 0.0;
-  EXPECT_THROW(TrackCoupling(c, link.track_end()), std::runtime_error);
+  EXPECT_THROW(TrackCoupling(c, link.trackEnd()), std::runtime_error);
   c = config(0);
-  EXPECT_THROW(TrackCoupling(c, link.track_end()), std::runtime_error);
+  EXPECT_THROW(TrackCoupling(c, link.trackEnd()), std::runtime_error);
 }
 
 TEST(CouplingProtocol, SendBeforeReceiveIsAnError) {
   LoopbackLink link(2);
-  TrackCoupling track(config(2), link.track_end());
+  TrackCoupling track(config(2), link.trackEnd());
   const Result r = track.send();
   EXPECT_EQ(r.status, Status::kError);
   EXPECT_EQ(r.message, "track: send() called before receive() for step 0");
@@ -375,7 +375,7 @@ TEST(CouplingProtocol, ConfigFromScene) {
   s.solver.track_step = 1e-5;
   s.solver.exchange_timeout = 3.0;
   s.hash = 42;
-  const CouplingConfig c = coupling_config(s);
+  const CouplingConfig c = couplingConfig(s);
   EXPECT_EQ(c.track_step, 1e-5);
   EXPECT_EQ(c.exchange_timeout, 3.0);
   EXPECT_EQ(c.scene_hash, 42u);

@@ -28,19 +28,19 @@ constexpr std::uint64_t kHash = 0x5ca1ab1e00000001ull;
 constexpr int kWheels = 8;
 
 // Region names of these tests start with this prefix (unique to the test process).
-std::string test_prefix() { return "railsimtest" + std::to_string(getpid()); }
+std::string testPrefix() { return "railsimtest" + std::to_string(getpid()); }
 
-std::vector<std::string> leftover_regions() {
+std::vector<std::string> leftoverRegions() {
   std::vector<std::string> found;
   if (DIR* d = opendir("/dev/shm")) {
     while (dirent* e = readdir(d))
-      if (std::string(e->d_name).rfind(test_prefix(), 0) == 0) found.push_back(e->d_name);
+      if (std::string(e->d_name).rfind(testPrefix(), 0) == 0) found.push_back(e->d_name);
     closedir(d);
   }
   return found;
 }
 
-double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // splitmix64: deterministic 64-bit patterns.
 std::uint64_t mix(std::uint64_t x) {
@@ -49,7 +49,7 @@ std::uint64_t mix(std::uint64_t x) {
   x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
   return x ^ (x >> 31);
 }
-double from_bits(std::uint64_t b) {
+double fromBits(std::uint64_t b) {
   double d;
   std::memcpy(&d, &b, sizeof d);
   return d;
@@ -64,13 +64,13 @@ std::uint64_t bits(double d) {
 double pattern(std::uint64_t step, int wheel, int field) {
   const std::uint64_t seed = (step << 16) ^ (static_cast<std::uint64_t>(wheel) << 8) ^ field;
   switch (field) {  // a few fixed special values besides the random ones
-    case 0: return wheel == 0 ? -0.0 : from_bits(mix(seed));
-    case 1: return wheel == 1 ? from_bits(1) : from_bits(mix(seed));                      // subnormal
-    case 2: return wheel == 2 ? from_bits(0x7ff8000000001234ull + step) : from_bits(mix(seed));  // NaN
-    default: return from_bits(mix(seed));
+    case 0: return wheel == 0 ? -0.0 : fromBits(mix(seed));
+    case 1: return wheel == 1 ? fromBits(1) : fromBits(mix(seed));                      // subnormal
+    case 2: return wheel == 2 ? fromBits(0x7ff8000000001234ull + step) : fromBits(mix(seed));  // NaN
+    default: return fromBits(mix(seed));
   }
 }
-void fill_states(WheelStateFrame& f, std::uint64_t step) {
+void fillStates(WheelStateFrame& f, std::uint64_t step) {
   for (int i = 0; i < kWheels; ++i) {
     WheelState& w = f.wheels[i];
     w.id = static_cast<std::uint32_t>(mix(step * 31 + i));
@@ -81,7 +81,7 @@ void fill_states(WheelStateFrame& f, std::uint64_t step) {
     for (int j = 0; j < 3; ++j) w.omega_wheelset_in_world[j] = pattern(step, i, 11 + j);
   }
 }
-void fill_wrenches(WrenchFrame& f, std::uint64_t step) {
+void fillWrenches(WrenchFrame& f, std::uint64_t step) {
   for (int i = 0; i < kWheels; ++i) {
     WheelWrench& w = f.wheels[i];
     w.id = static_cast<std::uint32_t>(mix(step * 37 + i));
@@ -90,30 +90,30 @@ void fill_wrenches(WrenchFrame& f, std::uint64_t step) {
   }
 }
 template <class V>
-bool same_bits(const V& a, const V& b) {
+bool sameBits(const V& a, const V& b) {
   for (int j = 0; j < a.size(); ++j)
     if (bits(a[j]) != bits(b[j])) return false;
   return true;
 }
-bool same_bits(const WheelStateFrame& a, const WheelStateFrame& b) {
+bool sameBits(const WheelStateFrame& a, const WheelStateFrame& b) {
   if (a.count != b.count) return false;
   for (std::uint32_t i = 0; i < a.count; ++i) {
     const WheelState &x = a.wheels[i], &y = b.wheels[i];
     if (x.id != y.id || bits(x.arc_length) != bits(y.arc_length) ||
-        !same_bits(x.p_wheel_in_world, y.p_wheel_in_world) ||
-        !same_bits(x.q_wheelset_to_world.coeffs(), y.q_wheelset_to_world.coeffs()) ||
-        !same_bits(x.v_wheel_in_world, y.v_wheel_in_world) ||
-        !same_bits(x.omega_wheelset_in_world, y.omega_wheelset_in_world))
+        !sameBits(x.p_wheel_in_world, y.p_wheel_in_world) ||
+        !sameBits(x.q_wheelset_to_world.coeffs(), y.q_wheelset_to_world.coeffs()) ||
+        !sameBits(x.v_wheel_in_world, y.v_wheel_in_world) ||
+        !sameBits(x.omega_wheelset_in_world, y.omega_wheelset_in_world))
       return false;
   }
   return true;
 }
-bool same_bits(const WrenchFrame& a, const WrenchFrame& b) {
+bool sameBits(const WrenchFrame& a, const WrenchFrame& b) {
   if (a.count != b.count) return false;
   for (std::uint32_t i = 0; i < a.count; ++i) {
     const WheelWrench &x = a.wheels[i], &y = b.wheels[i];
-    if (x.id != y.id || !same_bits(x.f_wheel_in_world, y.f_wheel_in_world) ||
-        !same_bits(x.n_wheel_in_world, y.n_wheel_in_world))
+    if (x.id != y.id || !sameBits(x.f_wheel_in_world, y.f_wheel_in_world) ||
+        !sameBits(x.n_wheel_in_world, y.n_wheel_in_world))
       return false;
   }
   return true;
@@ -142,7 +142,7 @@ class ShmTest : public ::testing::Test {
       waitpid(pid, nullptr, 0);
     }
     // Nothing may be left in /dev/shm by a passing test; remove what a failing one left.
-    const auto left = leftover_regions();
+    const auto left = leftoverRegions();
     EXPECT_TRUE(left.empty()) << left.size() << " region(s) left, first: " << left.front();
     for (const std::string& n : left) shm_unlink(("/" + n).c_str());
   }
@@ -154,10 +154,10 @@ class ShmTest : public ::testing::Test {
     o.wheel_capacity = kWheels;
     o.run_id = run_id;
     o.attach_timeout = attach_timeout;
-    o.name_prefix = test_prefix();
+    o.name_prefix = testPrefix();
     return o;
   }
-  std::string name(Role writer) const { return shm_region_name(test_prefix(), kHash, run_id, writer); }
+  std::string name(Role writer) const { return shmRegionName(testPrefix(), kHash, run_id, writer); }
   bool exists(Role writer) const {
     struct stat st {};
     return stat(("/dev/shm" + name(writer)).c_str(), &st) == 0;
@@ -179,7 +179,7 @@ class ShmTest : public ::testing::Test {
     return pid;
   }
   // Exit code of a child, -1 if it did not end within `timeout` seconds (then it is killed).
-  int wait_child(pid_t pid, double timeout = 20.0) {
+  int waitChild(pid_t pid, double timeout = 20.0) {
     const auto t0 = Clock::now();
     for (;;) {
       int status = 0;
@@ -188,7 +188,7 @@ class ShmTest : public ::testing::Test {
           if (c == pid) c = 0;
         return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
       }
-      if (seconds_since(t0) > timeout) return -1;
+      if (secondsSince(t0) > timeout) return -1;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
   }
@@ -200,7 +200,7 @@ class ShmTest : public ::testing::Test {
   }
   // Waits until the writer's region is complete (its magic is stored last), not merely named: a process
   // killed between creating the name and finishing the header leaves an incomplete region, another case.
-  bool wait_complete(Role writer, double timeout = 10.0) {
+  bool waitComplete(Role writer, double timeout = 10.0) {
     const auto t0 = Clock::now();
     for (;;) {
       bool complete = false;
@@ -217,7 +217,7 @@ class ShmTest : public ::testing::Test {
         close(fd);
       }
       if (complete) return true;
-      if (seconds_since(t0) > timeout) return false;
+      if (secondsSince(t0) > timeout) return false;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
   }
@@ -228,7 +228,7 @@ class ShmTest : public ::testing::Test {
 
 // A child track that answers `steps` steps with fill_wrenches and checks the states it receives bit for
 // bit (exit 0 if all matched, 10 + reason otherwise).
-int echo_track(const ShmOptions& o, int steps, bool close_at_end = true) {
+int echoTrack(const ShmOptions& o, int steps, bool close_at_end = true) {
   ShmTransport t(o);
   TrackCoupling track(config(), t);
   WheelStateFrame expected(kWheels);
@@ -236,9 +236,9 @@ int echo_track(const ShmOptions& o, int steps, bool close_at_end = true) {
   int mismatches = 0;
   for (int k = 0; k < steps; ++k) {
     if (!track.receive()) return 11;
-    fill_states(expected, static_cast<std::uint64_t>(k));
-    if (!same_bits(track.states(), expected)) ++mismatches;
-    fill_wrenches(track.wrenches(), static_cast<std::uint64_t>(k));
+    fillStates(expected, static_cast<std::uint64_t>(k));
+    if (!sameBits(track.states(), expected)) ++mismatches;
+    fillWrenches(track.wrenches(), static_cast<std::uint64_t>(k));
     if (!track.send()) return 12;
   }
   if (close_at_end) t.close();
@@ -250,21 +250,21 @@ int echo_track(const ShmOptions& o, int steps, bool close_at_end = true) {
 // Frames cross the process boundary bit for bit, in both directions, for 200 steps.
 TEST_F(ShmTest, RoundTripAcrossProcessesIsBitExact) {
   const ShmOptions track_options = options(Role::kTrack);
-  const pid_t child = spawn([&] { return echo_track(track_options, 200); });
+  const pid_t child = spawn([&] { return echoTrack(track_options, 200); });
   ShmTransport t(options(Role::kVehicle));
-  EXPECT_EQ(t.peer_pid(), child);
+  EXPECT_EQ(t.peerPid(), child);
   VehicleCoupling v(config(), t);
   WrenchFrame expected(kWheels);
   expected.count = kWheels;
   for (std::uint64_t k = 0; k < 200; ++k) {
-    fill_states(v.states(), k);
+    fillStates(v.states(), k);
     const Result r = v.exchange();
     ASSERT_TRUE(r) << r.message;
-    fill_wrenches(expected, k);
-    ASSERT_EQ(v.last_wrenches().step, k);
-    ASSERT_TRUE(same_bits(v.last_wrenches(), expected)) << "step " << k;
+    fillWrenches(expected, k);
+    ASSERT_EQ(v.lastWrenches().step, k);
+    ASSERT_TRUE(sameBits(v.lastWrenches(), expected)) << "step " << k;
   }
-  EXPECT_EQ(wait_child(child), 0);  // 0: the track saw every state frame bit for bit
+  EXPECT_EQ(waitChild(child), 0);  // 0: the track saw every state frame bit for bit
   t.close();
   EXPECT_FALSE(exists(Role::kVehicle));
   EXPECT_FALSE(exists(Role::kTrack));
@@ -279,8 +279,8 @@ TEST_F(ShmTest, RegionsArePrivateToTheUser) {
   ASSERT_EQ(stat(("/dev/shm" + name(Role::kVehicle)).c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 07777, 0600u);
   EXPECT_EQ(st.st_uid, getuid());
-  EXPECT_EQ(static_cast<std::size_t>(st.st_size), shm::shm_region_size(shm::FrameKind::kWheelStates, kWheels));
-  r.unlink_if_same();
+  EXPECT_EQ(static_cast<std::size_t>(st.st_size), shm::shmRegionSize(shm::FrameKind::kWheelStates, kWheels));
+  r.unlinkIfSame();
 }
 
 // Attach refuses a region whose payload size, total size, layout version or scene hash differ, naming the
@@ -298,13 +298,13 @@ TEST_F(ShmTest, AttachRefusesMismatchedRegions) {
     }
     EXPECT_FALSE(exists(Role::kVehicle));  // its own region was removed
   };
-  const std::size_t payload8 = shm::shm_payload_size(FrameKind::kWrenches, 8);
-  const std::size_t payload16 = shm::shm_payload_size(FrameKind::kWrenches, 16);
+  const std::size_t payload8 = shm::shmPayloadSize(FrameKind::kWrenches, 8);
+  const std::size_t payload16 = shm::shmPayloadSize(FrameKind::kWrenches, 16);
   {  // wheel capacity 16 instead of 8
     ShmRegion r = ShmRegion::create({t2v, FrameKind::kWrenches, 16, kHash});
     expect_refusal("shm transport: region " + t2v + " refused: payload size " + std::to_string(payload8) +
                    " bytes (8 wheels) expected, " + std::to_string(payload16) + " bytes (16 wheels) in the region");
-    r.unlink_if_same();
+    r.unlinkIfSame();
   }
   {  // a region grown past its header's sizes
     ShmRegion r = ShmRegion::create({t2v, FrameKind::kWrenches, 8, kHash});
@@ -314,19 +314,19 @@ TEST_F(ShmTest, AttachRefusesMismatchedRegions) {
     close(fd);
     expect_refusal("shm transport: region " + t2v + " refused: size " + std::to_string(r.size()) +
                    " bytes expected, " + std::to_string(r.size() + 4096) + " bytes in the region");
-    r.unlink_if_same();
+    r.unlinkIfSame();
   }
   {  // another layout version
     ShmRegion r = ShmRegion::create({t2v, FrameKind::kWrenches, 8, kHash});
     r.header().layout_version = 99;
     expect_refusal("shm transport: region " + t2v + " refused: layout version 1 expected, 99 in the region");
-    r.unlink_if_same();
+    r.unlinkIfSame();
   }
   {  // another scene under the same name
     ShmRegion r = ShmRegion::create({t2v, FrameKind::kWrenches, 8, 0x1111});
     expect_refusal("shm transport: region " + t2v +
                    " refused: scene hash 5ca1ab1e00000001 expected, 0000000000001111 in the region");
-    r.unlink_if_same();
+    r.unlinkIfSame();
   }
   {  // created on another host
     ShmRegion r = ShmRegion::create({t2v, FrameKind::kWrenches, 8, kHash});
@@ -335,7 +335,7 @@ TEST_F(ShmTest, AttachRefusesMismatchedRegions) {
     gethostname(host, sizeof host - 1);
     expect_refusal("shm transport: region " + t2v + " refused: created on host 'elsewhere', this is host '" +
                    host + "'; the shm transport needs both nodes on one host (use transport service or topic)");
-    r.unlink_if_same();
+    r.unlinkIfSame();
   }
 }
 
@@ -374,18 +374,18 @@ TEST_F(ShmTest, LiveRegionIsRefusedClosedOneReplaced) {
     EXPECT_EQ(std::string(e.what()).rfind("shm transport: region " + spec.name + " is in use by pid " +
                                           std::to_string(getpid()) + " on host '", 0), 0u) << e.what();
   }
-  EXPECT_EQ(first.replaced_stale(), "");  // the name was free
+  EXPECT_EQ(first.replacedStale(), "");  // the name was free
   first.header().state.fetch_or(shm::kWriterClosed);
   ShmRegion second = ShmRegion::create(spec);  // the closed one is stale: replaced
   EXPECT_EQ(second.header().state.load(), 0u);
-  EXPECT_EQ(second.replaced_stale().rfind("replaced the stale region " + spec.name + " left by pid " +
+  EXPECT_EQ(second.replacedStale().rfind("replaced the stale region " + spec.name + " left by pid " +
                                               std::to_string(getpid()) + " on host '", 0), 0u)
-      << second.replaced_stale();
-  EXPECT_NE(second.replaced_stale().find("' (closed by its writer)"), std::string::npos) << second.replaced_stale();
+      << second.replacedStale();
+  EXPECT_NE(second.replacedStale().find("' (closed by its writer)"), std::string::npos) << second.replacedStale();
   struct stat a {}, b {};
   ASSERT_EQ(stat(("/dev/shm" + spec.name).c_str(), &b), 0);
-  second.unlink_if_same();
-  first.unlink_if_same();  // no longer its name: does nothing
+  second.unlinkIfSame();
+  first.unlinkIfSame();  // no longer its name: does nothing
   EXPECT_NE(stat(("/dev/shm" + spec.name).c_str(), &a), 0);
 }
 
@@ -397,16 +397,16 @@ TEST_F(ShmTest, IncompleteRegionOfDeadCreatorIsReplaced) {
   for (const bool sized : {false, true}) {
     const int fd = shm_open(spec.name.c_str(), O_CREAT | O_EXCL | O_RDWR, 0600);
     ASSERT_GE(fd, 0);
-    if (sized) ASSERT_EQ(ftruncate(fd, static_cast<off_t>(shm::shm_region_size(spec.kind, spec.wheel_capacity))), 0);
+    if (sized) ASSERT_EQ(ftruncate(fd, static_cast<off_t>(shm::shmRegionSize(spec.kind, spec.wheel_capacity))), 0);
     close(fd);
     const auto t0 = Clock::now();
     ShmRegion r = ShmRegion::create(spec);
-    EXPECT_GE(seconds_since(t0), 0.9) << "replaced before the grace, sized " << sized;
+    EXPECT_GE(secondsSince(t0), 0.9) << "replaced before the grace, sized " << sized;
     EXPECT_EQ(r.header().magic.load(), shm::kShmMagic);
     EXPECT_EQ(r.header().creator_pid, getpid());
-    EXPECT_EQ(r.replaced_stale(), "replaced the stale region " + spec.name +
+    EXPECT_EQ(r.replacedStale(), "replaced the stale region " + spec.name +
                                       " (incomplete, left by a creator that died while setting it up)");
-    r.unlink_if_same();
+    r.unlinkIfSame();
   }
 }
 
@@ -418,7 +418,7 @@ TEST_F(ShmTest, StaleRegionOfKilledProcessIsReplaced) {
     ShmTransport t(vehicle_options);  // creates v2t, then waits for a track that never comes
     return 20;
   });
-  ASSERT_TRUE(wait_complete(Role::kVehicle));
+  ASSERT_TRUE(waitComplete(Role::kVehicle));
   kill9(doomed);
   ASSERT_TRUE(exists(Role::kVehicle)) << "the killed process's region should still be there";
   {  // the stale region names a dead creator
@@ -428,25 +428,25 @@ TEST_F(ShmTest, StaleRegionOfKilledProcessIsReplaced) {
     ASSERT_NE(p, MAP_FAILED);
     const auto* h = static_cast<const shm::ShmHeader*>(p);
     EXPECT_EQ(h->creator_pid, doomed);
-    EXPECT_FALSE(shm_process_alive(h->creator_pid, h->creator_start_time));
+    EXPECT_FALSE(shmProcessAlive(h->creator_pid, h->creator_start_time));
     munmap(p, sizeof(shm::ShmHeader));
     close(fd);
   }
   const ShmOptions track_options = options(Role::kTrack);
-  const pid_t track = spawn([&] { return echo_track(track_options, 3); });
+  const pid_t track = spawn([&] { return echoTrack(track_options, 3); });
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the track now polls the stale region
   ShmTransport t(options(Role::kVehicle));
-  EXPECT_EQ(t.peer_pid(), track);
-  EXPECT_EQ(t.replaced_stale().rfind("replaced the stale region " + name(Role::kVehicle) + " left by pid " +
-                                         std::to_string(doomed) + " on host '", 0), 0u) << t.replaced_stale();
-  EXPECT_NE(t.replaced_stale().find("' (its creator is gone)"), std::string::npos) << t.replaced_stale();
+  EXPECT_EQ(t.peerPid(), track);
+  EXPECT_EQ(t.replacedStale().rfind("replaced the stale region " + name(Role::kVehicle) + " left by pid " +
+                                         std::to_string(doomed) + " on host '", 0), 0u) << t.replacedStale();
+  EXPECT_NE(t.replacedStale().find("' (its creator is gone)"), std::string::npos) << t.replacedStale();
   VehicleCoupling v(config(), t);
   for (std::uint64_t k = 0; k < 3; ++k) {
-    fill_states(v.states(), k);
+    fillStates(v.states(), k);
     const Result r = v.exchange();
     ASSERT_TRUE(r) << r.message;
   }
-  EXPECT_EQ(wait_child(track), 0);
+  EXPECT_EQ(waitChild(track), 0);
   t.close();
 }
 
@@ -465,7 +465,7 @@ TEST_F(ShmTest, SilentPeerTimesOutWithinTheDeadline) {
     VehicleCoupling v(config(0.3), t);
     const auto t0 = Clock::now();
     const Result r = v.exchange();
-    const double elapsed = seconds_since(t0);
+    const double elapsed = secondsSince(t0);
     EXPECT_EQ(r.status, Status::kTimeout);
     EXPECT_GE(elapsed, 0.3);
     EXPECT_LE(elapsed, 0.3 + 0.25);
@@ -486,7 +486,7 @@ TEST_F(ShmTest, SilentPeerTimesOutWithinTheDeadline) {
     TrackCoupling track(config(0.3), t);
     const auto t0 = Clock::now();
     const Result r = track.receive();
-    const double elapsed = seconds_since(t0);
+    const double elapsed = secondsSince(t0);
     EXPECT_EQ(r.status, Status::kTimeout);
     EXPECT_GE(elapsed, 0.3);
     EXPECT_LE(elapsed, 0.3 + 0.25);
@@ -500,19 +500,19 @@ TEST_F(ShmTest, SilentPeerTimesOutWithinTheDeadline) {
 // A track that answers two steps and closes: the vehicle's next exchange reports the closed peer at once.
 TEST_F(ShmTest, ClosedPeerIsReported) {
   const ShmOptions track_options = options(Role::kTrack);
-  const pid_t child = spawn([&] { return echo_track(track_options, 2, true); });
+  const pid_t child = spawn([&] { return echoTrack(track_options, 2, true); });
   ShmTransport t(options(Role::kVehicle));
   VehicleCoupling v(config(10.0), t);
   for (std::uint64_t k = 0; k < 2; ++k) {
-    fill_states(v.states(), k);
+    fillStates(v.states(), k);
     ASSERT_TRUE(v.exchange());
   }
   const auto t0 = Clock::now();
   const Result r = v.exchange();
   EXPECT_EQ(r.status, Status::kPeerClosed);
-  EXPECT_LE(seconds_since(t0), 2.0);  // the close wakes the waiter; far below the 10 s timeout
+  EXPECT_LE(secondsSince(t0), 2.0);  // the close wakes the waiter; far below the 10 s timeout
   EXPECT_EQ(r.message, "vehicle: waiting for the contact wrenches of step 2: the track closed the connection");
-  EXPECT_EQ(wait_child(child), 0);
+  EXPECT_EQ(waitChild(child), 0);
 }
 
 // A track killed mid-run (no close): the vehicle notices its process is gone within a few sleep slices
@@ -532,10 +532,10 @@ TEST_F(ShmTest, KilledPeerIsReportedBeforeTheTimeout) {
   const auto t0 = Clock::now();
   const Result r = v.exchange();
   EXPECT_EQ(r.status, Status::kPeerClosed);
-  EXPECT_LE(seconds_since(t0), 1.0);  // 50 ms slices; 1 s leaves room for a loaded machine
+  EXPECT_LE(secondsSince(t0), 1.0);  // 50 ms slices; 1 s leaves room for a loaded machine
   EXPECT_EQ(r.message, "vehicle: waiting for the contact wrenches of step 1: the track closed the connection "
                        "(its process " + std::to_string(child) + " ended without closing)");
-  EXPECT_EQ(wait_child(child), 128 + SIGKILL);
+  EXPECT_EQ(waitChild(child), 128 + SIGKILL);
 }
 
 // Nobody to attach to: the constructor gives up after the attach timeout, naming the peer and the region.
@@ -549,7 +549,7 @@ TEST_F(ShmTest, MissingPeerTimesOutAttaching) {
     EXPECT_EQ(std::string(e.what()),
               "shm transport: the vehicle's region " + name(Role::kVehicle) + " did not appear within 0.2 s");
   }
-  const double elapsed = seconds_since(t0);
+  const double elapsed = secondsSince(t0);
   EXPECT_GE(elapsed, 0.2);
   EXPECT_LE(elapsed, 0.2 + 0.25);
   EXPECT_FALSE(exists(Role::kTrack));
@@ -571,6 +571,6 @@ TEST_F(ShmTest, BadOptionsAreRefused) {
 
 // After all of the above, nothing of this test program is left in /dev/shm.
 TEST(ShmCleanup, NothingLeftInDevShm) {
-  const auto left = leftover_regions();
+  const auto left = leftoverRegions();
   EXPECT_TRUE(left.empty()) << left.size() << " region(s) left, first: " << left.front();
 }

@@ -44,7 +44,7 @@ Scene curveScene(const std::string& irregularities, const std::string& effects) 
   std::string text = kCurve;
   text.replace(text.find("IRREGULARITIES"), 14, irregularities);
   text.replace(text.find("EFFECTS"), 7, effects);
-  return load_scene_text(text, "canted_curve.yaml", kData);
+  return loadSceneText(text, "canted_curve.yaml", kData);
 }
 
 // Gauge point of one rail found in the world, independently of the builder's tilted-profile route: every
@@ -86,8 +86,8 @@ Eigen::Vector2d worldGaugePointNB(const rc::TrackGeometry& g, const rc::ProfileC
 // the R13 corner arc (chord sag (1e-4)^2 / (8 * 0.013) = 1e-7 m).
 TEST(GeometryBuilder, GaugePointsAreTheGaugeApartOnCantedCurve) {
   const Scene scene = curveScene("", "effects: {track_model: flexible}");
-  const rc::TrackGeometry g = build_track_geometry(scene);
-  const rc::ProfileCurve profile = rail_profile_curve(scene);
+  const rc::TrackGeometry g = buildTrackGeometry(scene);
+  const rc::ProfileCurve profile = railProfileCurve(scene);
   for (double s : {5.0, 30.0, 55.0, 90.0, 125.0, 170.0}) {
     const Eigen::Vector2d left = worldGaugePointNB(g, profile, rc::RailSide::kLeft, s, 0.014);
     const Eigen::Vector2d right = worldGaugePointNB(g, profile, rc::RailSide::kRight, s, 0.014);
@@ -109,7 +109,7 @@ TEST(GeometryBuilder, GaugePointsAreTheGaugeApartOnCantedCurve) {
 // except the curvature, 1 ulp-level.
 TEST(GeometryBuilder, SpecCarriesSignedCurvatureCantAndInclination) {
   const Scene scene = curveScene("", "effects: {track_model: flexible}");
-  const rc::GeometrySpec spec = geometry_spec(scene);
+  const rc::GeometrySpec spec = geometrySpec(scene);
   ASSERT_EQ(spec.segments.size(), 5u);
   EXPECT_EQ(spec.segments[1].type, rc::SegmentSpec::Type::Transition);
   EXPECT_DOUBLE_EQ(spec.segments[1].curvature_start, 0.0);
@@ -135,10 +135,10 @@ TEST(GeometryBuilder, IrregularitiesOffCostNothing) {
   const Scene plain = curveScene("", "effects: {track_model: flexible}");
   const Scene off = curveScene(psd, "effects: {track_model: flexible, irregularities: false}");
   const Scene on = curveScene(psd, "effects: {track_model: flexible, irregularities: true}");
-  EXPECT_TRUE(build_irregularities(off).empty());
-  const rc::TrackGeometry g_plain = build_track_geometry(plain);
-  const rc::TrackGeometry g_off = build_track_geometry(off);
-  const rc::TrackGeometry g_on = build_track_geometry(on);
+  EXPECT_TRUE(buildIrregularities(off).empty());
+  const rc::TrackGeometry g_plain = buildTrackGeometry(plain);
+  const rc::TrackGeometry g_off = buildTrackGeometry(off);
+  const rc::TrackGeometry g_on = buildTrackGeometry(on);
   EXPECT_FALSE(g_off.hasIrregularities());
   EXPECT_TRUE(g_on.hasIrregularities());
   EXPECT_EQ(g_off.tableStep(), g_plain.tableStep());
@@ -163,10 +163,10 @@ TEST(GeometryBuilder, PsdRealisationDoesNotRepeatWithinTrack) {
   const Scene on = curveScene(
       "  irregularities: {source: psd, psd: german_low, wavelength_min: 0.5, wavelength_max: 120.0}",
       "effects: {track_model: flexible, irregularities: true}");
-  const rc::Irregularities irr = build_irregularities(on);
+  const rc::Irregularities irr = buildIrregularities(on);
   EXPECT_GT(irr.repeatLength(), on.track.length());
   EXPECT_NEAR(irr.shortestWavelength(), 0.5, 1e-12);
-  const rc::TrackGeometry g = build_track_geometry(on);
+  const rc::TrackGeometry g = buildTrackGeometry(on);
   EXPECT_LE(g.tableStep(), 0.5 / 8.0 + 1e-12);
 }
 
@@ -182,7 +182,7 @@ TEST(GeometryBuilder, ErrorsNameSceneFileAndField) {
   const Scene bad_file = curveScene("  irregularities: {source: file, file: " + csv + "}",
                                     "effects: {track_model: flexible, irregularities: true}");
   try {
-    build_track_geometry(bad_file);
+    buildTrackGeometry(bad_file);
     FAIL() << "no error";
   } catch (const SceneError& e) {
     const std::string m = e.what();
@@ -196,7 +196,7 @@ TEST(GeometryBuilder, ErrorsNameSceneFileAndField) {
   tight.track.segments[1].radius_end = 0.5;
   tight.track.segments[3].radius_start = 0.5;
   try {
-    build_track_geometry(tight);
+    buildTrackGeometry(tight);
     FAIL() << "no error";
   } catch (const SceneError& e) {
     const std::string m = e.what();

@@ -38,7 +38,7 @@ output:
   topics: [wheel_states]
 )";
 
-Scene load(const std::string& text) { return load_scene_text(text, "scene.yaml", kData); }
+Scene load(const std::string& text) { return loadSceneText(text, "scene.yaml", kData); }
 
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
   const auto pos = text.find(from);
@@ -48,7 +48,7 @@ std::string replaced(std::string text, const std::string& from, const std::strin
 }
 
 // The error message of loading `text`, or "" when it loads.
-std::string error_of(const std::string& text) {
+std::string errorOf(const std::string& text) {
   try {
     load(text);
   } catch (const SceneError& e) {
@@ -57,7 +57,7 @@ std::string error_of(const std::string& text) {
   return "";
 }
 
-std::vector<std::string> shipped_scenes() {
+std::vector<std::string> shippedScenes() {
   std::vector<std::string> out;
   const std::string dir = kConfig + "/scenes";
   if (DIR* d = opendir(dir.c_str())) {
@@ -84,32 +84,32 @@ TEST(Scene, BaseSceneLoadsWithDefaults) {
   EXPECT_TRUE(s.effects.flange_contact);                           // default on
   EXPECT_EQ(s.solver.end.kind, EndKind::kArcLength);
   EXPECT_DOUBLE_EQ(s.solver.end.value, 150.0);                     // default: the track's end
-  EXPECT_EQ(s.wheel_count(), 8);
+  EXPECT_EQ(s.wheelCount(), 8);
   EXPECT_TRUE(s.cosimulation());
-  EXPECT_FALSE(s.runs_fe_integration());
+  EXPECT_FALSE(s.runsFeIntegration());
   // Left curve: positive curvature, the right (outer) rail raised: positive cant.
-  EXPECT_DOUBLE_EQ(s.track.segments[2].curvature_at_start(), 1.0 / 500.0);
-  EXPECT_DOUBLE_EQ(s.track.segments[2].signed_cant_at_start(), 0.1);
+  EXPECT_DOUBLE_EQ(s.track.segments[2].curvatureAtStart(), 1.0 / 500.0);
+  EXPECT_DOUBLE_EQ(s.track.segments[2].signedCantAtStart(), 0.1);
 }
 
 TEST(Scene, EveryShippedSceneLoadsAndRoundTrips) {
-  const auto scenes = shipped_scenes();
+  const auto scenes = shippedScenes();
   ASSERT_GE(scenes.size(), 3u) << "expected the paper, straight and tight-curve scenes in config/scenes";
   for (const auto& path : scenes) {
     SCOPED_TRACE(path);
     Scene a;
-    ASSERT_NO_THROW(a = load_scene_file(path));
-    const std::string resolved = to_yaml(a);
+    ASSERT_NO_THROW(a = loadSceneFile(path));
+    const std::string resolved = toYaml(a);
     // The resolved form loads again to the same scene: same text, same hash.
-    const Scene b = load_scene_text(resolved, path, kConfig + "/scenes");
-    EXPECT_EQ(to_yaml(b), resolved);
+    const Scene b = loadSceneText(resolved, path, kConfig + "/scenes");
+    EXPECT_EQ(toYaml(b), resolved);
     EXPECT_EQ(a.hash, b.hash);
     EXPECT_FALSE(describe(a, Role::kValidator).empty());
   }
 }
 
 TEST(Scene, ThePaperSceneIsTheOneTheIssueDescribes) {
-  const Scene s = load_scene_file(kConfig + "/scenes/paper_demo.yaml");
+  const Scene s = loadSceneFile(kConfig + "/scenes/paper_demo.yaml");
   EXPECT_DOUBLE_EQ(s.track.length(), 500.0);
   EXPECT_DOUBLE_EQ(s.track.gauge, 1.668);
   EXPECT_NEAR(s.vehicle.speed * 3.6, 110.0, 1e-3);
@@ -133,7 +133,7 @@ TEST(Scene, InclinationAcceptsARatioOrANumber) {
                        .track.rail_inclination, 0.025);
   EXPECT_DOUBLE_EQ(load(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 0.025"))
                        .track.rail_inclination, 0.025);
-  EXPECT_EQ(error_of(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 1/zero")),
+  EXPECT_EQ(errorOf(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 1/zero")),
             "scene.yaml: track.rail_inclination: must be a ratio such as 1/20 or a number, got '1/zero' (line 4)");
 }
 
@@ -245,7 +245,7 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.what);
-    EXPECT_EQ(error_of(c.text), c.message);
+    EXPECT_EQ(errorOf(c.text), c.message);
   }
 }
 
@@ -259,15 +259,15 @@ TEST(Scene, ContactSectionReachesTheSceneAndItsHash) {
   EXPECT_DOUBLE_EQ(wet.contact.restitution, 0.8);
   EXPECT_DOUBLE_EQ(wet.contact.impact_velocity_floor, 0.1);
   EXPECT_NE(wet.hash, base.hash);  // two nodes with different rail conditions refuse each other
-  EXPECT_NE(to_yaml(wet).find("contact:\n  friction: 0.15\n  restitution: 0.8\n  impact_velocity_floor: 0.1"),
-            std::string::npos) << to_yaml(wet);
+  EXPECT_NE(toYaml(wet).find("contact:\n  friction: 0.15\n  restitution: 0.8\n  impact_velocity_floor: 0.1"),
+            std::string::npos) << toYaml(wet);
   // Overrides reach it like any key.
-  EXPECT_DOUBLE_EQ(load_scene_text(kBase, "scene.yaml", kData, {"contact.friction=0.45"}).contact.friction, 0.45);
+  EXPECT_DOUBLE_EQ(loadSceneText(kBase, "scene.yaml", kData, {"contact.friction=0.45"}).contact.friction, 0.45);
 }
 
 TEST(Scene, MissingSceneFileNamesIt) {
   try {
-    load_scene_file("/nonexistent/scene.yaml");
+    loadSceneFile("/nonexistent/scene.yaml");
     FAIL() << "a missing scene file was accepted";
   } catch (const SceneError& e) {
     EXPECT_EQ(std::string(e.what()), "/nonexistent/scene.yaml: cannot read the scene file: No such file or directory");
@@ -289,7 +289,7 @@ TEST(Scene, DescribeListsEffectsAndComponents) {
 TEST(Scene, OverridesChangeKeysAsIfTheFileSaidSo) {
   // One scene run with each track model and a shorter end: the override gives the scene (and the hash) the
   // file would give with those keys written in it.
-  const Scene over = load_scene_text(kBase, "scene.yaml", kData,
+  const Scene over = loadSceneText(kBase, "scene.yaml", kData,
                                      {"effects.track_model=flexible", "solver.end={time: 0.5}", "output.bag=x.bag"});
   std::string edited = replaced(kBase, "track_model: rigid_fe", "track_model: flexible");
   edited = replaced(edited, "  vehicle_max_step: 1.0e-5\n", "  vehicle_max_step: 1.0e-5\n  end: {time: 0.5}\n");
@@ -300,21 +300,21 @@ TEST(Scene, OverridesChangeKeysAsIfTheFileSaidSo) {
   EXPECT_DOUBLE_EQ(over.solver.end.value, 0.5);
   EXPECT_EQ(over.output.bag, "x.bag");
   EXPECT_EQ(over.hash, file.hash);
-  EXPECT_EQ(to_yaml(over), to_yaml(file));
+  EXPECT_EQ(toYaml(over), toYaml(file));
   // An empty value keeps the file's value (a launch argument left empty).
-  EXPECT_EQ(load_scene_text(kBase, "scene.yaml", kData, {"effects.track_model="}).hash, load(kBase).hash);
+  EXPECT_EQ(loadSceneText(kBase, "scene.yaml", kData, {"effects.track_model="}).hash, load(kBase).hash);
   // A missing map is created.
-  EXPECT_EQ(load_scene_text(kBase, "scene.yaml", kData, {"effects.irregularities=false"}).effects.irregularities,
+  EXPECT_EQ(loadSceneText(kBase, "scene.yaml", kData, {"effects.irregularities=false"}).effects.irregularities,
             false);
-  EXPECT_EQ(split_overrides("  a=1 b.c=2\tc= "), (SceneOverrides{"a=1", "b.c=2", "c="}));
-  EXPECT_EQ(split_overrides("solver.end={time: 1.5} output.bag='a b.bag' t=[x, y]"),
+  EXPECT_EQ(splitOverrides("  a=1 b.c=2\tc= "), (SceneOverrides{"a=1", "b.c=2", "c="}));
+  EXPECT_EQ(splitOverrides("solver.end={time: 1.5} output.bag='a b.bag' t=[x, y]"),
             (SceneOverrides{"solver.end={time: 1.5}", "output.bag='a b.bag'", "t=[x, y]"}));
 }
 
 TEST(Scene, BadOverridesAreRefusedNamingTheOverride) {
   auto error = [](const SceneOverrides& o) -> std::string {
     try {
-      load_scene_text(kBase, "scene.yaml", kData, o);
+      loadSceneText(kBase, "scene.yaml", kData, o);
     } catch (const SceneError& e) {
       return e.what();
     }
@@ -335,22 +335,22 @@ TEST(Scene, BadOverridesAreRefusedNamingTheOverride) {
 TEST(Scene, AKeyGivenTwiceIsRefusedNamingBothLines) {
   // yaml-cpp would keep the first value without a word.
   const std::string twice = replaced(kBase, "  speed: 30.0\n", "  speed: 30.0\n  speed: 10.0\n");
-  const std::string e = error_of(twice);
+  const std::string e = errorOf(twice);
   EXPECT_NE(e.find("scene.yaml: vehicle.speed: given twice (lines "), std::string::npos) << e;
   // Inside a list item too.
   const std::string in_list = replaced(kBase, "{type: straight, length: 50.0}", "{type: straight, length: 50.0, length: 5}");
-  EXPECT_NE(error_of(in_list).find("track.segments[0].length: given twice"), std::string::npos) << error_of(in_list);
+  EXPECT_NE(errorOf(in_list).find("track.segments[0].length: given twice"), std::string::npos) << errorOf(in_list);
 }
 
 TEST(Scene, AFlowMapOverrideWithoutSpacesReadsAsWritten) {
   // scene.launch's comment writes solver.end={time:1.0}; YAML alone would read the key "time:1.0".
-  const Scene s = load_scene_text(kBase, "scene.yaml", kData, {"solver.end={time:1.0}"});
+  const Scene s = loadSceneText(kBase, "scene.yaml", kData, {"solver.end={time:1.0}"});
   EXPECT_EQ(s.solver.end.kind, EndKind::kTime);
   EXPECT_DOUBLE_EQ(s.solver.end.value, 1.0);
-  EXPECT_EQ(load_scene_text(kBase, "scene.yaml", kData, {"output.bag='a:b.bag'"}).output.bag, "a:b.bag");
+  EXPECT_EQ(loadSceneText(kBase, "scene.yaml", kData, {"output.bag='a:b.bag'"}).output.bag, "a:b.bag");
 }
 
 TEST(Scene, TrackLengthsThatWouldOverflowACountAreRefused) {
-  const std::string e = error_of(replaced(kBase, "length: 50.0", "length: 1e308"));
+  const std::string e = errorOf(replaced(kBase, "length: 50.0", "length: 1e308"));
   EXPECT_NE(e.find("track.segments[0].length: must be <= 1e+06 m"), std::string::npos) << e;
 }

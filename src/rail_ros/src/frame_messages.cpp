@@ -15,19 +15,19 @@ using coupling::Status;
 namespace {
 
 // The stamp of time t [s] (the frames' times are >= 0), or false when t is no valid ros::Time.
-bool stamp_of(double t, ros::Time& stamp) {
+bool stampOf(double t, ros::Time& stamp) {
   if (!(t >= 0.0) || !(t < static_cast<double>(std::numeric_limits<std::uint32_t>::max()))) return false;
   stamp.fromSec(t);
   return true;
 }
 
-Result bad_time(double t) {
+Result badTime(double t) {
   char buf[96];
   std::snprintf(buf, sizeof(buf), "frame time %.9g s is not a valid ROS stamp (0 .. 2^32 s)", t);
   return {Status::kError, buf};
 }
 
-Result bad_id(std::uint32_t id) {
+Result badId(std::uint32_t id) {
   return {Status::kError, "wheel id " + std::to_string(id) + " does not fit the message's uint8 wheel_id"};
 }
 
@@ -39,14 +39,14 @@ void put(const Eigen::Vector3d& v, geometry_msgs::Vector3& m) {
 void get(const geometry_msgs::Vector3& m, Eigen::Vector3d& v) { v = Eigen::Vector3d(m.x, m.y, m.z); }
 
 // The checks shared by both message kinds: wheel count against the capacity, stamp against k h.
-Result check_incoming(std::uint64_t step, const ros::Time& stamp, std::size_t count, int capacity,
+Result checkIncoming(std::uint64_t step, const ros::Time& stamp, std::size_t count, int capacity,
                       double track_step, const char* source) {
   if (count > static_cast<std::size_t>(capacity))
     return {Status::kRefused, std::string(source) + ": " + std::to_string(count) + " wheels in step " +
                                   std::to_string(step) + ", more than the capacity " + std::to_string(capacity)};
   const double t = static_cast<double>(step) * track_step;
   ros::Time expected;
-  const bool valid = stamp_of(t, expected);
+  const bool valid = stampOf(t, expected);
   const std::int64_t diff = static_cast<std::int64_t>(stamp.toNSec()) - static_cast<std::int64_t>(expected.toNSec());
   if (!valid || diff > 1 || diff < -1) {
     char buf[200];
@@ -59,21 +59,21 @@ Result check_incoming(std::uint64_t step, const ros::Time& stamp, std::size_t co
 
 }  // namespace
 
-void reserve_message(rail_msgs::WheelStates& msg, int capacity) {
+void reserveMessage(rail_msgs::WheelStates& msg, int capacity) {
   msg.header.frame_id = kWorldFrameId;
   msg.wheels.reserve(static_cast<std::size_t>(capacity > 0 ? capacity : 0));
 }
 
-void reserve_message(rail_msgs::ContactWrenches& msg, int capacity) {
+void reserveMessage(rail_msgs::ContactWrenches& msg, int capacity) {
   msg.header.frame_id = kWorldFrameId;
   msg.wrenches.reserve(static_cast<std::size_t>(capacity > 0 ? capacity : 0));
 }
 
-Result to_message(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates& msg) {
+Result toMessage(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates& msg) {
   ros::Time stamp;
-  if (!stamp_of(frame.time, stamp)) return bad_time(frame.time);
+  if (!stampOf(frame.time, stamp)) return badTime(frame.time);
   for (std::uint32_t i = 0; i < frame.count; ++i)
-    if (frame.wheels[i].id > 255u) return bad_id(frame.wheels[i].id);
+    if (frame.wheels[i].id > 255u) return badId(frame.wheels[i].id);
   msg.header.stamp = stamp;
   msg.step = frame.step;
   msg.scene_hash = frame.scene_hash;
@@ -98,11 +98,11 @@ Result to_message(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates
   return {};
 }
 
-Result to_message(const coupling::WrenchFrame& frame, rail_msgs::ContactWrenches& msg) {
+Result toMessage(const coupling::WrenchFrame& frame, rail_msgs::ContactWrenches& msg) {
   ros::Time stamp;
-  if (!stamp_of(frame.time, stamp)) return bad_time(frame.time);
+  if (!stampOf(frame.time, stamp)) return badTime(frame.time);
   for (std::uint32_t i = 0; i < frame.count; ++i)
-    if (frame.wheels[i].id > 255u) return bad_id(frame.wheels[i].id);
+    if (frame.wheels[i].id > 255u) return badId(frame.wheels[i].id);
   msg.header.stamp = stamp;
   msg.step = frame.step;
   msg.scene_hash = frame.scene_hash;
@@ -117,19 +117,19 @@ Result to_message(const coupling::WrenchFrame& frame, rail_msgs::ContactWrenches
   return {};
 }
 
-void make_close_marker(rail_msgs::WheelStates& msg) {
+void makeCloseMarker(rail_msgs::WheelStates& msg) {
   msg.step = kCloseStep;
   msg.wheels.clear();  // keeps the capacity
 }
 
-void make_close_marker(rail_msgs::ContactWrenches& msg) {
+void makeCloseMarker(rail_msgs::ContactWrenches& msg) {
   msg.step = kCloseStep;
   msg.wrenches.clear();
 }
 
-Result from_message(const rail_msgs::WheelStates& msg, double track_step, coupling::WheelStateFrame& frame,
+Result fromMessage(const rail_msgs::WheelStates& msg, double track_step, coupling::WheelStateFrame& frame,
                     const char* source) {
-  Result r = check_incoming(msg.step, msg.header.stamp, msg.wheels.size(), frame.capacity(), track_step, source);
+  Result r = checkIncoming(msg.step, msg.header.stamp, msg.wheels.size(), frame.capacity(), track_step, source);
   if (!r) return r;
   frame.step = msg.step;
   frame.time = static_cast<double>(msg.step) * track_step;
@@ -149,9 +149,9 @@ Result from_message(const rail_msgs::WheelStates& msg, double track_step, coupli
   return {};
 }
 
-Result from_message(const rail_msgs::ContactWrenches& msg, double track_step, coupling::WrenchFrame& frame,
+Result fromMessage(const rail_msgs::ContactWrenches& msg, double track_step, coupling::WrenchFrame& frame,
                     const char* source) {
-  Result r = check_incoming(msg.step, msg.header.stamp, msg.wrenches.size(), frame.capacity(), track_step, source);
+  Result r = checkIncoming(msg.step, msg.header.stamp, msg.wrenches.size(), frame.capacity(), track_step, source);
   if (!r) return r;
   frame.step = msg.step;
   frame.time = static_cast<double>(msg.step) * track_step;

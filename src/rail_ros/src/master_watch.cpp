@@ -49,7 +49,7 @@ MasterWatch::~MasterWatch() {
   release(static_cast<Shared*>(state_));
 }
 
-std::string exited_peer(const std::string& me) {
+std::string exitedPeer(const std::string& me) {
   XmlRpc::XmlRpcValue exits;
   if (!ros::param::get("/railsim/node_exit", exits) || exits.getType() != XmlRpc::XmlRpcValue::TypeStruct) {
     return "";
@@ -72,7 +72,7 @@ std::string exited_peer(const std::string& me) {
   return "";
 }
 
-int wait_for_master(const std::string& node, const std::atomic<int>& signal, double timeout_s) {
+int waitForMaster(const std::string& node, const std::atomic<int>& signal, double timeout_s) {
   const auto t0 = std::chrono::steady_clock::now();
   bool said = false;
   while (!ros::master::check()) {
@@ -93,7 +93,7 @@ int wait_for_master(const std::string& node, const std::atomic<int>& signal, dou
   return 0;
 }
 
-bool node_help_requested(int argc, char** argv, const char* node, const char* what) {
+bool nodeHelpRequested(int argc, char** argv, const char* node, const char* what) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") {

@@ -17,12 +17,12 @@ namespace {
 
 const char* const kHandshakeService = "/railsim/handshake";
 
-void on_stop_signal(int s) {
-  node_stop().signal = s;
-  node_stop().requested = true;
+void onStopSignal(int s) {
+  nodeStop().signal = s;
+  nodeStop().requested = true;
 }
 
-bool stop_requested() { return node_stop().requested || !ros::ok(); }
+bool stopRequested() { return nodeStop().requested || !ros::ok(); }
 
 // Answers the vehicle's handshake; remembers whether it was accepted.
 struct HandshakeServer {
@@ -32,7 +32,7 @@ struct HandshakeServer {
   std::string refusal;
   std::string peer;  // the vehicle node's name
 
-  bool on_request(rail_msgs::Handshake::Request& req, rail_msgs::Handshake::Response& res) {
+  bool onRequest(rail_msgs::Handshake::Request& req, rail_msgs::Handshake::Response& res) {
     core::HandshakeInfo theirs;
     theirs.node = req.node_name;
     theirs.scene_file = req.scene_file;
@@ -40,7 +40,7 @@ struct HandshakeServer {
     theirs.wheel_count = req.wheel_count;
     theirs.track_step = req.track_step;
     theirs.transport = req.transport;
-    refusal = core::compare_handshake(mine, theirs);
+    refusal = core::compareHandshake(mine, theirs);
     res.accepted = refusal.empty();
     res.message = refusal;
     res.peer_name = mine.node;
@@ -58,36 +58,36 @@ const char* NodeStop::reason() const {
   return s == SIGINT ? "SIGINT" : s == SIGTERM ? "SIGTERM" : "ROS shutdown";
 }
 
-NodeStop& node_stop() {
+NodeStop& nodeStop() {
   static NodeStop stop;
   return stop;
 }
 
-void install_stop_signals() {
-  node_stop();  // constructed before a signal can arrive
-  std::signal(SIGINT, on_stop_signal);
-  std::signal(SIGTERM, on_stop_signal);
+void installStopSignals() {
+  nodeStop();  // constructed before a signal can arrive
+  std::signal(SIGINT, onStopSignal);
+  std::signal(SIGTERM, onStopSignal);
 }
 
-int handshake_as_vehicle(const core::Scene& scene, std::string& peer) {
+int handshakeAsVehicle(const core::Scene& scene, std::string& peer) {
   const std::string& me = ros::this_node::getName();
   // Waits in short slices so that a track node that died (its guard's record, master_watch.hpp) is
   // reported at once, with its exit code, not after the whole timeout.
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
   while (!ros::service::waitForService(kHandshakeService, ros::Duration(0.2))) {
-    const std::string dead = exited_peer(me);
+    const std::string dead = exitedPeer(me);
     if (!dead.empty()) {
       ROS_FATAL("%s: the track node died before the handshake: %s (its log says why)", me.c_str(), dead.c_str());
       return core::kExitPeerTimeout;
     }
-    if (stop_requested()) return core::kExitInterrupted;
+    if (stopRequested()) return core::kExitInterrupted;
     if (ros::WallTime::now() >= deadline) {
       ROS_FATAL("%s: the track node did not offer %s within %.1f s (solver.handshake_timeout): is rail_track "
                 "running?", me.c_str(), kHandshakeService, scene.solver.handshake_timeout);
       return core::kExitPeerTimeout;
     }
   }
-  const core::HandshakeInfo mine = core::handshake_info(scene, me);
+  const core::HandshakeInfo mine = core::handshakeInfo(scene, me);
   rail_msgs::Handshake srv;
   srv.request.node_name = mine.node;
   srv.request.scene_file = mine.scene_file;
@@ -109,24 +109,24 @@ int handshake_as_vehicle(const core::Scene& scene, std::string& peer) {
   return core::kExitOk;
 }
 
-int handshake_as_track(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer) {
+int handshakeAsTrack(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer) {
   const std::string& me = ros::this_node::getName();
   HandshakeServer server;
-  server.mine = core::handshake_info(scene, me);
-  ros::ServiceServer srv = nh.advertiseService(kHandshakeService, &HandshakeServer::on_request, &server);
+  server.mine = core::handshakeInfo(scene, me);
+  ros::ServiceServer srv = nh.advertiseService(kHandshakeService, &HandshakeServer::onRequest, &server);
   const ros::WallTime deadline = ros::WallTime::now() + ros::WallDuration(scene.solver.handshake_timeout);
   // A vehicle node that died before calling (its guard's record, master_watch.hpp) is reported at once.
   std::string dead;
   ros::WallTime next_check = ros::WallTime::now();
-  while (!stop_requested() && !server.answered && ros::WallTime::now() < deadline) {
+  while (!stopRequested() && !server.answered && ros::WallTime::now() < deadline) {
     ros::getGlobalCallbackQueue()->callAvailable(ros::WallDuration(0.05));
     if (!server.answered && ros::WallTime::now() >= next_check) {
-      dead = exited_peer(me);
+      dead = exitedPeer(me);
       if (!dead.empty()) break;
       next_check = ros::WallTime::now() + ros::WallDuration(0.2);
     }
   }
-  if (stop_requested()) return core::kExitInterrupted;
+  if (stopRequested()) return core::kExitInterrupted;
   if (!dead.empty()) {
     ROS_FATAL("%s: the vehicle node died before the handshake: %s (its log says why)", me.c_str(), dead.c_str());
     return core::kExitPeerTimeout;

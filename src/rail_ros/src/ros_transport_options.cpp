@@ -22,7 +22,7 @@ std::string num(double v) {
 }
 }  // namespace
 
-void check_options(const RosTransportOptions& o, const char* what) {
+void checkOptions(const RosTransportOptions& o, const char* what) {
   if (!(o.track_step > 0.0) || !std::isfinite(o.track_step))
     throw std::runtime_error(std::string(what) + ": track_step must be > 0 s (got " + num(o.track_step) + ")");
   if (o.wheel_capacity < 1 || o.wheel_capacity > 256)
@@ -35,7 +35,7 @@ void check_options(const RosTransportOptions& o, const char* what) {
 
 namespace detail {
 
-std::string service_provider(const std::string& service) {
+std::string serviceProvider(const std::string& service) {
   try {
     XmlRpc::XmlRpcValue args, result, payload;
     args[0] = ros::this_node::getName();

@@ -23,21 +23,21 @@ inline coupling::Result interrupted(const std::atomic<bool>* flag) {
 }
 
 // End of the next wait slice.
-inline coupling::Deadline slice_end(coupling::Deadline deadline) {
+inline coupling::Deadline sliceEnd(coupling::Deadline deadline) {
   return std::min(deadline, coupling::Clock::now() + std::chrono::duration_cast<coupling::Clock::duration>(kSlice));
 }
 
-inline coupling::Result wrong_role(coupling::Role role, const char* call) {
-  return {coupling::Status::kError, std::string(call) + " called on the " + coupling::to_string(role) + " end"};
+inline coupling::Result wrongRole(coupling::Role role, const char* call) {
+  return {coupling::Status::kError, std::string(call) + " called on the " + coupling::toString(role) + " end"};
 }
 
 // "node /x" or "<role> node (name not known yet)".
-inline std::string node_label(const std::string& node, coupling::Role peer) {
-  if (node.empty()) return std::string("the ") + coupling::to_string(peer) + " node (name not known yet)";
+inline std::string nodeLabel(const std::string& node, coupling::Role peer) {
+  if (node.empty()) return std::string("the ") + coupling::toString(peer) + " node (name not known yet)";
   return "node " + node;
 }
 
 // The node that provides `service`, from the master's system state; empty when unknown or unreachable.
-std::string service_provider(const std::string& service);
+std::string serviceProvider(const std::string& service);
 
 }  // namespace rail::ros_glue::detail

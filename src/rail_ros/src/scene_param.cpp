@@ -6,7 +6,7 @@
 
 namespace rail::ros_glue {
 
-bool read_scene(ros::NodeHandle& private_nh, core::Scene& scene) {
+bool readScene(ros::NodeHandle& private_nh, core::Scene& scene) {
   const std::string ns = private_nh.param<std::string>("scene_ns", "/railsim");
   const std::string& node = ros::this_node::getName();
   std::string text, file;
@@ -21,7 +21,7 @@ bool read_scene(ros::NodeHandle& private_nh, core::Scene& scene) {
   std::string overrides;
   ros::param::param<std::string>(ns + "/scene_overrides", overrides, "");
   try {
-    scene = core::load_scene_handed_over(text, file, core::split_overrides(overrides));
+    scene = core::loadSceneHandedOver(text, file, core::splitOverrides(overrides));
   } catch (const core::SceneError& e) {
     ROS_FATAL("%s: scene refused: %s", node.c_str(), e.what());
     return false;

@@ -22,8 +22,8 @@ using coupling::Result;
 using coupling::Role;
 using coupling::Status;
 using detail::interrupted;
-using detail::node_label;
-using detail::slice_end;
+using detail::nodeLabel;
+using detail::sliceEnd;
 
 namespace {
 
@@ -74,7 +74,7 @@ struct ServiceTransport::VehicleEnd : std::enable_shared_from_this<VehicleEnd> {
   Result send(const coupling::WheelStateFrame& frame);
   Result receive(coupling::WrenchFrame& frame, Deadline deadline);
   void close();
-  std::string where() const { return "service " + service + " of " + node_label(peer, Role::kTrack); }
+  std::string where() const { return "service " + service + " of " + nodeLabel(peer, Role::kTrack); }
 };
 
 void ServiceTransport::VehicleEnd::run(std::shared_ptr<VehicleEnd> self_keepalive) {
@@ -95,7 +95,7 @@ void ServiceTransport::VehicleEnd::run(std::shared_ptr<VehicleEnd> self_keepaliv
       continue;
     }
     // Close marker: tells the track the run is over (its receive() then returns kPeerClosed).
-    make_close_marker(srv.request.states);
+    makeCloseMarker(srv.request.states);
     lock.unlock();
     client.call(srv);
     lock.lock();
@@ -113,7 +113,7 @@ Result ServiceTransport::VehicleEnd::send(const coupling::WheelStateFrame& frame
                                 " is still in flight (it outlived its deadline)"};
   if (phase != Phase::kIdle)
     return {Status::kError, "send_states called again before receive_wrenches (step " + std::to_string(step) + ")"};
-  Result r = to_message(frame, srv.request.states);
+  Result r = toMessage(frame, srv.request.states);
   if (!r) return r;
   step = frame.step;
   phase = Phase::kRequested;
@@ -132,7 +132,7 @@ Result ServiceTransport::VehicleEnd::receive(coupling::WrenchFrame& frame, Deadl
         return {Status::kPeerClosed, where() + ": the call failed, the connection was dropped (the node ended, "
                                                "closed or withdrew the service)"};
       if (!srv.response.ok) return {Status::kRefused, where() + " refused the call: " + srv.response.error};
-      return from_message(srv.response.wrenches, o.track_step, frame, service.c_str());
+      return fromMessage(srv.response.wrenches, o.track_step, frame, service.c_str());
     }
     if (phase != Phase::kRequested) return {Status::kError, "this end is closed"};
     Result r = interrupted(o.interrupt);
@@ -141,7 +141,7 @@ Result ServiceTransport::VehicleEnd::receive(coupling::WrenchFrame& frame, Deadl
       abandoned = true;
       return {Status::kTimeout, "no answer from " + where()};
     }
-    cv.wait_until(lock, slice_end(deadline));
+    cv.wait_until(lock, sliceEnd(deadline));
   }
 }
 
@@ -186,7 +186,7 @@ struct ServiceTransport::TrackEnd {
   Result receive(coupling::WheelStateFrame& frame, Deadline deadline);
   Result send(const coupling::WrenchFrame& frame);
   void close();
-  std::string where() const { return "service " + service + ", caller " + node_label(vehicle, Role::kVehicle); }
+  std::string where() const { return "service " + service + ", caller " + nodeLabel(vehicle, Role::kVehicle); }
 };
 
 bool ServiceTransport::TrackEnd::serve(
@@ -216,7 +216,7 @@ bool ServiceTransport::TrackEnd::serve(
     res.error = "the track closed the connection";
     return true;
   }
-  if (is_close_marker(req.states)) {
+  if (isCloseMarker(req.states)) {
     vehicle_closed = true;
     cv.notify_all();
     res.ok = true;
@@ -252,7 +252,7 @@ Result ServiceTransport::TrackEnd::receive(coupling::WheelStateFrame& frame, Dea
     return {Status::kError, "receive_states called again before send_wrenches (step " + std::to_string(step) + ")"};
   for (;;) {
     if (phase == Phase::kPending) {
-      Result r = from_message(*request, o.track_step, frame, service.c_str());
+      Result r = fromMessage(*request, o.track_step, frame, service.c_str());
       if (!r) {  // the vehicle hears of it in the answer
         response->ok = false;
         response->error = r.message;
@@ -264,11 +264,11 @@ Result ServiceTransport::TrackEnd::receive(coupling::WheelStateFrame& frame, Dea
       phase = Phase::kTaken;
       return {};
     }
-    if (vehicle_closed) return {Status::kPeerClosed, node_label(vehicle, Role::kVehicle) + " sent its close marker on service " + service};
+    if (vehicle_closed) return {Status::kPeerClosed, nodeLabel(vehicle, Role::kVehicle) + " sent its close marker on service " + service};
     Result r = interrupted(o.interrupt);
     if (!r) return r;
     if (Clock::now() >= deadline) return {Status::kTimeout, "no call on " + where()};
-    cv.wait_until(lock, slice_end(deadline));
+    cv.wait_until(lock, sliceEnd(deadline));
   }
 }
 
@@ -281,7 +281,7 @@ Result ServiceTransport::TrackEnd::send(const coupling::WrenchFrame& frame) {
                                     " stopped waiting for its answer (reply_timeout " + num(o.reply_timeout) + " s)"};
     return {Status::kError, "send_wrenches called without receive_states"};
   }
-  Result r = to_message(frame, response->wrenches);
+  Result r = toMessage(frame, response->wrenches);
   if (!r) {
     response->ok = false;
     response->error = "the track could not answer: " + r.message;
@@ -307,7 +307,7 @@ void ServiceTransport::TrackEnd::close() {
 // ---------------------------------------------------------------------------------------------------------
 ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOptions& options)
     : role_(options.role) {
-  check_options(options, "service transport");
+  checkOptions(options, "service transport");
   if (!(options.reply_timeout > 0.0))
     throw std::runtime_error("service transport: reply_timeout must be > 0 s (got " + num(options.reply_timeout) + ")");
   const std::string service = nh.resolveName(options.service);
@@ -315,8 +315,8 @@ ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOp
     auto v = std::make_shared<VehicleEnd>();
     v->o = options;
     v->service = service;
-    reserve_message(v->srv.request.states, options.wheel_capacity);
-    reserve_message(v->srv.response.wrenches, options.wheel_capacity);
+    reserveMessage(v->srv.request.states, options.wheel_capacity);
+    reserveMessage(v->srv.response.wrenches, options.wheel_capacity);
     // Wait for the service (polled quietly every 20 ms, so that an interrupt ends the wait).
     const Deadline deadline = after(options.attach_timeout);
     for (;;) {
@@ -329,7 +329,7 @@ ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOp
                                   num(options.attach_timeout) + " s (solver.handshake_timeout)");
       std::this_thread::sleep_for(detail::kSlice);
     }
-    v->peer = options.peer_node.empty() ? detail::service_provider(service) : options.peer_node;
+    v->peer = options.peer_node.empty() ? detail::serviceProvider(service) : options.peer_node;
     v->client = nh.serviceClient<rail_msgs::Lockstep>(service, /*persistent=*/true);
     v->worker = std::thread(&VehicleEnd::run, v.get(), v);
     vehicle_ = std::move(v);
@@ -380,23 +380,23 @@ ServiceTransport::~ServiceTransport() {
 
 Role ServiceTransport::role() const { return role_; }
 
-Result ServiceTransport::send_states(const coupling::WheelStateFrame& frame, Deadline) {
-  if (!vehicle_) return detail::wrong_role(role_, "send_states");
+Result ServiceTransport::sendStates(const coupling::WheelStateFrame& frame, Deadline) {
+  if (!vehicle_) return detail::wrongRole(role_, "send_states");
   return vehicle_->send(frame);
 }
 
-Result ServiceTransport::receive_wrenches(coupling::WrenchFrame& frame, Deadline deadline) {
-  if (!vehicle_) return detail::wrong_role(role_, "receive_wrenches");
+Result ServiceTransport::receiveWrenches(coupling::WrenchFrame& frame, Deadline deadline) {
+  if (!vehicle_) return detail::wrongRole(role_, "receive_wrenches");
   return vehicle_->receive(frame, deadline);
 }
 
-Result ServiceTransport::receive_states(coupling::WheelStateFrame& frame, Deadline deadline) {
-  if (!track_) return detail::wrong_role(role_, "receive_states");
+Result ServiceTransport::receiveStates(coupling::WheelStateFrame& frame, Deadline deadline) {
+  if (!track_) return detail::wrongRole(role_, "receive_states");
   return track_->receive(frame, deadline);
 }
 
-Result ServiceTransport::send_wrenches(const coupling::WrenchFrame& frame, Deadline) {
-  if (!track_) return detail::wrong_role(role_, "send_wrenches");
+Result ServiceTransport::sendWrenches(const coupling::WrenchFrame& frame, Deadline) {
+  if (!track_) return detail::wrongRole(role_, "send_wrenches");
   return track_->send(frame);
 }
 
@@ -405,9 +405,9 @@ void ServiceTransport::close() {
   if (track_) track_->close();
 }
 
-const std::string& ServiceTransport::service_name() const { return vehicle_ ? vehicle_->service : track_->service; }
+const std::string& ServiceTransport::serviceName() const { return vehicle_ ? vehicle_->service : track_->service; }
 
-std::string ServiceTransport::peer_node() const {
+std::string ServiceTransport::peerNode() const {
   if (vehicle_) return vehicle_->peer;
   std::lock_guard<std::mutex> lock(track_->m);
   return track_->vehicle;

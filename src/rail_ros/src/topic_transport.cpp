@@ -19,7 +19,7 @@ using coupling::Result;
 using coupling::Role;
 using coupling::Status;
 using detail::interrupted;
-using detail::node_label;
+using detail::nodeLabel;
 
 namespace {
 
@@ -68,29 +68,29 @@ struct TopicTransport::Impl {
   bool peer_dropped = false;             // the peer's subscription to out_topic ended
   bool closed = false;
 
-  void on_link(const ros::SingleSubscriberPublisher& p, bool connected);
+  void onLink(const ros::SingleSubscriberPublisher& p, bool connected);
   template <class Msg>
-  void on_frame(const ros::MessageEvent<Msg const>& event);
+  void onFrame(const ros::MessageEvent<Msg const>& event);
   template <class Frame>
   Result receive(Frame& frame, Deadline deadline);
   template <class Frame, class Msg>
   Result send(const Frame& frame, Msg& msg);
-  bool has_subscriber() const;
-  void set_target(coupling::WheelStateFrame& f) { states_target = &f; }
-  void set_target(coupling::WrenchFrame& f) { wrenches_target = &f; }
+  bool hasSubscriber() const;
+  void setTarget(coupling::WheelStateFrame& f) { states_target = &f; }
+  void setTarget(coupling::WrenchFrame& f) { wrenches_target = &f; }
   bool fill(const rail_msgs::WheelStates& m, Result& r) {
     if (!states_target) return false;
-    r = from_message(m, o.track_step, *states_target, in_topic.c_str());
+    r = fromMessage(m, o.track_step, *states_target, in_topic.c_str());
     return true;
   }
   bool fill(const rail_msgs::ContactWrenches& m, Result& r) {
     if (!wrenches_target) return false;
-    r = from_message(m, o.track_step, *wrenches_target, in_topic.c_str());
+    r = fromMessage(m, o.track_step, *wrenches_target, in_topic.c_str());
     return true;
   }
 };
 
-void TopicTransport::Impl::on_link(const ros::SingleSubscriberPublisher& p, bool connected) {
+void TopicTransport::Impl::onLink(const ros::SingleSubscriberPublisher& p, bool connected) {
   const std::string name = p.getSubscriberName();
   if (connected) {
     subscribers.push_back(name);
@@ -104,7 +104,7 @@ void TopicTransport::Impl::on_link(const ros::SingleSubscriberPublisher& p, bool
   if (!peer.empty() && name == peer) peer_dropped = true;
 }
 
-bool TopicTransport::Impl::has_subscriber() const {
+bool TopicTransport::Impl::hasSubscriber() const {
   if (o.peer_node.empty()) return !subscribers.empty();
   for (const std::string& s : subscribers)
     if (s == o.peer_node) return true;
@@ -112,7 +112,7 @@ bool TopicTransport::Impl::has_subscriber() const {
 }
 
 template <class Msg>
-void TopicTransport::Impl::on_frame(const ros::MessageEvent<Msg const>& event) {
+void TopicTransport::Impl::onFrame(const ros::MessageEvent<Msg const>& event) {
   const Msg& msg = *event.getConstMessage();
   // Frames count only from the handshake's peer: the connection header identifies it without a string
   // lookup; a frame on another connection is looked up once and dropped if another node sent it.
@@ -130,7 +130,7 @@ void TopicTransport::Impl::on_frame(const ros::MessageEvent<Msg const>& event) {
     if (peer.empty()) peer = from;
   }
   if (outcome != Outcome::kWaiting) return;  // (only pumped while waiting)
-  if (is_close_marker(msg)) {
+  if (isCloseMarker(msg)) {
     outcome = Outcome::kCloseMarker;
     return;
   }
@@ -154,13 +154,13 @@ template <class Frame>
 Result TopicTransport::Impl::receive(Frame& frame, Deadline deadline) {
   if (closed) return {Status::kError, "this end is closed"};
   outcome = Outcome::kWaiting;
-  set_target(frame);
+  setTarget(frame);
   Result result;
   bool first = true;
   for (;;) {
     // Frames first: one that is ready is delivered even after the deadline.
     const Clock::time_point now = Clock::now();
-    frame_queue.callOne(first ? ros::WallDuration(0.0) : wall(detail::slice_end(deadline) - now));
+    frame_queue.callOne(first ? ros::WallDuration(0.0) : wall(detail::sliceEnd(deadline) - now));
     first = false;
     if (outcome != Outcome::kWaiting) break;
     link_queue.callAvailable(ros::WallDuration(0.0));
@@ -169,7 +169,7 @@ Result TopicTransport::Impl::receive(Frame& frame, Deadline deadline) {
       while (outcome == Outcome::kWaiting && Clock::now() < grace)
         frame_queue.callOne(wall(grace - Clock::now()));
       if (outcome != Outcome::kWaiting) break;
-      result = {Status::kPeerClosed, node_label(peer, coupling::peer_of(role)) + " ended its subscription to " +
+      result = {Status::kPeerClosed, nodeLabel(peer, coupling::peerOf(role)) + " ended its subscription to " +
                                          out_topic + " (the node ended or closed)"};
       break;
     }
@@ -177,7 +177,7 @@ Result TopicTransport::Impl::receive(Frame& frame, Deadline deadline) {
     if (!result) break;
     if (Clock::now() >= deadline) {
       result = {Status::kTimeout, "no frame of step " + std::to_string(expected) + " on topic " + in_topic +
-                                      " from " + node_label(peer, coupling::peer_of(role))};
+                                      " from " + nodeLabel(peer, coupling::peerOf(role))};
       break;
     }
   }
@@ -187,7 +187,7 @@ Result TopicTransport::Impl::receive(Frame& frame, Deadline deadline) {
     case Outcome::kGot: return {};
     case Outcome::kRefused: return refusal;
     case Outcome::kCloseMarker:
-      return {Status::kPeerClosed, node_label(peer, coupling::peer_of(role)) + " sent its close marker on " + in_topic};
+      return {Status::kPeerClosed, nodeLabel(peer, coupling::peerOf(role)) + " sent its close marker on " + in_topic};
     case Outcome::kWaiting: break;
   }
   return result;
@@ -196,7 +196,7 @@ Result TopicTransport::Impl::receive(Frame& frame, Deadline deadline) {
 template <class Frame, class Msg>
 Result TopicTransport::Impl::send(const Frame& frame, Msg& msg) {
   if (closed) return {Status::kError, "this end is closed"};
-  Result r = to_message(frame, msg);
+  Result r = toMessage(frame, msg);
   if (!r) return r;
   pub.publish(msg);  // serialised here; written by roscpp's network thread
   return {};
@@ -205,7 +205,7 @@ Result TopicTransport::Impl::send(const Frame& frame, Msg& msg) {
 // ---------------------------------------------------------------------------------------------------------
 TopicTransport::TopicTransport(ros::NodeHandle& nh, const TopicTransportOptions& options)
     : impl_(std::make_unique<Impl>()) {
-  check_options(options, "topic transport");
+  checkOptions(options, "topic transport");
   Impl& d = *impl_;
   d.o = options;
   d.role = options.role;
@@ -215,14 +215,14 @@ TopicTransport::TopicTransport(ros::NodeHandle& nh, const TopicTransportOptions&
   const std::string wrenches = nh.resolveName(options.wrenches_topic);
   d.out_topic = vehicle ? states : wrenches;
   d.in_topic = vehicle ? wrenches : states;
-  reserve_message(d.states_out, options.wheel_capacity);
-  reserve_message(d.wrenches_out, options.wheel_capacity);
+  reserveMessage(d.states_out, options.wheel_capacity);
+  reserveMessage(d.wrenches_out, options.wheel_capacity);
 
   // Queue size 0 = unbounded (roscpp): no frame is dropped, in lockstep or when a bag runs ahead.
   ros::AdvertiseOptions ao;
   Impl* raw = &d;
-  const ros::SubscriberStatusCallback on_connect = [raw](const ros::SingleSubscriberPublisher& p) { raw->on_link(p, true); };
-  const ros::SubscriberStatusCallback on_disconnect = [raw](const ros::SingleSubscriberPublisher& p) { raw->on_link(p, false); };
+  const ros::SubscriberStatusCallback on_connect = [raw](const ros::SingleSubscriberPublisher& p) { raw->onLink(p, true); };
+  const ros::SubscriberStatusCallback on_disconnect = [raw](const ros::SingleSubscriberPublisher& p) { raw->onLink(p, false); };
   if (vehicle)
     ao.init<rail_msgs::WheelStates>(d.out_topic, 0, on_connect, on_disconnect);
   else
@@ -234,15 +234,15 @@ TopicTransport::TopicTransport(ros::NodeHandle& nh, const TopicTransportOptions&
   ros::SubscribeOptions so;
   if (vehicle)
     so.initByFullCallbackType<const ros::MessageEvent<rail_msgs::ContactWrenches const>&>(
-        d.in_topic, 0, [raw](const ros::MessageEvent<rail_msgs::ContactWrenches const>& e) { raw->on_frame(e); });
+        d.in_topic, 0, [raw](const ros::MessageEvent<rail_msgs::ContactWrenches const>& e) { raw->onFrame(e); });
   else
     so.initByFullCallbackType<const ros::MessageEvent<rail_msgs::WheelStates const>&>(
-        d.in_topic, 0, [raw](const ros::MessageEvent<rail_msgs::WheelStates const>& e) { raw->on_frame(e); });
+        d.in_topic, 0, [raw](const ros::MessageEvent<rail_msgs::WheelStates const>& e) { raw->onFrame(e); });
   so.transport_hints = ros::TransportHints().tcpNoDelay();
   so.callback_queue = &d.frame_queue;
   d.sub = nh.subscribe(so);
   if (!d.pub || !d.sub)
-    throw coupling::CouplingError(Status::kError, std::string(coupling::to_string(d.role)) +
+    throw coupling::CouplingError(Status::kError, std::string(coupling::toString(d.role)) +
                                                       ": could not advertise " + d.out_topic + " or subscribe to " + d.in_topic);
 
   if (!options.wait_for_subscriber) return;
@@ -251,15 +251,15 @@ TopicTransport::TopicTransport(ros::NodeHandle& nh, const TopicTransportOptions&
       Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.attach_timeout));
   for (;;) {
     d.link_queue.callAvailable(ros::WallDuration(0.0));
-    if (d.has_subscriber()) break;
+    if (d.hasSubscriber()) break;
     const Result r = interrupted(options.interrupt);
     if (!r)
-      throw coupling::CouplingError(Status::kInterrupted, std::string(coupling::to_string(d.role)) +
+      throw coupling::CouplingError(Status::kInterrupted, std::string(coupling::toString(d.role)) +
                                                               ": interrupted while waiting for a subscriber of " + d.out_topic);
     if (Clock::now() >= deadline)
       throw coupling::CouplingError(
-          Status::kTimeout, std::string(coupling::to_string(d.role)) + ": " +
-                                node_label(options.peer_node, coupling::peer_of(d.role)) + " did not subscribe to " +
+          Status::kTimeout, std::string(coupling::toString(d.role)) + ": " +
+                                nodeLabel(options.peer_node, coupling::peerOf(d.role)) + " did not subscribe to " +
                                 d.out_topic + " within " + num(options.attach_timeout) + " s (solver.handshake_timeout)");
     d.link_queue.callAvailable(ros::WallDuration(0.01));
   }
@@ -272,9 +272,9 @@ TopicTransport::~TopicTransport() {
 
 Role TopicTransport::role() const { return impl_->role; }
 
-Result TopicTransport::send_states(const coupling::WheelStateFrame& frame, Deadline) {
+Result TopicTransport::sendStates(const coupling::WheelStateFrame& frame, Deadline) {
   Impl& d = *impl_;
-  if (d.role != Role::kVehicle) return detail::wrong_role(d.role, "send_states");
+  if (d.role != Role::kVehicle) return detail::wrongRole(d.role, "send_states");
   Result r = d.send(frame, d.states_out);
   if (r) {
     d.expected = frame.step;
@@ -283,26 +283,26 @@ Result TopicTransport::send_states(const coupling::WheelStateFrame& frame, Deadl
   return r;
 }
 
-Result TopicTransport::receive_wrenches(coupling::WrenchFrame& frame, Deadline deadline) {
+Result TopicTransport::receiveWrenches(coupling::WrenchFrame& frame, Deadline deadline) {
   Impl& d = *impl_;
-  if (d.role != Role::kVehicle) return detail::wrong_role(d.role, "receive_wrenches");
+  if (d.role != Role::kVehicle) return detail::wrongRole(d.role, "receive_wrenches");
   if (!d.awaiting) return {Status::kError, "receive_wrenches called without send_states"};
   Result r = d.receive(frame, deadline);
   if (r) d.awaiting = false;
   return r;
 }
 
-Result TopicTransport::receive_states(coupling::WheelStateFrame& frame, Deadline deadline) {
+Result TopicTransport::receiveStates(coupling::WheelStateFrame& frame, Deadline deadline) {
   Impl& d = *impl_;
-  if (d.role != Role::kTrack) return detail::wrong_role(d.role, "receive_states");
+  if (d.role != Role::kTrack) return detail::wrongRole(d.role, "receive_states");
   Result r = d.receive(frame, deadline);
   if (r) ++d.expected;
   return r;
 }
 
-Result TopicTransport::send_wrenches(const coupling::WrenchFrame& frame, Deadline) {
+Result TopicTransport::sendWrenches(const coupling::WrenchFrame& frame, Deadline) {
   Impl& d = *impl_;
-  if (d.role != Role::kTrack) return detail::wrong_role(d.role, "send_wrenches");
+  if (d.role != Role::kTrack) return detail::wrongRole(d.role, "send_wrenches");
   return d.send(frame, d.wrenches_out);
 }
 
@@ -311,10 +311,10 @@ void TopicTransport::close() {
   if (d.closed) return;
   d.closed = true;
   if (d.role == Role::kVehicle) {
-    make_close_marker(d.states_out);
+    makeCloseMarker(d.states_out);
     d.pub.publish(d.states_out);
   } else {
-    make_close_marker(d.wrenches_out);
+    makeCloseMarker(d.wrenches_out);
     d.pub.publish(d.wrenches_out);
   }
   // Stop receiving now; the publisher is withdrawn by the destructor, so that roscpp's network thread can
@@ -322,6 +322,6 @@ void TopicTransport::close() {
   d.sub.shutdown();
 }
 
-const std::string& TopicTransport::peer_node() const { return impl_->peer; }
+const std::string& TopicTransport::peerNode() const { return impl_->peer; }
 
 }  // namespace rail::ros_glue

@@ -36,7 +36,7 @@ namespace {
 constexpr int kWheels = 8;
 constexpr double kTrackStep = 2e-5;  // [s]
 
-CouplingConfig bench_config() {
+CouplingConfig benchConfig() {
   CouplingConfig c;
   c.track_step = kTrackStep;
   c.exchange_timeout = 10.0;
@@ -55,7 +55,7 @@ std::unique_ptr<FrameTransport> make(const std::string& kind, Role role, const N
   if (kind == "shm") {
     ShmOptions o;
     o.role = role;
-    o.scene_hash = bench_config().scene_hash;
+    o.scene_hash = benchConfig().scene_hash;
     o.wheel_capacity = kWheels;
     o.run_id = names.run_id;
     return std::make_unique<ShmTransport>(o);
@@ -81,8 +81,8 @@ std::unique_ptr<FrameTransport> make(const std::string& kind, Role role, const N
 }
 
 // Track end: answers until the vehicle closes; 0 when it did.
-int track_loop(FrameTransport& t) {
-  TrackCoupling track(bench_config(), t);
+int trackLoop(FrameTransport& t) {
+  TrackCoupling track(benchConfig(), t);
   for (;;) {
     const Result r = track.receive();
     if (r.status == Status::kPeerClosed) return 0;
@@ -99,8 +99,8 @@ int track_loop(FrameTransport& t) {
 }
 
 // Vehicle end: times `steps` exchanges after `warmup` untimed ones; round-trip times [s] into rtt.
-bool vehicle_loop(FrameTransport& t, long warmup, long steps, std::vector<double>& rtt) {
-  VehicleCoupling v(bench_config(), t);
+bool vehicleLoop(FrameTransport& t, long warmup, long steps, std::vector<double>& rtt) {
+  VehicleCoupling v(benchConfig(), t);
   rtt.resize(static_cast<std::size_t>(steps));
   for (long k = 0; k < warmup + steps; ++k) {
     for (int i = 0; i < kWheels; ++i) {
@@ -197,7 +197,7 @@ int main(int argc, char** argv) {
     for (const std::string& kind : kinds) {
       try {
         auto t = make(kind, Role::kTrack, names, nh);
-        code = track_loop(*t);
+        code = trackLoop(*t);
       } catch (const std::exception& e) {
         std::fprintf(stderr, "track (%s): %s\n", kind.c_str(), e.what());
         code = 3;
@@ -225,7 +225,7 @@ int main(int argc, char** argv) {
     bool run_ok = false;
     try {
       auto t = make(kind, Role::kVehicle, names, nh);
-      run_ok = vehicle_loop(*t, warmup, steps, rtt);
+      run_ok = vehicleLoop(*t, warmup, steps, rtt);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "vehicle (%s): %s\n", kind.c_str(), e.what());
     }

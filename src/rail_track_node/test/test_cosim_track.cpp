@@ -49,15 +49,15 @@ Scene scene(const std::string& track_model, double track_step = 2.0e-5, int whee
       "effects:\n  track_model: " + track_model + "\n"
       "solver:\n  track_step: " + std::string(step) + "\n  vehicle_max_step: " + std::string(step) +
       "\n  end: {time: 1.0}\n";
-  return rail::core::load_scene_text(text, "t.yaml", configDir() + "/scenes");
+  return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
 }
 
 // The contact of one wheel built independently, the way the vehicle side builds it on the rigid track.
 struct DirectContact {
   explicit DirectContact(const Scene& sc)
-      : track(rail::core::build_track_geometry(sc)),
+      : track(rail::core::buildTrackGeometry(sc)),
         wheel(rc::makeS1002()),
-        rail(rail::core::rail_profile_curve(sc)),
+        rail(rail::core::railProfileCurve(sc)),
         model(wheel, sc.vehicle.nominal_radius, rail, Eigen::Vector2d(0.0, -rc::uic60::kCentroidDepth), options(sc)),
         taping_y(0.5 * sc.vehicle.back_to_back + rc::flangeBackY(wheel)) {}
   static rc::WheelContactOptions options(const Scene& sc) {

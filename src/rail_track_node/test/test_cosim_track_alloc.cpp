@@ -39,7 +39,7 @@ rail::core::Scene scene(const std::string& track_model) {
       "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 25.0\n  speed: 30.0\n"
       "  back_to_back: 1.592\n  wheelsets: 4\n"
       "effects:\n  track_model: " + track_model + "\nsolver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
-  return rail::core::load_scene_text(text, "t.yaml", configDir() + "/scenes");
+  return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
 }
 
 // Eight wheels rolling at 30 m/s, 50 micrometres into the rails (loaded contacts), at step k, the
@@ -115,7 +115,7 @@ WindowCounted windowAllocations(bool curve) {
       "  back_to_back: 1.592\n  wheelsets: 4\n"
       "effects:\n  track_model: flexible\nsolver:\n  track_step: 1.0e-4\n  vehicle_max_step: 1.0e-4\n"
       "  end: {time: 1.0}\n  track_window: {enabled: true, behind: 2.0, ahead: 2.0, shift: 3.0}\n";
-  rt::CosimTrack track(rail::core::load_scene_text(text, "t.yaml", configDir() + "/scenes"));
+  rt::CosimTrack track(rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes"));
   const rc::TrackGeometry& geo = track.geometry();
   const double taping_y = 0.5 * 1.592 + rc::flangeBackY(rc::makeS1002());
   const double offsets[4] = {0.0, 2.7, 19.0, 21.7}, V = 30.0, r0 = 0.445, h = 1e-4;

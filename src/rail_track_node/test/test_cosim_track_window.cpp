@@ -56,7 +56,7 @@ Scene lineScene(bool curve, double h) {
       "effects:\n  track_model: flexible\n"
       "solver:\n  track_step: " + std::string(step) + "\n  vehicle_max_step: " + std::string(step) +
       "\n  end: {time: 1.0}\n";
-  return rail::core::load_scene_text(text, "w.yaml", configDir() + "/scenes");
+  return rail::core::loadSceneText(text, "w.yaml", configDir() + "/scenes");
 }
 
 Scene windowed(Scene sc, double margin) {

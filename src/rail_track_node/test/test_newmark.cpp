@@ -109,18 +109,18 @@ TEST(Newmark, DampedSdofDecaysAtAnalyticRate) {
   EXPECT_NEAR(st.a(0), -omega * omega * d0, 1e-12 * omega * omega * d0);  // M a0 = -K d0
   rt::NodalLoads none(1);
 
-  using cd = std::complex<double>;
+  using Complex = std::complex<double>;
   const double sigma = zeta * omega, omega_d = omega * std::sqrt(1.0 - zeta * zeta);
-  const cd lam1(-sigma, omega_d), lam2(-sigma, -omega_d);
-  const cd z1 = (1.0 + lam1 * h / 2.0) / (1.0 - lam1 * h / 2.0), z2 = (1.0 + lam2 * h / 2.0) / (1.0 - lam2 * h / 2.0);
+  const Complex lam1(-sigma, omega_d), lam2(-sigma, -omega_d);
+  const Complex z1 = (1.0 + lam1 * h / 2.0) / (1.0 - lam1 * h / 2.0), z2 = (1.0 + lam2 * h / 2.0) / (1.0 - lam2 * h / 2.0);
   // y0 = c1 [1, lam1] + c2 [1, lam2] with y0 = [d0, 0]
-  const cd c2 = d0 * lam1 / (lam1 - lam2), c1 = d0 - c2;
+  const Complex c2 = d0 * lam1 / (lam1 - lam2), c1 = d0 - c2;
   const double A0 = std::hypot(d0, sigma * d0 / omega_d);
   double A_end = 0.0;
   const int n_steps = 2000;
   for (int n = 1; n <= n_steps; ++n) {
     integ.step(st, none);
-    const cd zn1 = std::pow(z1, n), zn2 = std::pow(z2, n);
+    const Complex zn1 = std::pow(z1, n), zn2 = std::pow(z2, n);
     ASSERT_NEAR(st.d(0), std::real(c1 * zn1 + c2 * zn2), 1e-10 * d0);
     ASSERT_NEAR(st.v(0), std::real(c1 * lam1 * zn1 + c2 * lam2 * zn2), 1e-10 * d0 * omega);
     A_end = std::hypot(st.d(0), (st.v(0) + sigma * st.d(0)) / omega_d);

@@ -33,7 +33,7 @@ rt::SceneTrack straightTrack(double length, double rail_beta) {
   const std::string text = "name: r\ntrack:\n  gauge: 1.668\n  data: ../track/paper_track.yaml\n  segments:\n"
                            "    - {type: straight, length: " + std::to_string(length) + "}\n"
                            "moving_loads:\n  loads:\n    - {vertical: 0.0}\nsolver:\n  end: {time: 1.0}\n";
-  const rail::core::Scene scene = rail::core::load_scene_text(text, "r.yaml", configDir() + "/scenes");
+  const rail::core::Scene scene = rail::core::loadSceneText(text, "r.yaml", configDir() + "/scenes");
   rt::SceneTrack t = rt::buildSceneTrack(scene);
   if (rail_beta >= 0.0) {
     rt::TrackData data = t.model.data;

@@ -35,7 +35,7 @@ Scene scene(const std::string& segments, const std::string& loads, const std::st
   const std::string text = "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n"
                            "  data: ../track/paper_track.yaml\n  segments:\n" + segments +
                            "\nmoving_loads:\n" + loads + "\neffects:\n" + effects + "\nsolver:\n" + solver + "\n";
-  return rail::core::load_scene_text(text, "t.yaml", configDir() + "/scenes");
+  return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
 }
 
 const std::string kStraight24 = "    - {type: straight, length: 24.0}";

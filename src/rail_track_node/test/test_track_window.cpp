@@ -61,7 +61,7 @@ Scene lineScene(const std::string& segments, double start, double lateral, doubl
                            "\n  speed: " + std::to_string(kSpeed) + "\n  loads:\n" + loads +
                            "effects:\n  track_model: flexible\nsolver:\n  track_step: " + std::to_string(h) +
                            "\n  end: {time: 10.0}\n";
-  return rail::core::load_scene_text(text, "w.yaml", configDir() + "/scenes");
+  return rail::core::loadSceneText(text, "w.yaml", configDir() + "/scenes");
 }
 
 const std::string kStraight200 = "    - {type: straight, length: 200.0}";

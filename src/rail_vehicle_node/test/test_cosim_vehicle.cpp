@@ -42,8 +42,8 @@ constexpr double kPi = 3.14159265358979323846;
 
 // straight_short (60 m Iberian-gauge straight, paper coach at 110 km/h, co-simulation on rigid_fe) ending
 // at end_time; track step h = vehicle max step = 2e-5 s (the scene defaults, the paper's values).
-core::Scene CosimScene(double end_time) {
-  core::Scene scene = core::load_scene_file(kScenes + "straight_short.yaml");
+core::Scene cosimScene(double end_time) {
+  core::Scene scene = core::loadSceneFile(kScenes + "straight_short.yaml");
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = end_time;
   return scene;
@@ -51,9 +51,9 @@ core::Scene CosimScene(double end_time) {
 
 // The whole vehicle shifted laterally by dy (world y on the straight): every suspension force unchanged,
 // the wheelsets start off-centre and the creep forces move them back.
-Eigen::VectorXd Shifted(const VehicleSimulator& sim, double dy) {
+Eigen::VectorXd shifted(const VehicleSimulator& sim, double dy) {
   Eigen::VectorXd y = sim.state();
-  for (int b = 0; b < sim.model().n_bodies(); ++b) y[VehicleModel::PositionOffset(b) + 1] += dy;
+  for (int b = 0; b < sim.model().nBodies(); ++b) y[VehicleModel::positionOffset(b) + 1] += dy;
   return y;
 }
 
@@ -62,9 +62,9 @@ Eigen::VectorXd Shifted(const VehicleSimulator& sim, double dy) {
 class RigidTrackPeer {
  public:
   RigidTrackPeer(const core::Scene& scene, const std::vector<WheelDefinition>& wheels, cc::FrameTransport& end)
-      : track_(core::build_track_geometry(scene)),
-        model_(MakeModel(scene)),
-        coupling_(cc::coupling_config(scene), end),
+      : track_(core::buildTrackGeometry(scene)),
+        model_(makeModel(scene)),
+        coupling_(cc::couplingConfig(scene), end),
         work_(wheels.size()),
         result_(wheels.size()) {
     // The frames carry the contact's wheel centre (the taping-line point) directly.
@@ -74,7 +74,7 @@ class RigidTrackPeer {
   }
 
   // Serves steps until the vehicle closes; ok() false if anything else ended it.
-  void Run() {
+  void run() {
     for (;;) {
       const cc::Result r = coupling_.receive();
       if (r.status == cc::Status::kPeerClosed) return;
@@ -86,7 +86,7 @@ class RigidTrackPeer {
       steps_.push_back(in.step);
       times_.push_back(in.time);
       cc::WrenchFrame& out = coupling_.wrenches();
-      for (std::uint32_t i = 0; i < in.count; ++i) Evaluate(in.wheels[i], out.wheels[i]);
+      for (std::uint32_t i = 0; i < in.count; ++i) evaluate(in.wheels[i], out.wheels[i]);
       const cc::Result s = coupling_.send();
       if (!s.ok()) {
         error_ = s.message;
@@ -100,7 +100,7 @@ class RigidTrackPeer {
   const std::vector<double>& times() const { return times_; }
 
  private:
-  static rc::WheelContactModel MakeModel(const core::Scene& scene) {
+  static rc::WheelContactModel makeModel(const core::Scene& scene) {
     rc::WheelContactOptions options = SimulatorSettings().contact;
     options.flange_contact = scene.effects.flange_contact;
     options.spin = scene.effects.spin_creepage;
@@ -108,11 +108,11 @@ class RigidTrackPeer {
     const rc::WheelProfile wheel = scene.vehicle.wheel_profile_file.empty()
                                        ? rc::makeS1002()
                                        : rc::loadWheelProfile(scene.vehicle.wheel_profile_file.path);
-    return rc::WheelContactModel(wheel, scene.vehicle.nominal_radius, core::rail_profile_curve(scene),
+    return rc::WheelContactModel(wheel, scene.vehicle.nominal_radius, core::railProfileCurve(scene),
                                  Eigen::Vector2d(0.0, -rc::uic60::kCentroidDepth), options);
   }
 
-  void Evaluate(const cc::WheelState& in, cc::WheelWrench& out) {
+  void evaluate(const cc::WheelState& in, cc::WheelWrench& out) {
     const std::size_t i = in.id;
     const Eigen::Matrix3d R = in.q_wheelset_to_world.toRotationMatrix();
     rc::WheelState w;
@@ -143,17 +143,17 @@ class RigidTrackPeer {
 // Leading-wheelset record at the sampling instants.
 struct Record {
   std::vector<double> t, lateral, vertical, yaw;
-  void Add(double time, const WheelsetTrackOutput& o) {
+  void add(double time, const WheelsetTrackOutput& o) {
     t.push_back(time), lateral.push_back(o.lateral), vertical.push_back(o.vertical), yaw.push_back(o.angle_of_attack);
   }
 };
 
-double MaxDiff(const std::vector<double>& a, const std::vector<double>& b) {
+double maxDiff(const std::vector<double>& a, const std::vector<double>& b) {
   double m = 0.0;
   for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) m = std::max(m, std::abs(a[i] - b[i]));
   return m;
 }
-double Range(const std::vector<double>& a) {
+double range(const std::vector<double>& a) {
   if (a.empty()) return 0.0;
   const auto [lo, hi] = std::minmax_element(a.begin(), a.end());
   return *hi - *lo;
@@ -165,80 +165,80 @@ constexpr double kShift = 2e-3;     // initial lateral offset of the vehicle [m]
 
 TEST(CosimVehicle, ReproducesTheVehicleAloneOnTheRigidTrack) {
   // Standalone: the same scene on the rigid track.
-  core::Scene rigid = CosimScene(kEnd);
+  core::Scene rigid = cosimScene(kEnd);
   rigid.effects.track_model = core::TrackModel::kRigid;
   VehicleSimulator alone(rigid);
-  alone.ResetState(Shifted(alone, kShift));
+  alone.resetState(shifted(alone, kShift));
   Record ra;
   const int n_samples = static_cast<int>(std::lround(kEnd / kSample));
   const auto a0 = std::chrono::steady_clock::now();
   for (int j = 1; j <= n_samples; ++j) {
-    const RunStatus s = alone.AdvanceTo(j * kSample);
+    const RunStatus s = alone.advanceTo(j * kSample);
     ASSERT_TRUE(s == RunStatus::kRunning || s == RunStatus::kFinished) << alone.message();
-    ra.Add(alone.time(), alone.wheelsets()[0]);
+    ra.add(alone.time(), alone.wheelsets()[0]);
   }
   const double wall_alone = std::chrono::duration<double>(std::chrono::steady_clock::now() - a0).count();
 
   // Co-simulation over the loopback: vehicle in this thread, rigid-track peer in another.
-  const core::Scene scene = CosimScene(kEnd);
-  cc::LoopbackLink link(scene.wheel_count());
-  CosimVehicle cosim(scene, link.vehicle_end());
-  cosim.ResetState(Shifted(cosim.simulator(), kShift));
-  RigidTrackPeer peer(scene, cosim.simulator().contact_model().wheels(), link.track_end());
+  const core::Scene scene = cosimScene(kEnd);
+  cc::LoopbackLink link(scene.wheelCount());
+  CosimVehicle cosim(scene, link.vehicleEnd());
+  cosim.resetState(shifted(cosim.simulator(), kShift));
+  RigidTrackPeer peer(scene, cosim.simulator().contactModel().wheels(), link.trackEnd());
   // The vehicle's own contact evaluations (placement and settling); none may follow: the wrenches must
   // all come from the track side.
-  const long long own_evaluations = cosim.simulator().contact_data().evaluations;
-  const double h = cosim.track_step();
+  const long long own_evaluations = cosim.simulator().contactData().evaluations;
+  const double h = cosim.trackStep();
   const int per_sample = static_cast<int>(std::lround(kSample / h));
   Record rc_;
   const auto c0 = std::chrono::steady_clock::now();
-  std::thread track([&peer] { peer.Run(); });
-  RunStatus s = cosim.Start();
+  std::thread track([&peer] { peer.run(); });
+  RunStatus s = cosim.start();
   std::uint64_t k = 0;
   while (s == RunStatus::kRunning) {
-    s = cosim.Step();
+    s = cosim.step();
     ++k;
     if (k % static_cast<std::uint64_t>(per_sample) == 0 && (s == RunStatus::kRunning || s == RunStatus::kFinished)) {
-      rc_.Add(cosim.time(), cosim.simulator().wheelsets()[0]);
+      rc_.add(cosim.time(), cosim.simulator().wheelsets()[0]);
     }
   }
-  cosim.Close();
+  cosim.close();
   track.join();
   const double wall_cosim = std::chrono::duration<double>(std::chrono::steady_clock::now() - c0).count();
   ASSERT_EQ(s, RunStatus::kFinished) << cosim.message();
   EXPECT_EQ(peer.error(), "");
-  EXPECT_TRUE(cosim.simulator().external_wheel_wrenches());
-  EXPECT_EQ(cosim.simulator().contact_data().evaluations, own_evaluations);
+  EXPECT_TRUE(cosim.simulator().externalWheelWrenches());
+  EXPECT_EQ(cosim.simulator().contactData().evaluations, own_evaluations);
 
   // Every step exchanged once, in order, at t_k = k h: step 0 (initial states) to the end.
   const std::uint64_t n_steps = static_cast<std::uint64_t>(std::lround(kEnd / h)) + 1;
   ASSERT_EQ(peer.steps().size(), n_steps);
-  EXPECT_EQ(cosim.steps_exchanged(), n_steps);
+  EXPECT_EQ(cosim.stepsExchanged(), n_steps);
   for (std::size_t i = 0; i < peer.steps().size(); ++i) {
     ASSERT_EQ(peer.steps()[i], i);
     ASSERT_NEAR(peer.times()[i], static_cast<double>(i) * h, 1e-9 * h);
   }
   // The vehicle's internal steps never exceed h (CVODE's max step; 1e-12 relative for rounding).
-  EXPECT_GT(cosim.max_internal_step(), 0.0);
-  EXPECT_LE(cosim.max_internal_step(), h * (1.0 + 1e-12));
+  EXPECT_GT(cosim.maxInternalStep(), 0.0);
+  EXPECT_LE(cosim.maxInternalStep(), h * (1.0 + 1e-12));
   // At least one internal step per track step on average.
-  EXPECT_GE(cosim.simulator().Counters().steps, static_cast<long>(n_steps - 1));
+  EXPECT_GE(cosim.simulator().counters().steps, static_cast<long>(n_steps - 1));
 
   // Same samples, leading wheelset.
   ASSERT_EQ(rc_.t.size(), ra.t.size());
   for (std::size_t i = 0; i < ra.t.size(); ++i) ASSERT_NEAR(rc_.t[i], ra.t[i], 1e-12);
-  const double d_lat = MaxDiff(rc_.lateral, ra.lateral);
-  const double d_vert = MaxDiff(rc_.vertical, ra.vertical);
-  const double d_yaw_deg = MaxDiff(rc_.yaw, ra.yaw) * 180.0 / kPi;
+  const double d_lat = maxDiff(rc_.lateral, ra.lateral);
+  const double d_vert = maxDiff(rc_.vertical, ra.vertical);
+  const double d_yaw_deg = maxDiff(rc_.yaw, ra.yaw) * 180.0 / kPi;
   std::printf("leading wheelset alone, %.2f s: range of lateral %.3e m, vertical %.3e m, angle of attack %.3e deg\n",
-              kEnd, Range(ra.lateral), Range(ra.vertical), Range(ra.yaw) * 180.0 / kPi);
+              kEnd, range(ra.lateral), range(ra.vertical), range(ra.yaw) * 180.0 / kPi);
   std::printf("cosim - alone: lateral %.3e m, vertical %.3e m, angle of attack %.3e deg\n", d_lat, d_vert, d_yaw_deg);
   std::printf("wall: alone %.2f s, cosim %.2f s (%llu exchanges, %ld + %ld steps)\n", wall_alone, wall_cosim,
-              static_cast<unsigned long long>(n_steps), alone.Counters().steps, cosim.simulator().Counters().steps);
+              static_cast<unsigned long long>(n_steps), alone.counters().steps, cosim.simulator().counters().steps);
   // The motion compared is not trivial: it varies by far more than the deviations allowed below.
-  EXPECT_GT(Range(ra.lateral), 10.0 * 2.5e-5);
-  EXPECT_GT(Range(ra.yaw) * 180.0 / kPi, 10.0 * 4.7e-4);
-  EXPECT_GT(Range(ra.vertical), 10.0 * 8e-8);
+  EXPECT_GT(range(ra.lateral), 10.0 * 2.5e-5);
+  EXPECT_GT(range(ra.yaw) * 180.0 / kPi, 10.0 * 4.7e-4);
+  EXPECT_GT(range(ra.vertical), 10.0 * 8e-8);
   // The paper's deviations between its two rigid runs (section 6).
   EXPECT_LT(d_lat, 2.5e-5);
   EXPECT_LT(d_yaw_deg, 4.7e-4);
@@ -247,13 +247,13 @@ TEST(CosimVehicle, ReproducesTheVehicleAloneOnTheRigidTrack) {
 
 TEST(CosimVehicle, RefusesAScene) {
   cc::LoopbackLink link(8);
-  core::Scene rigid = CosimScene(0.1);
+  core::Scene rigid = cosimScene(0.1);
   rigid.effects.track_model = core::TrackModel::kRigid;
-  EXPECT_THROW(CosimVehicle(rigid, link.vehicle_end()), std::runtime_error);
-  core::Scene big_step = CosimScene(0.1);
+  EXPECT_THROW(CosimVehicle(rigid, link.vehicleEnd()), std::runtime_error);
+  core::Scene big_step = cosimScene(0.1);
   big_step.solver.vehicle_max_step = 2.0 * big_step.solver.track_step;
   try {
-    CosimVehicle v(big_step, link.vehicle_end());
+    CosimVehicle v(big_step, link.vehicleEnd());
     ADD_FAILURE() << "a vehicle max step larger than the track step was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("solver.vehicle_max_step"), std::string::npos) << e.what();

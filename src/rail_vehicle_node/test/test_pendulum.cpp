@@ -18,26 +18,26 @@ constexpr double kJyy = 0.2;      // about the centre of mass, hinge direction [
 constexpr double kGravity = 9.81;
 constexpr double kTheta0 = 1.2;   // initial angle from the downward vertical [rad] (large: nonlinear)
 
-VehicleModel MakePendulum(KktSolver solver) {
+VehicleModel makePendulum(KktSolver solver) {
   VehicleModel model;
   RigidBody body;
   body.name = "bob";
   body.mass = kMass;
   body.inertia_in_body = Vector3(0.15, kJyy, 0.1).asDiagonal();
   body.r_reference = Vector3(0.0, 0.0, -kLength);  // hanging below the hinge at the origin
-  const int b = model.AddBody(body);
-  model.AddRevoluteJointAt("hinge", b, kGround, Vector3::Zero(), Vector3::UnitY());
-  model.SetGravity(Vector3(0.0, 0.0, -kGravity));
-  model.SetKktSolver(solver);
-  model.Finalize();
+  const int b = model.addBody(body);
+  model.addRevoluteJointAt("hinge", b, kGround, Vector3::Zero(), Vector3::UnitY());
+  model.setGravity(Vector3(0.0, 0.0, -kGravity));
+  model.setKktSolver(solver);
+  model.finalize();
   return model;
 }
 
 // Angle from the downward vertical, positive for a right-hand rotation about +y.
-double Angle(const Eigen::Ref<const Eigen::VectorXd>& y) { return std::atan2(-y[0], -y[2]); }
+double angle(const Eigen::Ref<const Eigen::VectorXd>& y) { return std::atan2(-y[0], -y[2]); }
 
 // Reference: RK4 with step 1e-4 s on the scalar equation (global error ~ (1e-4)^4 * T ~ 1e-15 per unit).
-double ReferenceAngle(double t_end) {
+double referenceAngle(double t_end) {
   const double I_O = kJyy + kMass * kLength * kLength;
   const double w2 = kMass * kGravity * kLength / I_O;
   double theta = kTheta0, omega = 0.0;
@@ -57,40 +57,40 @@ double ReferenceAngle(double t_end) {
 class Pendulum : public ::testing::TestWithParam<KktSolver> {};
 
 TEST_P(Pendulum, ConservesEnergyKeepsConstraintAndMatchesScalarSolution) {
-  const VehicleModel model = MakePendulum(GetParam());
+  const VehicleModel model = makePendulum(GetParam());
   VehicleData data(model);
-  Eigen::VectorXd y0 = model.ReferenceState();
+  Eigen::VectorXd y0 = model.referenceState();
   const Matrix3 R = Eigen::AngleAxisd(kTheta0, Vector3::UnitY()).toRotationMatrix();
   y0.segment<3>(0) = R * Vector3(0.0, 0.0, -kLength);
-  y0.segment<4>(3) = EulerParametersFromRotation(R);
+  y0.segment<4>(3) = eulerParametersFromRotation(R);
 
   IntegratorSettings settings;
   settings.method = IntegrationMethod::kBdf;
   settings.rtol = 1e-9;
   settings.atol = 1e-11;
   VehicleIntegrator integrator(model, data, y0, 0.0, settings);
-  ComputeKinematics(model, y0, data);
-  const double E0 = KineticEnergy(model, data) + PotentialEnergy(model, data);
+  computeKinematics(model, y0, data);
+  const double E0 = kineticEnergy(model, data) + potentialEnergy(model, data);
   const double energy_scale = kMass * kGravity * kLength;  // 9.81 J
 
   const double t_end = 10.0;  // ~7 periods
   double max_energy_error = 0.0, max_violation = 0.0;
   for (int k = 1; k <= 500; ++k) {
-    integrator.AdvanceTo(t_end * k / 500.0);
-    ComputeKinematics(model, integrator.state(), data);
-    const double E = KineticEnergy(model, data) + PotentialEnergy(model, data);
+    integrator.advanceTo(t_end * k / 500.0);
+    computeKinematics(model, integrator.state(), data);
+    const double E = kineticEnergy(model, data) + potentialEnergy(model, data);
     max_energy_error = std::max(max_energy_error, std::abs(E - E0) / energy_scale);
-    max_violation = std::max(max_violation, integrator.Violation().position);
+    max_violation = std::max(max_violation, integrator.violation().position);
   }
   // rtol 1e-9 over ~2e3 steps: global state error ~1e-7 relative, energy is a smooth function of it.
   EXPECT_LT(max_energy_error, 1e-6);
   // Baumgarte alone keeps the drift far below the projection threshold (1e-6 m): no projection needed.
   EXPECT_LT(max_violation, settings.projection_position_threshold);
-  EXPECT_EQ(integrator.Counters().projections, 0);
+  EXPECT_EQ(integrator.counters().projections, 0);
   // Swing angle against the independent scalar solution; 1e-5 rad covers the ~1e-7 global error with margin,
   // while a wrong inertia (e.g. J_yy missing, period 20% off) misses by O(1) after 7 periods.
-  EXPECT_NEAR(Angle(integrator.state()), ReferenceAngle(t_end), 1e-5);
-  std::printf("[ pendulum ] steps %ld, energy drift %.2e mgL, max |Phi| %.2e m\n", integrator.Counters().steps,
+  EXPECT_NEAR(angle(integrator.state()), referenceAngle(t_end), 1e-5);
+  std::printf("[ pendulum ] steps %ld, energy drift %.2e mgL, max |Phi| %.2e m\n", integrator.counters().steps,
               max_energy_error, max_violation);
 }
 
@@ -98,11 +98,11 @@ INSTANTIATE_TEST_SUITE_P(Solvers, Pendulum, ::testing::Values(KktSolver::kRangeS
 
 // The reaction at the hinge at rest hanging straight down is the weight: lambda carries it.
 TEST(Pendulum, HangingAtRestHasZeroAccelerationAndCarriesTheWeight) {
-  const VehicleModel model = MakePendulum(KktSolver::kAugmentedLu);
+  const VehicleModel model = makePendulum(KktSolver::kAugmentedLu);
   VehicleData data(model);
-  const Eigen::VectorXd y = model.ReferenceState();
-  Eigen::VectorXd y_dot(model.state_size());
-  ComputeDerivatives(model, 0.0, y, y_dot, data);
+  const Eigen::VectorXd y = model.referenceState();
+  Eigen::VectorXd y_dot(model.stateSize());
+  computeDerivatives(model, 0.0, y, y_dot, data);
   EXPECT_LT(y_dot.norm(), 1e-12);  // exact equilibrium up to round-off
   // M v_dot + Phi_v^T lambda = g, v_dot = 0  =>  Phi_v^T lambda = g: the joint force balances m g.
   const Eigen::VectorXd reaction = data.phi_v.transpose() * data.lambda;

@@ -15,14 +15,14 @@ constexpr double kDamping = 40.0;      // [N s/m]  -> zeta = c / (2 sqrt(k m)) =
 constexpr double kX0 = 0.01;           // initial displacement [m]
 
 // Free vibration of m x'' + c x' + k x = 0 from (x0, 0), underdamped.
-double DampedOscillation(double t) {
+double dampedOscillation(double t) {
   const double wn = std::sqrt(kStiffness / kMass);
   const double zeta = kDamping / (2.0 * std::sqrt(kStiffness * kMass));
   const double wd = wn * std::sqrt(1.0 - zeta * zeta);
   return std::exp(-zeta * wn * t) * kX0 * (std::cos(wd * t) + zeta * wn / wd * std::sin(wd * t));
 }
 
-RigidBody Block(const Vector3& r) {
+RigidBody block(const Vector3& r) {
   RigidBody b;
   b.name = "block";
   b.mass = kMass;
@@ -31,7 +31,7 @@ RigidBody Block(const Vector3& r) {
   return b;
 }
 
-IntegratorSettings Tight() {
+IntegratorSettings tight() {
   IntegratorSettings s;
   s.rtol = 1e-10;
   s.atol = 1e-13;
@@ -45,22 +45,22 @@ constexpr double kOscillatorTolerance = 1e-8;
 
 TEST(Bushing, MassMatchesAnalyticDampedOscillation) {
   VehicleModel model;
-  const int b = model.AddBody(Block(Vector3(0.0, 0.0, 1.0)));
+  const int b = model.addBody(block(Vector3(0.0, 0.0, 1.0)));
   Bushing::Parameters par;
   par.stiffness = Vector3(1e5, 1e5, kStiffness);  // x, y stiff and never excited
   par.damping = Vector3(0.0, 0.0, kDamping);
-  model.AddBushingAt("mount", kGround, b, Vector3(0.0, 0.0, 1.0), Matrix3::Identity(), par);
-  model.SetGravity(Vector3::Zero());
-  model.Finalize();
+  model.addBushingAt("mount", kGround, b, Vector3(0.0, 0.0, 1.0), Matrix3::Identity(), par);
+  model.setGravity(Vector3::Zero());
+  model.finalize();
   VehicleData data(model);
-  Eigen::VectorXd y0 = model.ReferenceState();
+  Eigen::VectorXd y0 = model.referenceState();
   y0[2] += kX0;
-  VehicleIntegrator integrator(model, data, y0, 0.0, Tight());
+  VehicleIntegrator integrator(model, data, y0, 0.0, tight());
   double max_error = 0.0;
   for (int k = 1; k <= 300; ++k) {
     const double t = 0.01 * k;  // 3 s, about 10 periods of 0.31 s
-    integrator.AdvanceTo(t);
-    max_error = std::max(max_error, std::abs(integrator.state()[2] - 1.0 - DampedOscillation(t)));
+    integrator.advanceTo(t);
+    max_error = std::max(max_error, std::abs(integrator.state()[2] - 1.0 - dampedOscillation(t)));
   }
   EXPECT_LT(max_error, kOscillatorTolerance);
   EXPECT_LT(std::abs(integrator.state()[0]) + std::abs(integrator.state()[1]), 1e-14);
@@ -69,41 +69,41 @@ TEST(Bushing, MassMatchesAnalyticDampedOscillation) {
 TEST(Bushing, PreloadBalancesGravityAtTheReference) {
   // Preload m g upward: the reference is the static equilibrium; an offset oscillates about it.
   VehicleModel model;
-  const int b = model.AddBody(Block(Vector3(0.0, 0.0, 1.0)));
+  const int b = model.addBody(block(Vector3(0.0, 0.0, 1.0)));
   Bushing::Parameters par;
   par.stiffness = Vector3(1e5, 1e5, kStiffness);
   par.damping = Vector3(0.0, 0.0, kDamping);
   par.preload = Vector3(0.0, 0.0, kMass * 9.81);
-  model.AddBushingAt("mount", kGround, b, Vector3(0.0, 0.0, 1.0), Matrix3::Identity(), par);
-  model.Finalize();
+  model.addBushingAt("mount", kGround, b, Vector3(0.0, 0.0, 1.0), Matrix3::Identity(), par);
+  model.finalize();
   VehicleData data(model);
-  Eigen::VectorXd y0 = model.ReferenceState();
-  Eigen::VectorXd y_dot(model.state_size());
-  ComputeDerivatives(model, 0.0, y0, y_dot, data);
+  Eigen::VectorXd y0 = model.referenceState();
+  Eigen::VectorXd y_dot(model.stateSize());
+  computeDerivatives(model, 0.0, y0, y_dot, data);
   EXPECT_LT(y_dot.norm(), 1e-12);
   y0[2] += kX0;
-  VehicleIntegrator integrator(model, data, y0, 0.0, Tight());
-  integrator.AdvanceTo(1.234);
-  EXPECT_NEAR(integrator.state()[2] - 1.0, DampedOscillation(1.234), kOscillatorTolerance);
+  VehicleIntegrator integrator(model, data, y0, 0.0, tight());
+  integrator.advanceTo(1.234);
+  EXPECT_NEAR(integrator.state()[2] - 1.0, dampedOscillation(1.234), kOscillatorTolerance);
 }
 
 TEST(PointToPoint, MassMatchesAnalyticDampedOscillation) {
   // Spring along z from a ground point 1 m above the block; free length 1 m; stretched by x0.
   VehicleModel model;
-  const int b = model.AddBody(Block(Vector3::Zero()));
-  model.AddPointToPointAt("spring", kGround, b, Vector3(0.0, 0.0, 1.0), Vector3::Zero(), kStiffness, kDamping, 1.0,
+  const int b = model.addBody(block(Vector3::Zero()));
+  model.addPointToPointAt("spring", kGround, b, Vector3(0.0, 0.0, 1.0), Vector3::Zero(), kStiffness, kDamping, 1.0,
                           0.0);
-  model.SetGravity(Vector3::Zero());
-  model.Finalize();
+  model.setGravity(Vector3::Zero());
+  model.finalize();
   VehicleData data(model);
-  Eigen::VectorXd y0 = model.ReferenceState();
+  Eigen::VectorXd y0 = model.referenceState();
   y0[2] -= kX0;  // stretched: pulled back up
-  VehicleIntegrator integrator(model, data, y0, 0.0, Tight());
+  VehicleIntegrator integrator(model, data, y0, 0.0, tight());
   double max_error = 0.0;
   for (int k = 1; k <= 300; ++k) {
     const double t = 0.01 * k;
-    integrator.AdvanceTo(t);
-    max_error = std::max(max_error, std::abs(-integrator.state()[2] - DampedOscillation(t)));
+    integrator.advanceTo(t);
+    max_error = std::max(max_error, std::abs(-integrator.state()[2] - dampedOscillation(t)));
   }
   EXPECT_LT(max_error, kOscillatorTolerance);
 }
@@ -111,24 +111,24 @@ TEST(PointToPoint, MassMatchesAnalyticDampedOscillation) {
 TEST(Bushing, RotationalStiffnessGivesHarmonicRoll) {
   // Single-axis rotation: the rotation vector is exactly the roll angle, so theta'' = -(k_r / J_xx) theta.
   VehicleModel model;
-  const int b = model.AddBody(Block(Vector3::Zero()));
+  const int b = model.addBody(block(Vector3::Zero()));
   Bushing::Parameters par;
   par.stiffness = Vector3(1e5, 1e5, 1e5);
   par.rotational_stiffness = Vector3(50.0, 0.0, 0.0);
-  model.AddBushingAt("torsion", kGround, b, Vector3::Zero(), Matrix3::Identity(), par);
-  model.SetGravity(Vector3::Zero());
-  model.Finalize();
+  model.addBushingAt("torsion", kGround, b, Vector3::Zero(), Matrix3::Identity(), par);
+  model.setGravity(Vector3::Zero());
+  model.finalize();
   VehicleData data(model);
-  Eigen::VectorXd y0 = model.ReferenceState();
+  Eigen::VectorXd y0 = model.referenceState();
   const double theta0 = 0.3;
-  y0.segment<4>(3) = EulerParametersFromRotationVector(Vector3(theta0, 0.0, 0.0));
-  VehicleIntegrator integrator(model, data, y0, 0.0, Tight());
+  y0.segment<4>(3) = eulerParametersFromRotationVector(Vector3(theta0, 0.0, 0.0));
+  VehicleIntegrator integrator(model, data, y0, 0.0, tight());
   const double w = std::sqrt(50.0 / 0.2);
   double max_error = 0.0;
   for (int k = 1; k <= 200; ++k) {
     const double t = 0.01 * k;
-    integrator.AdvanceTo(t);
-    const Vector3 theta = RotationVectorFromRotation(RotationFromEulerParameters(integrator.state().segment<4>(3)));
+    integrator.advanceTo(t);
+    const Vector3 theta = rotationVectorFromRotation(rotationFromEulerParameters(integrator.state().segment<4>(3)));
     max_error = std::max(max_error, std::abs(theta.x() - theta0 * std::cos(w * t)));
   }
   EXPECT_LT(max_error, 1e-7);  // rtol 1e-10 on a 0.3 rad amplitude over ~5 periods; margin as above
@@ -136,25 +136,25 @@ TEST(Bushing, RotationalStiffnessGivesHarmonicRoll) {
 
 TEST(BumpStop, TableInterpolationAndEnergy) {
   VehicleModel model;
-  const int b = model.AddBody(Block(Vector3::Zero()));
-  model.AddBumpStopAt("stop", kGround, b, Vector3::Zero(), Vector3::UnitY(), {0.025, 0.030, 0.040},
+  const int b = model.addBody(block(Vector3::Zero()));
+  model.addBumpStopAt("stop", kGround, b, Vector3::Zero(), Vector3::UnitY(), {0.025, 0.030, 0.040},
                       {0.0, 600.0, 3730.0});
-  model.Finalize();
-  const auto* stop = dynamic_cast<const BumpStop*>(model.force_elements()[0].get());
+  model.finalize();
+  const auto* stop = dynamic_cast<const BumpStop*>(model.forceElements()[0].get());
   ASSERT_NE(stop, nullptr);
-  EXPECT_DOUBLE_EQ(stop->ForceAt(0.02), 0.0);
-  EXPECT_DOUBLE_EQ(stop->ForceAt(0.025), 0.0);
-  EXPECT_NEAR(stop->ForceAt(0.0275), 300.0, 1e-9);                         // halfway on the first segment
-  EXPECT_NEAR(stop->ForceAt(0.035), 0.5 * (600.0 + 3730.0), 1e-9);         // halfway on the second
-  EXPECT_NEAR(stop->ForceAt(0.045), 3730.0 + 313000.0 * 0.005, 1e-6);      // last slope extended
+  EXPECT_DOUBLE_EQ(stop->forceAt(0.02), 0.0);
+  EXPECT_DOUBLE_EQ(stop->forceAt(0.025), 0.0);
+  EXPECT_NEAR(stop->forceAt(0.0275), 300.0, 1e-9);                         // halfway on the first segment
+  EXPECT_NEAR(stop->forceAt(0.035), 0.5 * (600.0 + 3730.0), 1e-9);         // halfway on the second
+  EXPECT_NEAR(stop->forceAt(0.045), 3730.0 + 313000.0 * 0.005, 1e-6);      // last slope extended
   VehicleData data(model);
-  Eigen::VectorXd y = model.ReferenceState();
+  Eigen::VectorXd y = model.referenceState();
   y[1] = -0.035;  // deflection along -y: same magnitude, opposite force
-  ComputeKinematics(model, y, data);
+  computeKinematics(model, y, data);
   // Integral of the piecewise-linear force from 0.025 to 0.035: trapezoids 0.005*300 + 0.005*(600+2165)/2.
-  EXPECT_NEAR(stop->PotentialEnergy(data), 0.005 * 300.0 + 0.005 * (600.0 + 2165.0) / 2.0, 1e-9);
+  EXPECT_NEAR(stop->potentialEnergy(data), 0.005 * 300.0 + 0.005 * (600.0 + 2165.0) / 2.0, 1e-9);
   data.g.setZero();
-  stop->AddForces(data, data.g);
+  stop->addForces(data, data.g);
   EXPECT_NEAR(data.g[1], +2165.0, 1e-9);  // pushes the block back toward the centre
 }
 
@@ -163,14 +163,14 @@ TEST(BumpStop, ImpactWithClearanceMatchesEnergyBalance) {
   // c + v0 sqrt(m / k) and it leaves at -v0 (elastic).
   const double c = 0.025, k = 2.0e5, v0 = 0.5;
   VehicleModel model;
-  const int b = model.AddBody(Block(Vector3::Zero()));
-  model.AddBumpStopAt("stop", kGround, b, Vector3::Zero(), Vector3::UnitY(), {c, c + 1.0}, {0.0, k});
-  model.SetGravity(Vector3::Zero());
-  model.Finalize();
+  const int b = model.addBody(block(Vector3::Zero()));
+  model.addBumpStopAt("stop", kGround, b, Vector3::Zero(), Vector3::UnitY(), {c, c + 1.0}, {0.0, k});
+  model.setGravity(Vector3::Zero());
+  model.finalize();
   VehicleData data(model);
-  Eigen::VectorXd y0 = model.ReferenceState();
-  y0[model.VelocityOffset(b) + 1] = v0;
-  IntegratorSettings s = Tight();
+  Eigen::VectorXd y0 = model.referenceState();
+  y0[model.velocityOffset(b) + 1] = v0;
+  IntegratorSettings s = tight();
   s.max_step = 1e-3;  // resolve the onset of contact (a kink in the force law)
   VehicleIntegrator integrator(model, data, y0, 0.0, s);
   double max_y = 0.0;
@@ -179,14 +179,14 @@ TEST(BumpStop, ImpactWithClearanceMatchesEnergyBalance) {
   const double t_end = 0.1;  // out of contact, before reaching the opposite stop at 0.05 + 0.0722 + 0.1 s
   ASSERT_GT(t_end, t_out);
   for (int step = 1; step <= 1000; ++step) {
-    integrator.AdvanceTo(step * 1e-4);
+    integrator.advanceTo(step * 1e-4);
     max_y = std::max(max_y, integrator.state()[1]);
   }
   const double expected_max = c + v0 * std::sqrt(kMass / k);
   // Sampling every 1e-4 s near the turning point (curvature v0 w) costs < v0 w (0.5e-4)^2 / 2 ~ 1e-7 m;
   // the kinks at contact are crossed with local error ~rtol: 1e-6 m bounds both.
   EXPECT_NEAR(max_y, expected_max, 1e-6);
-  EXPECT_NEAR(integrator.state()[model.VelocityOffset(b) + 1], -v0, 1e-5);  // elastic rebound
+  EXPECT_NEAR(integrator.state()[model.velocityOffset(b) + 1], -v0, 1e-5);  // elastic rebound
 }
 
 }  // namespace

@@ -25,8 +25,8 @@ namespace rc = rail::contact;
 
 const std::string kScenes = std::string(RAILSIM_CONFIG_DIR) + "/scenes/";
 
-core::Scene TimedScene(const std::string& file, double start_arc_length, double speed, double end_time) {
-  core::Scene scene = core::load_scene_file(kScenes + file);
+core::Scene timedScene(const std::string& file, double start_arc_length, double speed, double end_time) {
+  core::Scene scene = core::loadSceneFile(kScenes + file);
   scene.effects.track_model = core::TrackModel::kRigid;
   scene.vehicle.start_arc_length = start_arc_length;
   scene.vehicle.speed = speed;
@@ -61,38 +61,38 @@ struct Comparison {
 
 // Coloured Jacobian at the simulator's state, then the dense forward quotient with the same increments:
 // each column perturbed alone, the full right-hand side, the elements' work states restored before each.
-Comparison Compare(VehicleSimulator& sim) {
+Comparison compare(VehicleSimulator& sim) {
   const VehicleModel& model = sim.model();
   VehicleData& data = sim.data();
-  const int n = model.state_size();
+  const int n = model.stateSize();
   const Eigen::VectorXd y = sim.state();
   const double t = sim.time();
   const Eigen::VectorXd weight = Eigen::VectorXd::Ones(n);
   Eigen::VectorXd f_ref(n), f(n), y_perturbed = y, column(n);
-  ComputeDerivatives(model, t, y, f_ref, data);
+  computeDerivatives(model, t, y, f_ref, data);
 
-  const auto& contact = sim.contact_data();
+  const auto& contact = sim.contactData();
   const std::vector<rc::WheelContactResult> results_before = contact.result;
   const std::vector<double> hints_before = contact.s_hint;
   JacobianPattern pattern(model);
   JacobianWork work(model, pattern);
   Comparison c;
-  c.evaluations = EvaluateJacobian(model, pattern, t, y, weight, kMinIncrement, data, work);
-  c.body_colours = pattern.n_body_colours();
+  c.evaluations = evaluateJacobian(model, pattern, t, y, weight, kMinIncrement, data, work);
+  c.body_colours = pattern.nBodyColours();
   c.work_state_kept = contact.s_hint == hints_before;
   for (std::size_t k = 0; k < results_before.size(); ++k) {
     c.work_state_kept = c.work_state_kept &&
                         contact.result[k].wheel_centre.force_in_world == results_before[k].wheel_centre.force_in_world;
   }
 
-  const auto& elements = model.force_elements();
-  for (const auto& e : elements) e->SaveWorkState();
-  const auto& start = pattern.col_start();
-  const auto& rows = pattern.row_index();
+  const auto& elements = model.forceElements();
+  for (const auto& e : elements) e->saveWorkState();
+  const auto& start = pattern.colStart();
+  const auto& rows = pattern.rowIndex();
   for (int j = 0; j < n; ++j) {
     y_perturbed[j] = y[j] + work.increment[j];
-    for (const auto& e : elements) e->RestoreWorkState();
-    ComputeDerivatives(model, t, y_perturbed, f, data);
+    for (const auto& e : elements) e->restoreWorkState();
+    computeDerivatives(model, t, y_perturbed, f, data);
     y_perturbed[j] = y[j];
     column = (f - f_ref) / work.increment[j];
     const double col_max = column.cwiseAbs().maxCoeff();
@@ -107,14 +107,14 @@ Comparison Compare(VehicleSimulator& sim) {
     c.max_outside = std::max(c.max_outside, outside.cwiseAbs().maxCoeff() / tolerance);
     if (col_max > 0.0) c.max_relative = std::max(c.max_relative, error / col_max);
   }
-  for (const auto& e : elements) e->RestoreWorkState();
+  for (const auto& e : elements) e->restoreWorkState();
   std::printf("jacobian: %d nonzeros of %d, %d body colours, %d evaluations; max |coloured - dense| / tolerance "
               "%.2e (%.2e of the column's largest entry), max dense entry outside the pattern / tolerance %.2e\n",
               pattern.nonzeros(), n * n, c.body_colours, c.evaluations, c.max_ratio, c.max_relative, c.max_outside);
   return c;
 }
 
-void ExpectMatches(const Comparison& c) {
+void expectMatches(const Comparison& c) {
   EXPECT_LT(c.max_ratio, 1.0);
   EXPECT_LT(c.max_outside, 1.0);
   EXPECT_TRUE(c.work_state_kept);
@@ -127,25 +127,25 @@ void ExpectMatches(const Comparison& c) {
 
 TEST(VehicleJacobian, MatchesTheDenseQuotientInTheCurve) {
   // Paper scene, 110 km/h, inside the R 500 m circular curve (s 200-380 m).
-  VehicleSimulator sim(TimedScene("paper_demo.yaml", 300.0, 30.5556, 0.1));
-  ASSERT_EQ(sim.AdvanceTo(0.1), RunStatus::kFinished) << sim.message();
-  ExpectMatches(Compare(sim));
+  VehicleSimulator sim(timedScene("paper_demo.yaml", 300.0, 30.5556, 0.1));
+  ASSERT_EQ(sim.advanceTo(0.1), RunStatus::kFinished) << sim.message();
+  expectMatches(compare(sim));
 }
 
 TEST(VehicleJacobian, MatchesTheDenseQuotientInFlangeContact) {
   // R 150 m at 50 km/h: after 0.7 s the leading wheelset flanges on the outer (right) rail
   // (test_vehicle_simulator's TightCurveLeadingWheelsetsFlangeOnTheOuterRail).
-  core::Scene scene = TimedScene("tight_curve.yaml", 145.0, core::load_scene_file(kScenes + "tight_curve.yaml").vehicle.speed, 0.7);
+  core::Scene scene = timedScene("tight_curve.yaml", 145.0, core::loadSceneFile(kScenes + "tight_curve.yaml").vehicle.speed, 0.7);
   VehicleSimulator sim(scene);
-  ASSERT_EQ(sim.AdvanceTo(0.7), RunStatus::kFinished) << sim.message();
+  ASSERT_EQ(sim.advanceTo(0.7), RunStatus::kFinished) << sim.message();
   ASSERT_TRUE(sim.contacts()[1].contact[rc::kFlange].active);
-  ExpectMatches(Compare(sim));
+  expectMatches(compare(sim));
 }
 
 TEST(VehicleJacobian, MatchesTheDenseQuotientAtStandstill) {
-  VehicleSimulator sim(TimedScene("straight_short.yaml", 25.0, 0.0, 0.01));
-  ASSERT_EQ(sim.AdvanceTo(0.01), RunStatus::kFinished) << sim.message();
-  ExpectMatches(Compare(sim));
+  VehicleSimulator sim(timedScene("straight_short.yaml", 25.0, 0.0, 0.01));
+  ASSERT_EQ(sim.advanceTo(0.01), RunStatus::kFinished) << sim.message();
+  expectMatches(compare(sim));
 }
 
 }  // namespace

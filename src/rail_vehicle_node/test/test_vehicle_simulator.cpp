@@ -32,8 +32,8 @@ constexpr double kG = 9.81;             // the data file's gravity [m/s^2]
 
 // The short straight of the shipped scenes (Iberian gauge, paper coach) on the rigid track, lengthened to
 // 200 m.
-core::Scene StraightScene(double speed, double end_time) {
-  core::Scene scene = core::load_scene_file(kScenes + "straight_short.yaml");
+core::Scene straightScene(double speed, double end_time) {
+  core::Scene scene = core::loadSceneFile(kScenes + "straight_short.yaml");
   scene.track.segments.at(0).length = 200.0;
   scene.effects.track_model = core::TrackModel::kRigid;
   scene.vehicle.speed = speed;
@@ -43,16 +43,16 @@ core::Scene StraightScene(double speed, double end_time) {
 }
 
 // Wheel index of wheelset w (0 = leading) and side (0 left, 1 right).
-int Wheel(int w, int side) { return 2 * w + side; }
+int wheel(int w, int side) { return 2 * w + side; }
 
 TEST(VehicleSimulator, SettlesWithEachWheelCarryingItsShareOfTheWeight) {
-  VehicleSimulator sim(StraightScene(30.5556, 0.2));
+  VehicleSimulator sim(straightScene(30.5556, 0.2));
   const double share = kCoachMass * kG / 8.0;  // 72 937.35 N
   // The static solve matches the total to 1e-9 of the load; the data file's preloads make the reference
   // pose the suspension's equilibrium, so every wheel carries the same share up to the contact geometry's
   // left/right symmetry (mirrored profiles on a symmetric track): 1e-4 of the share.
-  EXPECT_NEAR(sim.settled_wheel_load_sum(), kCoachMass * kG, 1e-6 * kCoachMass * kG);
-  EXPECT_NEAR(sim.static_load(), kCoachMass * kG, 1e-6 * kCoachMass * kG);
+  EXPECT_NEAR(sim.settledWheelLoadSum(), kCoachMass * kG, 1e-6 * kCoachMass * kG);
+  EXPECT_NEAR(sim.staticLoad(), kCoachMass * kG, 1e-6 * kCoachMass * kG);
   ASSERT_EQ(sim.wheels().size(), 8u);
   for (const WheelOutput& w : sim.wheels()) {
     EXPECT_NEAR(w.force_in_world.z(), share, 1e-4 * share) << "wheel " << w.wheel_id;
@@ -64,14 +64,14 @@ TEST(VehicleSimulator, SettlesWithEachWheelCarryingItsShareOfTheWeight) {
   }
   // Rolling on straight track at speed, the loads stay at the static share: the vehicle starts in
   // equilibrium, so the only transients come from the creep forces settling (1 % of the share).
-  EXPECT_EQ(sim.AdvanceTo(0.2), RunStatus::kFinished) << sim.message();
+  EXPECT_EQ(sim.advanceTo(0.2), RunStatus::kFinished) << sim.message();
   for (const WheelOutput& w : sim.wheels()) {
     EXPECT_NEAR(w.force_in_world.z(), share, 1e-2 * share) << "wheel " << w.wheel_id;
   }
-  const IntegratorCounters c = sim.Counters();
+  const IntegratorCounters c = sim.counters();
   EXPECT_GT(c.steps, 0);
   std::printf("settle: lift %.4f mm; 0.2 s: %ld steps, %ld RHS, %ld Jacobian RHS, %ld Jacobians\n",
-              sim.settle_lift() * 1e3, c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals);
+              sim.settleLift() * 1e3, c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals);
 }
 
 
@@ -79,10 +79,10 @@ TEST(VehicleSimulator, SettlesWithEachWheelCarryingItsShareOfTheWeight) {
 class AxleLoad : public ForceElement {
  public:
   AxleLoad(int body, double force) : ForceElement("axle_load", body, kGround), force_(force) {}
-  void AddForces(const VehicleData& /*data*/, Eigen::Ref<Eigen::VectorXd> g) const override {
-    g[6 * body_i() + 2] -= force_;
+  void addForces(const VehicleData& /*data*/, Eigen::Ref<Eigen::VectorXd> g) const override {
+    g[6 * bodyI() + 2] -= force_;
   }
-  double PotentialEnergy(const VehicleData& /*data*/) const override { return 0.0; }
+  double potentialEnergy(const VehicleData& /*data*/) const override { return 0.0; }
 
  private:
   double force_;
@@ -92,7 +92,7 @@ class AxleLoad : public ForceElement {
 struct LateralRecord {
   std::vector<double> t, y;
   // Zero crossings by linear interpolation, after t_from.
-  std::vector<double> Crossings(double t_from) const {
+  std::vector<double> crossings(double t_from) const {
     std::vector<double> out;
     for (std::size_t i = 1; i < t.size(); ++i) {
       if (t[i - 1] < t_from) continue;
@@ -100,7 +100,7 @@ struct LateralRecord {
     }
     return out;
   }
-  double MaxAbs(double t_from) const {
+  double maxAbs(double t_from) const {
     double m = 0.0;
     for (std::size_t i = 0; i < t.size(); ++i) {
       if (t[i] >= t_from) m = std::max(m, std::abs(y[i]));
@@ -109,11 +109,11 @@ struct LateralRecord {
   }
 };
 
-LateralRecord RunAndRecord(VehicleSimulator& sim, int wheelset, double t_end, double dt) {
+LateralRecord runAndRecord(VehicleSimulator& sim, int wheelset, double t_end, double dt) {
   LateralRecord r;
   const int n = static_cast<int>(std::lround(t_end / dt));
   for (int i = 1; i <= n; ++i) {
-    const RunStatus status = sim.AdvanceTo(i * dt);
+    const RunStatus status = sim.advanceTo(i * dt);
     EXPECT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
     if (!(status == RunStatus::kRunning || status == RunStatus::kFinished)) break;
     r.t.push_back(sim.time());
@@ -123,23 +123,23 @@ LateralRecord RunAndRecord(VehicleSimulator& sim, int wheelset, double t_end, do
 }
 
 // Shifts the given bodies laterally (world y; straight track) in the simulator's current state.
-void ShiftBodies(VehicleSimulator& sim, const std::vector<std::string>& names, double dy) {
+void shiftBodies(VehicleSimulator& sim, const std::vector<std::string>& names, double dy) {
   Eigen::VectorXd y = sim.state();
-  for (const std::string& name : names) y[VehicleModel::PositionOffset(sim.model().BodyIndex(name)) + 1] += dy;
-  sim.ResetState(y);
+  for (const std::string& name : names) y[VehicleModel::positionOffset(sim.model().bodyIndex(name)) + 1] += dy;
+  sim.resetState(y);
 }
 
 // Rolling radius of the tread contact of both wheels of wheelset 0 with the wheelset shifted laterally by
 // dy (world y, straight track) from the simulator's settled state; no dynamics, geometry only.
-void RollingRadii(VehicleSimulator& sim, double dy, double& r_left, double& r_right, double& y_left,
+void rollingRadii(VehicleSimulator& sim, double dy, double& r_left, double& r_right, double& y_left,
                   double& y_right) {
   Eigen::VectorXd y = sim.state();
-  y[VehicleModel::PositionOffset(sim.wheelset_bodies()[0]) + 1] += dy;
-  ComputeKinematics(sim.model(), y, sim.data());
-  WheelRailContactData cd(sim.contact_model());
-  cd.s_hint = sim.contact_data().s_hint;
-  EvaluateWheel(sim.contact_model(), sim.data(), 0, cd);
-  EvaluateWheel(sim.contact_model(), sim.data(), 1, cd);
+  y[VehicleModel::positionOffset(sim.wheelsetBodies()[0]) + 1] += dy;
+  computeKinematics(sim.model(), y, sim.data());
+  WheelRailContactData cd(sim.contactModel());
+  cd.s_hint = sim.contactData().s_hint;
+  evaluateWheel(sim.contactModel(), sim.data(), 0, cd);
+  evaluateWheel(sim.contactModel(), sim.data(), 1, cd);
   const auto& left = cd.result[0].contact[rc::kTread];
   const auto& right = cd.result[1].contact[rc::kTread];
   r_left = left.rolling_radius;
@@ -150,7 +150,7 @@ void RollingRadii(VehicleSimulator& sim, double dy, double& r_left, double& r_ri
 
 // Equivalent conicity (EN 15302 principle, rail_contact's contact-geometry table) of the scene's wheelset on
 // its track at a lateral amplitude, with the half distance e between the contact points.
-double SceneConicity(const core::Scene& scene, double amplitude, double& e) {
+double sceneConicity(const core::Scene& scene, double amplitude, double& e) {
   rc::WheelsetTrackSpec spec;
   spec.track_gauge = scene.track.gauge;
   spec.gauge_depth = scene.track.gauge_measuring_depth;
@@ -173,7 +173,7 @@ TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
   // 1/20 at 1668 mm gauge and 1592 mm back-to-back the conicity is low (~0.01) and the wavelength long
   // (~40 m): 3.4 s give three zero crossings.
   const double speed = 20.0;
-  core::Scene scene = StraightScene(speed, 3.4);
+  core::Scene scene = straightScene(speed, 3.4);
   scene.vehicle.wheelsets = 1;
   scene.solver.vehicle_max_step = 2e-5;
   const double axle_load = kCoachMass * kG / 4.0;
@@ -183,38 +183,38 @@ TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
     ws.mass = 1800.0;
     ws.inertia_in_body = Eigen::Vector3d(900.0, 10.0, 900.0).asDiagonal();
     ws.r_reference = Vector3(0.0, 0.0, 0.445);
-    const int b = m.AddBody(ws);
-    m.AddLoadPointAtWorld("wheel_left", b, Vector3(0.0, 0.8665, 0.445));
-    m.AddLoadPointAtWorld("wheel_right", b, Vector3(0.0, -0.8665, 0.445));
-    m.AddForceElement(std::make_unique<AxleLoad>(b, axle_load - 1800.0 * kG));
+    const int b = m.addBody(ws);
+    m.addLoadPointAtWorld("wheel_left", b, Vector3(0.0, 0.8665, 0.445));
+    m.addLoadPointAtWorld("wheel_right", b, Vector3(0.0, -0.8665, 0.445));
+    m.addForceElement(std::make_unique<AxleLoad>(b, axle_load - 1800.0 * kG));
   };
   VehicleSimulator sim(scene, build);
-  EXPECT_NEAR(sim.static_load(), axle_load, 1e-9 * axle_load);
+  EXPECT_NEAR(sim.staticLoad(), axle_load, 1e-9 * axle_load);
 
   // Klingel: L = 2 pi sqrt(r0 e / lambda), e half the distance between the contact points, r0 the rolling
   // radius there, lambda the equivalent conicity at the oscillation's amplitude from rail_contact's
   // contact-geometry table (EN 15302 principle) for the same wheelset and track.
   const double amplitude = 2e-3;
   double e = 0.0;
-  const double lambda = SceneConicity(scene, amplitude, e);
+  const double lambda = sceneConicity(scene, amplitude, e);
   const double r0 = scene.vehicle.nominal_radius;
   ASSERT_TRUE(std::isfinite(lambda) && lambda > 0.0) << "equivalent conicity " << lambda;
   const double klingel = 2.0 * M_PI * std::sqrt(r0 * e / lambda);
   // Cross-check from the simulator's own contact: the rolling-radius difference slope at the amplitude.
   double r_l0, r_r0, y_l0, y_r0, r_lA, r_rA, dummy1, dummy2;
-  RollingRadii(sim, 0.0, r_l0, r_r0, y_l0, y_r0);
-  RollingRadii(sim, amplitude, r_lA, r_rA, dummy1, dummy2);
+  rollingRadii(sim, 0.0, r_l0, r_r0, y_l0, y_r0);
+  rollingRadii(sim, amplitude, r_lA, r_rA, dummy1, dummy2);
   const double lambda_slope = (r_lA - r_rA) / (2.0 * amplitude);
 
-  ShiftBodies(sim, {"ws"}, amplitude);
-  const LateralRecord rec = RunAndRecord(sim, 0, 3.4, 1e-3);
-  const std::vector<double> zc = rec.Crossings(0.0);
+  shiftBodies(sim, {"ws"}, amplitude);
+  const LateralRecord rec = runAndRecord(sim, 0, 3.4, 1e-3);
+  const std::vector<double> zc = rec.crossings(0.0);
   ASSERT_GE(zc.size(), 3u) << "no oscillation: Klingel wavelength " << klingel << " m";
   const double period = 2.0 * (zc.back() - zc.front()) / static_cast<double>(zc.size() - 1);
   const double wavelength = speed * period;
   std::printf("lone wheelset: r0 %.5f m, e %.4f m, lambda %.4f (table), %.4f (slope), Klingel %.3f m, simulated "
               "%.3f m (%zu crossings), amplitude at the end %.3f mm\n", r0, e, lambda, lambda_slope, klingel,
-              wavelength, zc.size(), rec.MaxAbs(3.0) * 1e3);
+              wavelength, zc.size(), rec.maxAbs(3.0) * 1e3);
   // Klingel's formula is the kinematic (creep-dominated, inertia-free) limit; at 20 m/s the inertia
   // forces m w^2 y are about 2e-3 of the lateral creep forces, so the difference is dominated by the
   // nonlinearity of Delta r over the amplitude and the wheelset's roll and spin creep; the zero crossings
@@ -235,26 +235,26 @@ TEST(VehicleSimulator, WheelsetOffsetDecaysOnStraightTrackBelowCriticalSpeed) {
   // geometry's conicity falling with amplitude allows, not a decay.
   // Below the critical speed the motion decays: from 2.0 s to 2.5 s the amplitude is below a fifth of the
   // offset (measured 0.21 mm against 0.6 mm).
-  core::Scene scene = StraightScene(30.5556, 2.5);
+  core::Scene scene = straightScene(30.5556, 2.5);
   scene.track.gauge = 1.435;
   scene.track.cant_reference_width = 1.500;
   scene.track.rail_inclination = 1.0 / 40.0;
   scene.vehicle.back_to_back = 1.356;
   VehicleSimulator sim(scene);
   const double offset = 3e-3;
-  ShiftBodies(sim, {"ws1", "ab1_left", "ab1_right"}, offset);
-  const LateralRecord rec = RunAndRecord(sim, 0, 2.5, 1e-3);
+  shiftBodies(sim, {"ws1", "ab1_left", "ab1_right"}, offset);
+  const LateralRecord rec = runAndRecord(sim, 0, 2.5, 1e-3);
   ASSERT_FALSE(rec.t.empty());
   double e = 0.0;
-  const double lambda = SceneConicity(scene, offset, e);
+  const double lambda = sceneConicity(scene, offset, e);
   const double wheelset = 2.0 * M_PI * std::sqrt(scene.vehicle.nominal_radius * e / lambda);
-  const double late = rec.MaxAbs(2.0);
+  const double late = rec.maxAbs(2.0);
   std::printf("coach, 1435 mm gauge, 1356 mm back-to-back, wheelset 1 offset %.1f mm: conicity %.4f at the offset "
               "(Klingel wavelength %.2f m); zero crossings %zu; max |y| from 0 s %.4f mm, from 1.0 s %.4f mm, from "
               "2.0 s %.4f mm\n",
-              offset * 1e3, lambda, wheelset, rec.Crossings(0.0).size(), rec.MaxAbs(0.0) * 1e3, rec.MaxAbs(1.0) * 1e3,
+              offset * 1e3, lambda, wheelset, rec.crossings(0.0).size(), rec.maxAbs(0.0) * 1e3, rec.maxAbs(1.0) * 1e3,
               late * 1e3);
-  EXPECT_GE(rec.Crossings(0.0).size(), 2u) << "the motion should oscillate, not creep back";
+  EXPECT_GE(rec.crossings(0.0).size(), 2u) << "the motion should oscillate, not creep back";
   EXPECT_LT(late, offset / 5.0);
 }
 
@@ -268,8 +268,8 @@ struct CurveRun {
 };
 // Both tests below compare two runs of the same step sequence: Adams at the paper's 2e-5 s cap (the vehicle
 // alone is otherwise uncapped and BDF's step choice would differ between the runs by more than the effect).
-CurveRun RunTightCurve(double t_end, double split_overlap, double rtol, double atol, double max_step = 2e-5) {
-  core::Scene scene = core::load_scene_file(kScenes + "tight_curve.yaml");
+CurveRun runTightCurve(double t_end, double split_overlap, double rtol, double atol, double max_step = 2e-5) {
+  core::Scene scene = core::loadSceneFile(kScenes + "tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = t_end;
@@ -280,12 +280,12 @@ CurveRun RunTightCurve(double t_end, double split_overlap, double rtol, double a
   settings.standalone_max_step = max_step;
   VehicleSimulator sim(scene, settings);
   RunStatus status = RunStatus::kRunning;
-  for (int i = 1; status == RunStatus::kRunning; ++i) status = sim.AdvanceTo(std::min(t_end, 0.01 * i));
+  for (int i = 1; status == RunStatus::kRunning; ++i) status = sim.advanceTo(std::min(t_end, 0.01 * i));
   EXPECT_EQ(status, RunStatus::kFinished) << sim.message();
   CurveRun r;
   for (const WheelsetTrackOutput& w : sim.wheelsets()) r.lateral.push_back(w.lateral);
   for (const auto& c : sim.contacts()) r.flange_force += c.contact[rc::kFlange].N;
-  r.counters = sim.Counters();
+  r.counters = sim.counters();
   return r;
 }
 
@@ -296,8 +296,8 @@ TEST(VehicleSimulator, SplitOverlapLeavesTheRunUnchangedBeforeAnyRootContact) {
   // with the overlap and the one without (the detection's previous behaviour) must agree to within what
   // the search's different sampling leaves after Newton (1e-10 m in the contact point): 1e-9 m in the
   // wheelsets' lateral positions, a tenth of the integrator's absolute tolerance (1e-8).
-  const CurveRun with = RunTightCurve(0.04, 5e-3, 1e-6, 1e-8);
-  const CurveRun without = RunTightCurve(0.04, 0.0, 1e-6, 1e-8);
+  const CurveRun with = runTightCurve(0.04, 5e-3, 1e-6, 1e-8);
+  const CurveRun without = runTightCurve(0.04, 0.0, 1e-6, 1e-8);
   ASSERT_EQ(with.lateral.size(), 4u);
   for (std::size_t w = 0; w < 4; ++w) EXPECT_NEAR(with.lateral[w], without.lateral[w], 1e-9) << "wheelset " << w + 1;
   EXPECT_EQ(with.flange_force, 0.0);
@@ -311,8 +311,8 @@ TEST(VehicleSimulator, TightCurveWithFlangeContactConvergesWithTheTolerance) {
   // 20 um of it in every wheelset's lateral position (the runs' global error, from the integrator's local
   // tolerances accumulated over ~1e4 steps and through the flange onsets) and its flange force within 2 %.
   // It also stays cheap: at most 1.3 right-hand sides per step at the 2e-5 s step cap (Adams).
-  const CurveRun run = RunTightCurve(0.2, 5e-3, 1e-6, 1e-8);
-  const CurveRun fine = RunTightCurve(0.2, 5e-3, 1e-8, 1e-10);
+  const CurveRun run = runTightCurve(0.2, 5e-3, 1e-6, 1e-8);
+  const CurveRun fine = runTightCurve(0.2, 5e-3, 1e-8, 1e-10);
   ASSERT_EQ(run.lateral.size(), 4u);
   for (std::size_t w = 0; w < 4; ++w) {
     std::printf("tight curve 0.2 s: wheelset %zu lateral %.4f mm (fine %.4f mm)\n", w + 1, run.lateral[w] * 1e3,
@@ -332,8 +332,8 @@ TEST(VehicleSimulator, UncappedBdfAtTightTolerancesFinishesTheFlangeOnsetsWithTh
   // (from ~45 ms) CVODE's BDF gives up (error test failing down to h ~ 1e-11 s); Adams at the scene's 2e-5 s
   // cap finishes those output intervals. The run must end and agree with the Adams run at the cap and the
   // same tolerances within the 20 um the test above allows between tolerances 100 times apart.
-  const CurveRun bdf = RunTightCurve(0.2, 5e-3, 1e-8, 1e-10, 0.0);
-  const CurveRun adams = RunTightCurve(0.2, 5e-3, 1e-8, 1e-10, 2e-5);
+  const CurveRun bdf = runTightCurve(0.2, 5e-3, 1e-8, 1e-10, 0.0);
+  const CurveRun adams = runTightCurve(0.2, 5e-3, 1e-8, 1e-10, 2e-5);
   ASSERT_EQ(bdf.lateral.size(), 4u);
   std::printf("tight curve 0.2 s, rtol 1e-8: BDF uncapped %ld steps, %ld Adams fallbacks\n", bdf.counters.steps,
               bdf.counters.adams_fallbacks);
@@ -346,11 +346,11 @@ TEST(VehicleSimulator, UncappedBdfAtTightTolerancesFinishesTheFlangeOnsetsWithTh
 }
 
 // Velocity in the world of a body point s' (body frame) from the state: r_dot + A (omega' x s').
-Vector3 PointVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y, int body,
+Vector3 pointVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y, int body,
                       const Vector3& s_in_body) {
-  const Matrix3 A = RotationFromEulerParameters(y.segment<4>(VehicleModel::EulerOffset(body)));
-  return y.segment<3>(model.VelocityOffset(body)) +
-         A * y.segment<3>(model.AngularVelocityOffset(body)).cross(s_in_body);
+  const Matrix3 A = rotationFromEulerParameters(y.segment<4>(VehicleModel::eulerOffset(body)));
+  return y.segment<3>(model.velocityOffset(body)) +
+         A * y.segment<3>(model.angularVelocityOffset(body)).cross(s_in_body);
 }
 
 TEST(VehicleSimulator, FloorAccelerometersReadTheDerivativeOfTheFloorVelocityMinusGravity) {
@@ -360,25 +360,25 @@ TEST(VehicleSimulator, FloorAccelerometersReadTheDerivativeOfTheFloorVelocityMin
   // from the state at 1 ms spacing. The difference's truncation error (h^2/6 times the third derivative of
   // the velocity, carbody motions below ~20 Hz: < 1e-4 m/s^2 per m/s^2) and the integrator's velocity error
   // over 2h (atol 1e-8 m/s / 2e-3 s) are far below the tolerance of 1e-3 m/s^2 + 0.5 % of |a|.
-  core::Scene scene = core::load_scene_file(kScenes + "tight_curve.yaml");
+  core::Scene scene = core::loadSceneFile(kScenes + "tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;
   scene.effects.floor_acceleration_output = true;
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = 0.3;
   VehicleSimulator sim(scene);
-  const auto& points = sim.model().measurement_points();
+  const auto& points = sim.model().measurementPoints();
   ASSERT_EQ(points.size(), 3u);
   ASSERT_EQ(points[1].name, "floor_centre");
   const double h = 1e-3;
   std::vector<std::vector<Vector3>> v(points.size()), f_in_world(points.size());
   RunStatus status = RunStatus::kRunning;
   for (int i = 1; status == RunStatus::kRunning; ++i) {
-    status = sim.AdvanceTo(std::min(0.3, h * i));
+    status = sim.advanceTo(std::min(0.3, h * i));
     ASSERT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
     for (std::size_t m = 0; m < points.size(); ++m) {
       const int b = points[m].body;
-      v[m].push_back(PointVelocity(sim.model(), sim.state(), b, points[m].s_in_body));
-      const Matrix3 A = RotationFromEulerParameters(sim.state().segment<4>(VehicleModel::EulerOffset(b)));
+      v[m].push_back(pointVelocity(sim.model(), sim.state(), b, points[m].s_in_body));
+      const Matrix3 A = rotationFromEulerParameters(sim.state().segment<4>(VehicleModel::eulerOffset(b)));
       f_in_world[m].push_back(A * sim.measurements()[m].specific_force_in_body);
     }
   }
@@ -399,7 +399,7 @@ TEST(VehicleSimulator, FloorAccelerometersReadTheDerivativeOfTheFloorVelocityMin
 
 // Sum over the active contacts of 2/5 N delta: the energy stored in a Hertz spring N = K delta^1.5 at its
 // penetration (the integral of K x^1.5 from 0 to delta), which /vehicle_energy leaves out.
-double HertzEnergy(const VehicleSimulator& sim) {
+double hertzEnergy(const VehicleSimulator& sim) {
   double e = 0.0;
   for (const auto& wheel : sim.contacts())
     for (const auto& c : wheel.contact)
@@ -415,21 +415,21 @@ TEST(VehicleSimulator, EnergyOnlyFallsWithNoDriveOnRigidRails) {
   // velocities, whose squares make the energy; ~6 J of 5.7 MJ). It must also fall: the curving work of the
   // creep forces over the 0.3 s (flanging wheelsets, of the order of 10 kN of creep force at a few cm/s of
   // slip) is far above that error.
-  core::Scene scene = core::load_scene_file(kScenes + "tight_curve.yaml");
+  core::Scene scene = core::loadSceneFile(kScenes + "tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;
   scene.effects.energy_output = true;
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = 0.3;
   VehicleSimulator sim(scene);
-  const double e0 = sim.energy().kinetic + sim.energy().potential + HertzEnergy(sim);
+  const double e0 = sim.energy().kinetic + sim.energy().potential + hertzEnergy(sim);
   const double kinetic0 = sim.energy().kinetic;
   EXPECT_NEAR(kinetic0, 0.5 * kCoachMass * scene.vehicle.speed * scene.vehicle.speed, 0.02 * kinetic0);  // + spin
   double highest = -1e300, e = e0;
   RunStatus status = RunStatus::kRunning;
   for (int i = 1; status == RunStatus::kRunning; ++i) {
-    status = sim.AdvanceTo(std::min(0.3, 1e-3 * i));
+    status = sim.advanceTo(std::min(0.3, 1e-3 * i));
     ASSERT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
-    e = sim.energy().kinetic + sim.energy().potential + HertzEnergy(sim);
+    e = sim.energy().kinetic + sim.energy().potential + hertzEnergy(sim);
     highest = std::max(highest, e - e0);
   }
   std::printf("energy: start %.3f J, highest rise %.3f J, end change %.3f J\n", e0, highest, e - e0);
@@ -438,21 +438,21 @@ TEST(VehicleSimulator, EnergyOnlyFallsWithNoDriveOnRigidRails) {
 }
 
 TEST(VehicleSimulator, EnergyIsNotComputedWhenTheEffectIsOff) {
-  VehicleSimulator sim(StraightScene(30.5556, 0.01));
-  ASSERT_EQ(sim.AdvanceTo(0.01), RunStatus::kFinished) << sim.message();
+  VehicleSimulator sim(straightScene(30.5556, 0.01));
+  ASSERT_EQ(sim.advanceTo(0.01), RunStatus::kFinished) << sim.message();
   EXPECT_EQ(sim.energy().kinetic, 0.0);
   EXPECT_EQ(sim.energy().potential, 0.0);
 }
 
 TEST(VehicleSimulator, FloorAccelerationsAreNotComputedWhenTheEffectIsOff) {
-  VehicleSimulator sim(StraightScene(30.5556, 0.05));
+  VehicleSimulator sim(straightScene(30.5556, 0.05));
   ASSERT_EQ(sim.measurements().size(), 3u);
-  ASSERT_EQ(sim.AdvanceTo(0.05), RunStatus::kFinished) << sim.message();
+  ASSERT_EQ(sim.advanceTo(0.05), RunStatus::kFinished) << sim.message();
   for (const MeasurementOutput& m : sim.measurements()) EXPECT_EQ(m.specific_force_in_body.norm(), 0.0);
 }
 
 TEST(VehicleSimulator, FloorAccelerationsNeedMeasurementPointsInTheDataFile) {
-  core::Scene scene = StraightScene(30.5556, 0.05);
+  core::Scene scene = straightScene(30.5556, 0.05);
   scene.effects.floor_acceleration_output = true;
   auto build = [](VehicleModel& model) {
     // One wheelset alone, no measurement point.
@@ -461,9 +461,9 @@ TEST(VehicleSimulator, FloorAccelerationsNeedMeasurementPointsInTheDataFile) {
     ws.mass = 1800.0;
     ws.inertia_in_body = Vector3(900.0, 10.0, 900.0).asDiagonal();
     ws.r_reference = Vector3(0.0, 0.0, 0.445);
-    const int b = model.AddBody(ws);
-    model.AddLoadPointAtWorld("ws1_left", b, Vector3(0.0, 0.8665, 0.445));
-    model.AddLoadPointAtWorld("ws1_right", b, Vector3(0.0, -0.8665, 0.445));
+    const int b = model.addBody(ws);
+    model.addLoadPointAtWorld("ws1_left", b, Vector3(0.0, 0.8665, 0.445));
+    model.addLoadPointAtWorld("ws1_right", b, Vector3(0.0, -0.8665, 0.445));
   };
   scene.vehicle.wheelsets = 1;
   try {
@@ -482,7 +482,7 @@ TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
   // inside the circular curve (s 110-230 m) on the chord placement of PlaceOnTrack and runs 1 s; the
   // leading wheelset of each bogie is pushed to the outer (right) rail and flanges there, measured over the
   // last 0.3 s (the rear bogie's leading wheelset settles on its flange only after ~0.5 s).
-  core::Scene scene = core::load_scene_file(kScenes + "tight_curve.yaml");
+  core::Scene scene = core::loadSceneFile(kScenes + "tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;  // trailing wheelset at 123.3 m, inside the circle
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = 1.0;
@@ -492,7 +492,7 @@ TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
   int samples = 0;
   RunStatus status = RunStatus::kRunning;
   for (int i = 1; i <= 100 && status == RunStatus::kRunning; ++i) {
-    status = sim.AdvanceTo(0.01 * i);
+    status = sim.advanceTo(0.01 * i);
     ASSERT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
     if (sim.time() < 0.7 - 1e-9) continue;
     ++samples;
@@ -502,13 +502,13 @@ TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
   ASSERT_GT(samples, 0);
   for (int w = 0; w < 4; ++w) {
     std::printf("tight curve: wheelset %d mean lateral %.3f mm, flange contact left %d/%d, right %d/%d\n", w + 1,
-                lateral_sum[static_cast<std::size_t>(w)] / samples * 1e3, flange_count[static_cast<std::size_t>(Wheel(w, 0))], samples,
-                flange_count[static_cast<std::size_t>(Wheel(w, 1))], samples);
+                lateral_sum[static_cast<std::size_t>(w)] / samples * 1e3, flange_count[static_cast<std::size_t>(wheel(w, 0))], samples,
+                flange_count[static_cast<std::size_t>(wheel(w, 1))], samples);
   }
   for (int w : {0, 2}) {  // leading wheelset of each bogie
     // Flange contact on the outer (right) wheel in every sample of the last 0.3 s, never on the inner one.
-    EXPECT_EQ(flange_count[static_cast<std::size_t>(Wheel(w, 1))], samples) << "wheelset " << w + 1;
-    EXPECT_EQ(flange_count[static_cast<std::size_t>(Wheel(w, 0))], 0) << "wheelset " << w + 1;
+    EXPECT_EQ(flange_count[static_cast<std::size_t>(wheel(w, 1))], samples) << "wheelset " << w + 1;
+    EXPECT_EQ(flange_count[static_cast<std::size_t>(wheel(w, 0))], 0) << "wheelset " << w + 1;
     // Quasi-static lateral displacement toward the outer rail (-y, to the right of a left-hand curve), at
     // least the flangeway clearance's order: more than 2 mm.
     EXPECT_LT(lateral_sum[static_cast<std::size_t>(w)] / samples, -2e-3) << "wheelset " << w + 1;
@@ -526,7 +526,7 @@ struct CostRun {
   long long irregularity_stations_run = 0;    // ... during the run
 };
 
-CostRun RunWithClock(const core::Scene& scene, double t_end = 0.02, double standalone_max_step = 0.0) {
+CostRun runWithClock(const core::Scene& scene, double t_end = 0.02, double standalone_max_step = 0.0) {
   CostRun r;
   SimulatorSettings settings;
   settings.cost = &r.clock;
@@ -534,14 +534,14 @@ CostRun RunWithClock(const core::Scene& scene, double t_end = 0.02, double stand
   const long long s0 = rc::Irregularities::stationsEvaluated();
   VehicleSimulator sim(scene, settings);
   const long long s1 = rc::Irregularities::stationsEvaluated();
-  EXPECT_EQ(sim.AdvanceTo(t_end), RunStatus::kFinished) << sim.message();
+  EXPECT_EQ(sim.advanceTo(t_end), RunStatus::kFinished) << sim.message();
   r.irregularity_stations_build = s1 - s0;
   r.irregularity_stations_run = rc::Irregularities::stationsEvaluated() - s1;
   return r;
 }
 
 TEST(VehicleSimulatorCost, TheBuildIsNotTimedAndTheRunIs) {
-  const CostRun r = RunWithClock(StraightScene(30.5556, 0.02), 0.02, 2e-5);
+  const CostRun r = runWithClock(straightScene(30.5556, 0.02), 0.02, 2e-5);
   // Adams (max step 2e-5 s): right-hand sides, no Jacobian.
   EXPECT_GT(r.clock.calls[core::CostClock::kVehicleRhs], 0);
   EXPECT_GT(r.clock.seconds[core::CostClock::kVehicleRhs], 0.0);
@@ -562,84 +562,84 @@ TEST(VehicleSimulatorCost, TheBuildIsNotTimedAndTheRunIs) {
 // The vehicle alone runs BDF here (no step cap): the runs include the coloured Jacobian's evaluations, so an
 // effect that is off is checked to be out of the Jacobian as well.
 TEST(VehicleSimulatorCost, FlangeContactOffSearchesNoFlange) {
-  core::Scene scene = StraightScene(30.5556, 0.02);
+  core::Scene scene = straightScene(30.5556, 0.02);
   scene.effects.flange_contact = false;
-  const CostRun off = RunWithClock(scene);
+  const CostRun off = runWithClock(scene);
   EXPECT_GT(off.clock.calls[core::CostClock::kVehicleJacobian], 0);
   EXPECT_EQ(off.clock.contact.flange_searches, 0);
   EXPECT_EQ(off.clock.contact.flange_detection_seconds, 0.0);
   EXPECT_GT(off.clock.contact.evaluations, 0);  // the tread was searched
   scene.effects.flange_contact = true;
-  const CostRun on = RunWithClock(scene);
+  const CostRun on = runWithClock(scene);
   // One flange search per wheel evaluation.
   EXPECT_EQ(on.clock.contact.flange_searches, on.clock.contact.evaluations);
   EXPECT_GT(on.clock.contact.flange_detection_seconds, 0.0);
 }
 
 TEST(VehicleSimulatorCost, SpinCreepageOffEvaluatesNoSpinTerm) {
-  core::Scene scene = StraightScene(30.5556, 0.02);
+  core::Scene scene = straightScene(30.5556, 0.02);
   scene.effects.spin_creepage = false;
-  const CostRun off = RunWithClock(scene);
+  const CostRun off = runWithClock(scene);
   EXPECT_GT(off.clock.calls[core::CostClock::kVehicleJacobian], 0);
   EXPECT_GT(off.clock.contact.creep_evaluations, 0);
   EXPECT_EQ(off.clock.contact.spin_evaluations, 0);
   scene.effects.spin_creepage = true;
-  const CostRun on = RunWithClock(scene);
+  const CostRun on = runWithClock(scene);
   // Every creep evaluation (one per active contact) includes the spin terms.
   EXPECT_GT(on.clock.contact.spin_evaluations, 0);
   EXPECT_EQ(on.clock.contact.spin_evaluations, on.clock.contact.creep_evaluations);
 }
 
 TEST(VehicleSimulatorCost, FloorAccelerationsOffCostNothing) {
-  core::Scene scene = StraightScene(30.5556, 0.02);
+  core::Scene scene = straightScene(30.5556, 0.02);
   scene.effects.floor_acceleration_output = false;
-  const CostRun off = RunWithClock(scene);
+  const CostRun off = runWithClock(scene);
   EXPECT_EQ(off.clock.calls[core::CostClock::kFloorAccelerations], 0);
   EXPECT_EQ(off.clock.seconds[core::CostClock::kFloorAccelerations], 0.0);
   scene.effects.floor_acceleration_output = true;
-  const CostRun on = RunWithClock(scene);
+  const CostRun on = runWithClock(scene);
   EXPECT_GT(on.clock.calls[core::CostClock::kFloorAccelerations], 0);
   EXPECT_GT(on.clock.seconds[core::CostClock::kFloorAccelerations], 0.0);
 }
 
 TEST(VehicleSimulatorCost, EnergyOutputOffCostsNothing) {
-  core::Scene scene = StraightScene(30.5556, 0.02);
-  const CostRun off = RunWithClock(scene);
+  core::Scene scene = straightScene(30.5556, 0.02);
+  const CostRun off = runWithClock(scene);
   EXPECT_EQ(off.clock.calls[core::CostClock::kEnergyOutput], 0);
   EXPECT_EQ(off.clock.seconds[core::CostClock::kEnergyOutput], 0.0);
   scene.effects.energy_output = true;
-  const CostRun on = RunWithClock(scene);
+  const CostRun on = runWithClock(scene);
   EXPECT_GT(on.clock.calls[core::CostClock::kEnergyOutput], 0);
   EXPECT_GT(on.clock.seconds[core::CostClock::kEnergyOutput], 0.0);
 }
 
 TEST(VehicleSimulatorCost, IrregularitiesAreTabulatedAtBuildAndCostNothingDuringTheRun) {
   // 2 ms only: the realisation's start is rough for the coach's first steps and run time is not the point.
-  core::Scene scene = StraightScene(30.5556, 0.002);
+  core::Scene scene = straightScene(30.5556, 0.002);
   scene.effects.irregularities = true;
   scene.track.irregularities.source = core::IrregularitySource::kPsd;
   scene.track.irregularities.psd = "fra_class_4";
-  const CostRun on = RunWithClock(scene, 0.002);
+  const CostRun on = runWithClock(scene, 0.002);
   EXPECT_GT(on.irregularity_stations_build, 0);  // applied: sampled into the geometry tables
   EXPECT_EQ(on.irregularity_stations_run, 0);    // never evaluated at run time
   scene.effects.irregularities = false;
-  const CostRun off = RunWithClock(scene, 0.002);
+  const CostRun off = runWithClock(scene, 0.002);
   EXPECT_EQ(off.irregularity_stations_build, 0);
   EXPECT_EQ(off.irregularity_stations_run, 0);
 }
 
 TEST(VehicleSimulatorCost, BdfJacobianRightHandSidesAreTimedAsJacobianWithoutChangingTheRun) {
   const double t_end = 0.01;
-  core::Scene scene = StraightScene(30.5556, t_end);
+  core::Scene scene = straightScene(30.5556, t_end);
   scene.solver.vehicle_method = core::VehicleMethod::kBdf;
   core::CostClock clock;
   SimulatorSettings timed;
   timed.cost = &clock;
   VehicleSimulator a(scene, timed), b(scene);
   ASSERT_EQ(a.method(), IntegrationMethod::kBdf);
-  EXPECT_EQ(a.AdvanceTo(t_end), RunStatus::kFinished) << a.message();
-  EXPECT_EQ(b.AdvanceTo(t_end), RunStatus::kFinished) << b.message();
-  const IntegratorCounters ca = a.Counters(), cb = b.Counters();
+  EXPECT_EQ(a.advanceTo(t_end), RunStatus::kFinished) << a.message();
+  EXPECT_EQ(b.advanceTo(t_end), RunStatus::kFinished) << b.message();
+  const IntegratorCounters ca = a.counters(), cb = b.counters();
   // The clock only reads time around the same evaluations: the same run to the last bit and the same counts.
   EXPECT_EQ(ca.steps, cb.steps);
   EXPECT_EQ(ca.rhs_evals_jacobian, cb.rhs_evals_jacobian);
@@ -665,17 +665,17 @@ TEST(ChooseMethod, AutoPicksBdfBelowTheStiffCreepSpeedWithTheBuiltInContact) {
   core::Solver s;
   s.vehicle_method = core::VehicleMethod::kAuto;
   s.vehicle_max_step = 2e-5;
-  EXPECT_EQ(ChooseMethod(s, 30.5556, false), IntegrationMethod::kAdams);
-  EXPECT_EQ(ChooseMethod(s, 0.0, false), IntegrationMethod::kBdf);
-  EXPECT_EQ(ChooseMethod(s, 0.1, false), IntegrationMethod::kBdf);
-  EXPECT_EQ(ChooseMethod(s, kStiffCreepSpeed, false), IntegrationMethod::kAdams);
-  EXPECT_EQ(ChooseMethod(s, 0.0, true), IntegrationMethod::kAdams);
+  EXPECT_EQ(chooseMethod(s, 30.5556, false), IntegrationMethod::kAdams);
+  EXPECT_EQ(chooseMethod(s, 0.0, false), IntegrationMethod::kBdf);
+  EXPECT_EQ(chooseMethod(s, 0.1, false), IntegrationMethod::kBdf);
+  EXPECT_EQ(chooseMethod(s, kStiffCreepSpeed, false), IntegrationMethod::kAdams);
+  EXPECT_EQ(chooseMethod(s, 0.0, true), IntegrationMethod::kAdams);
   // Above a 5e-5 s cap BDF on the vehicle's own contact, Adams in co-simulation at any cap.
   s.vehicle_max_step = 8e-5;
-  EXPECT_EQ(ChooseMethod(s, 30.5556, false), IntegrationMethod::kBdf);
-  EXPECT_EQ(ChooseMethod(s, 30.5556, true), IntegrationMethod::kAdams);
+  EXPECT_EQ(chooseMethod(s, 30.5556, false), IntegrationMethod::kBdf);
+  EXPECT_EQ(chooseMethod(s, 30.5556, true), IntegrationMethod::kAdams);
   s.vehicle_method = core::VehicleMethod::kAdams;
-  EXPECT_EQ(ChooseMethod(s, 0.0, false), IntegrationMethod::kAdams);
+  EXPECT_EQ(chooseMethod(s, 0.0, false), IntegrationMethod::kAdams);
 }
 
 }  // namespace

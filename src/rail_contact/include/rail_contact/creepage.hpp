@@ -29,18 +29,18 @@ struct Creepages {
 };
 
 /// Regularised reference speed [m/s] (never below v_eps > 0; v_eps <= 0 is treated as 1e-6 m/s).
-double regularised_speed(double V, const CreepageOptions& options) noexcept;
+double regularisedSpeed(double V, const CreepageOptions& options) noexcept;
 
 /// Creepages from the relative velocity of the wheel material point w.r.t. the rail material
 /// point at the contact, in the contact frame [m/s], the relative angular velocity of the wheel
 /// w.r.t. the rail about the contact normal [rad/s], and the rolling speed V [m/s]:
 ///   nu_x = v_rel_x / V_ref, nu_y = v_rel_y / V_ref, phi = omega_rel_n / V_ref.
-Creepages compute_creepages(const Eigen::Vector3d& v_rel_in_contact, double omega_rel_normal, double V,
+Creepages computeCreepages(const Eigen::Vector3d& v_rel_in_contact, double omega_rel_normal, double V,
                             const CreepageOptions& options) noexcept;
 
 /// Same, from world-frame velocities of the two material points and angular velocities of the
 /// two bodies; R_contact_to_world has columns (t_rolling, t_lateral, n) in world coordinates.
-Creepages compute_creepages(const Eigen::Vector3d& v_wheel_point_in_world,
+Creepages computeCreepages(const Eigen::Vector3d& v_wheel_point_in_world,
                             const Eigen::Vector3d& v_rail_point_in_world,
                             const Eigen::Vector3d& omega_wheel_in_world,
                             const Eigen::Vector3d& omega_rail_in_world,

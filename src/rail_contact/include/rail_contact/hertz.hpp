@@ -23,13 +23,13 @@ void validate(const ElasticMaterial& material, const char* what);
 
 /// Contact modulus E* = 1 / ((1 - nu_w^2)/E_w + (1 - nu_r^2)/E_r) [Pa] (Johnson, Contact Mechanics, eq. 4.22).
 /// Throws std::runtime_error on a non-physical material.
-double contact_modulus(const ElasticMaterial& wheel, const ElasticMaterial& rail);
+double contactModulus(const ElasticMaterial& wheel, const ElasticMaterial& rail);
 
 /// Combined shear modulus G with 2/G = 1/G_w + 1/G_r [Pa] (Kalker's convention for two bodies).
-double combined_shear_modulus(const ElasticMaterial& wheel, const ElasticMaterial& rail);
+double combinedShearModulus(const ElasticMaterial& wheel, const ElasticMaterial& rail);
 
 /// Combined Poisson ratio nu with nu/G = (nu_w/G_w + nu_r/G_r)/2 (Kalker's convention).
-double combined_poisson_ratio(const ElasticMaterial& wheel, const ElasticMaterial& rail);
+double combinedPoissonRatio(const ElasticMaterial& wheel, const ElasticMaterial& rail);
 
 /// Principal curvatures of wheel and rail at the contact point [1/m], assumed aligned with
 /// the rolling (x) and lateral (y) directions. Convex > 0, concave < 0.
@@ -91,20 +91,20 @@ struct HertzGeometry {
 /// Hertz's theory holds only for a patch small against the profile radii around it. Returns hz when its
 /// lateral semi-axis at the elastic load K delta^1.5 is within max_b; otherwise the geometry with B raised
 /// (bisection, A kept) until it is max_b, flagged kHertzWidthClamped. No allocation.
-HertzGeometry limit_lateral_width(const HertzGeometry& hz, double delta, double max_b,
+HertzGeometry limitLateralWidth(const HertzGeometry& hz, double delta, double max_b,
                                   const HertzOptions& options = {}) noexcept;
 
 /// Relative curvature coefficients A = (k_wx + k_rx)/2, B = (k_wy + k_ry)/2 [1/m].
-void relative_curvatures(const PrincipalCurvatures& k, double& A, double& B) noexcept;
+void relativeCurvatures(const PrincipalCurvatures& k, double& A, double& B) noexcept;
 
 /// Hertz solution from A, B [1/m] and E* [Pa]: solves the eccentricity from
 /// B/A = (E(e)/(1-e^2) - K(e)) / (K(e) - E(e)) (A the smaller; Johnson eqs. 4.37-4.39)
 /// with complete elliptic integrals K, E (arithmetic-geometric mean). Never throws, never returns NaN; degenerate input
 /// is clamped and flagged.
-HertzGeometry compute_hertz(double A, double B, double E_star, const HertzOptions& options = {}) noexcept;
+HertzGeometry computeHertz(double A, double B, double E_star, const HertzOptions& options = {}) noexcept;
 
 /// Same, from principal curvatures.
-HertzGeometry compute_hertz(const PrincipalCurvatures& k, double E_star,
+HertzGeometry computeHertz(const PrincipalCurvatures& k, double E_star,
                             const HertzOptions& options = {}) noexcept;
 
 /// Parameters of the damped normal force (paper eq. 9, Lankarani-Nikravesh form).
@@ -124,7 +124,7 @@ void validate(const NormalDampingParams& params);
 /// clamped to N >= 0 (never tensile); 0 when delta <= 0.
 /// K [N/m^n], delta penetration [m] (> 0 in contact), delta_dot [m/s] (> 0 approaching),
 /// delta_dot_impact the penetration rate when this contact started [m/s].
-double damped_normal_force(double K, double delta, double delta_dot, double delta_dot_impact,
+double dampedNormalForce(double K, double delta, double delta_dot, double delta_dot_impact,
                            const NormalDampingParams& params) noexcept;
 
 /// Per-contact memory of the impact velocity (caller-owned, one per contact pair).
@@ -145,6 +145,6 @@ struct ImpactMemory {
 
 /// Updates the memory: on the first step with delta > 0 stores max(delta_dot, 0), afterwards the largest
 /// delta_dot seen; resets when delta <= 0.
-void update_impact_memory(ImpactMemory& memory, double delta, double delta_dot) noexcept;
+void updateImpactMemory(ImpactMemory& memory, double delta, double delta_dot) noexcept;
 
 }  // namespace rail::contact

@@ -56,7 +56,7 @@ class KalkerTable {
 
   /// Builds a table from rows (checked: >= 2 rows, strictly increasing a/b, positive c).
   /// `origin` names the source in error messages.
-  static KalkerTable from_rows(std::vector<Row> rows, const std::string& origin);
+  static KalkerTable fromRows(std::vector<Row> rows, const std::string& origin);
 
  private:
   std::vector<Row> rows_;

@@ -29,8 +29,8 @@ void validate(const PolachOptions& options);
 /// parameters "for modelling of typical wheel-rail contact conditions"):
 ///   dry: kA = 1.00, kS = 0.40, mu0 = 0.55, A = 0.40, B = 0.60 s/m
 ///   wet: kA = 0.30, kS = 0.10, mu0 = 0.30, A = 0.40, B = 0.20 s/m
-PolachOptions polach2005_dry_options() noexcept;
-PolachOptions polach2005_wet_options() noexcept;
+PolachOptions polach2005DryOptions() noexcept;
+PolachOptions polach2005WetOptions() noexcept;
 constexpr double kPolach2005DryMu0 = 0.55;
 constexpr double kPolach2005WetMu0 = 0.30;
 
@@ -60,6 +60,6 @@ struct PolachResult {
 
 /// Creep forces by Polach's method. Allocation-free, no exceptions, finite at zero creepage
 /// (forces -> 0 continuously); returns zeros when N, a, b, G or mu0 is not positive.
-PolachResult polach_forces(const PolachInput& in, const PolachOptions& options) noexcept;
+PolachResult polachForces(const PolachInput& in, const PolachOptions& options) noexcept;
 
 }  // namespace rail::contact

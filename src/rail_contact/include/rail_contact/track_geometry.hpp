@@ -132,14 +132,14 @@ class TrackGeometry {
 
 /// Cant angle phi = asin(cant / cant_reference_width), rad; throws std::runtime_error when the width is
 /// not positive or |cant| >= width.
-double cant_angle(double cant, double cant_reference_width);
+double cantAngle(double cant, double cant_reference_width);
 
 /// EN 13803 equilibrium cant D_eq = e V^2 / (g R) (m): e cant base (m), V speed (m/s), R curve radius
 /// (m, > 0), g gravitational acceleration (m/s^2; EN 13803 uses 9.81). Throws on non-positive e, R, g.
-double equilibrium_cant(double cant_reference_width, double speed, double radius, double g = 9.81);
+double equilibriumCant(double cant_reference_width, double speed, double radius, double g = 9.81);
 
 /// EN 13803 cant deficiency I = D_eq - D (m): positive when the applied cant D is below equilibrium.
-double cant_deficiency(double d_eq, double applied_cant);
+double cantDeficiency(double d_eq, double applied_cant);
 
 }  // namespace contact
 }  // namespace rail

@@ -27,7 +27,7 @@ struct RailWrench {
 /// f_*_on_wheel_in_world: contact forces on the wheel (pass zero for an inactive contact);
 /// s_*_from_wheel_centre_in_wheelset: contact point minus wheel centre, wheelset frame;
 /// R_wheelset_to_world: A_ws.
-WheelsetWrench wheel_centre_wrench(const Eigen::Vector3d& f_tread_on_wheel_in_world,
+WheelsetWrench wheelCentreWrench(const Eigen::Vector3d& f_tread_on_wheel_in_world,
                                    const Eigen::Vector3d& f_flange_on_wheel_in_world,
                                    const Eigen::Vector3d& s_tread_from_wheel_centre_in_wheelset,
                                    const Eigen::Vector3d& s_flange_from_wheel_centre_in_wheelset,
@@ -36,7 +36,7 @@ WheelsetWrench wheel_centre_wrench(const Eigen::Vector3d& f_tread_on_wheel_in_wo
 /// Eq. 14: a wheel-centre wrench to the wheelset mass centre.
 ///   f_ws = f_wheel,  n'_ws = s'_w x (A_ws^T f_wheel) + n'_wheel
 /// s_wheel_centre_from_wheelset_centre_in_wheelset: s'_w.
-WheelsetWrench wheelset_centre_wrench(const WheelsetWrench& wheel_centre,
+WheelsetWrench wheelsetCentreWrench(const WheelsetWrench& wheel_centre,
                                       const Eigen::Vector3d& s_wheel_centre_from_wheelset_centre_in_wheelset,
                                       const Eigen::Matrix3d& R_wheelset_to_world) noexcept;
 
@@ -47,20 +47,20 @@ void accumulate(WheelsetWrench& sum, const WheelsetWrench& w) noexcept;
 ///   f_r = f_tr,r + f_fl,r,  n_r = s_tr,r x f_tr,r + s_fl,r x f_fl,r
 /// f_*_on_rail_in_world are the forces on the rail (opposite to those on the wheel);
 /// s_*_from_section_centre_in_world: contact point minus section centre, world frame.
-RailWrench rail_section_wrench(const Eigen::Vector3d& f_tread_on_rail_in_world,
+RailWrench railSectionWrench(const Eigen::Vector3d& f_tread_on_rail_in_world,
                                const Eigen::Vector3d& f_flange_on_rail_in_world,
                                const Eigen::Vector3d& s_tread_from_section_centre_in_world,
                                const Eigen::Vector3d& s_flange_from_section_centre_in_world) noexcept;
 
 /// Eq. 15 helper: position given in rail cross-section coordinates to world: s = A_r s'.
-inline Eigen::Vector3d section_offset_to_world(const Eigen::Matrix3d& R_section_to_world,
+inline Eigen::Vector3d sectionOffsetToWorld(const Eigen::Matrix3d& R_section_to_world,
                                                const Eigen::Vector3d& s_in_section) noexcept {
   return R_section_to_world * s_in_section;
 }
 
 /// Contact force on the wheel from its contact-frame components (paper eq. 12):
 ///   f = N n + F_long t_rolling + F_lat t_lateral, R_contact_to_world = [t_rolling t_lateral n].
-inline Eigen::Vector3d contact_force_in_world(const Eigen::Matrix3d& R_contact_to_world, double F_long,
+inline Eigen::Vector3d contactForceInWorld(const Eigen::Matrix3d& R_contact_to_world, double F_long,
                                               double F_lat, double N) noexcept {
   return R_contact_to_world * Eigen::Vector3d(F_long, F_lat, N);
 }

@@ -81,7 +81,7 @@ struct CostClock {
 // An optional output of the nodes: runs produce() under part's clock when the effect is on; does nothing
 // (no call, no clock read) when it is off. Returns on.
 template <class F>
-bool TimedOutput(CostClock* clock, CostClock::Part part, bool on, F&& produce) {
+bool timedOutput(CostClock* clock, CostClock::Part part, bool on, F&& produce) {
   if (!on) return false;
   CostClock::Scope scope(clock, part);
   produce();
@@ -125,17 +125,17 @@ class CostProfile {
   };
 
   // Counts to report beside the times (e.g. "CVODE steps", "Newmark steps"), set at the end.
-  void set_count(const std::string& what, double value) { counts_.emplace_back(what, value); }
+  void setCount(const std::string& what, double value) { counts_.emplace_back(what, value); }
 
   // The profile as YAML: node, wall time of the run loop, simulated time, each component's time, share
   // of the loop's wall time and calls (components never used show 0), the counts, and the scene's
   // effects (what was on).
   // clock: the finer split (nested in the components as CostClock says), with per parent "other" =
   // parent - its parts, so that the shares add up at each level; null: none.
-  std::string to_yaml(const std::string& node, const Scene& scene, double loop_wall, double simulated,
+  std::string toYaml(const std::string& node, const Scene& scene, double loop_wall, double simulated,
                       const CostClock* clock = nullptr) const;
   // The same as a few console lines.
-  std::string to_text(const std::string& node, double loop_wall, double simulated,
+  std::string toText(const std::string& node, double loop_wall, double simulated,
                       const CostClock* clock = nullptr) const;
 
   // One line of the finer split: name, seconds, calls and the coarse component it is part of.
@@ -148,7 +148,7 @@ class CostProfile {
   // The finer split of clock in this profile (contact under track_step if the profile has track steps,
   // else under vehicle_integration), fixed order, at most kMaxFinerLines lines.
   static constexpr int kMaxFinerLines = 13;
-  int finer_lines(const CostClock& clock, std::array<FinerLine, kMaxFinerLines>& lines) const;
+  int finerLines(const CostClock& clock, std::array<FinerLine, kMaxFinerLines>& lines) const;
 
  private:
   std::array<double, kComponentCount> seconds_{};

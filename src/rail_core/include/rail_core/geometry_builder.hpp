@@ -16,40 +16,40 @@ namespace rail::core {
 // The scene's rail profile in the rail's own cross-section frame (untilted: origin on top of the head,
 // y toward the track centre, z up the rail axis). The built-in "uic60" is the EN 13674-1 60E1 head; a
 // profile file is read as given (its coordinates are taken in the rail's own frame, like the built-in).
-rail::contact::ProfileCurve rail_profile_curve(const Scene& scene);
+rail::contact::ProfileCurve railProfileCurve(const Scene& scene);
 
 // The scene's wheel profile: the built-in S1002 (EN 13715), or vehicle.wheel_profile's file. Throws
 // SceneError naming vehicle.wheel_profile.
-rail::contact::WheelProfile wheel_profile(const Scene& scene);
+rail::contact::WheelProfile wheelProfile(const Scene& scene);
 
 // The contact options of the scene over `base` (the caller's numerical settings): effects.flange_contact and
 // effects.spin_creepage, Polach's creep law, contact.friction and the impact damping of contact.restitution
 // and contact.impact_velocity_floor.
-rail::contact::WheelContactOptions contact_options(const Scene& scene, rail::contact::WheelContactOptions base);
+rail::contact::WheelContactOptions contactOptions(const Scene& scene, rail::contact::WheelContactOptions base);
 
 // Gauge point of a rail (EN 13848-1: on the gauge face, depth below the running surface) in a frame
 // aligned with the track plane with its origin at the rail profile origin: y toward the track centre,
 // z normal to the track plane (m). The profile is tilted by the inclination (rad) first, so "below the
 // running surface" is measured normal to the track plane.
-Eigen::Vector2d gauge_point_in_track_plane(const rail::contact::ProfileCurve& rail_own_frame, double inclination,
+Eigen::Vector2d gaugePointInTrackPlane(const rail::contact::ProfileCurve& rail_own_frame, double inclination,
                                            double depth);
 
 // Centre line to each rail's profile origin, in the track plane (m), such that the two gauge points are
 // `gauge` apart: gauge / 2 + y of the gauge point (gauge_point_in_track_plane).
-double rail_half_spacing(double gauge, const Eigen::Vector2d& gauge_point_in_track_plane);
+double railHalfSpacing(double gauge, const Eigen::Vector2d& gauge_point_in_track_plane);
 
 // GeometrySpec of the scene: signed curvature and cant per segment (curvature > 0 curves left, cant > 0
 // raises the right rail), cant_reference_width, rail inclination atan(ratio), rail_half_spacing from the
 // gauge and the gauge point, rail profile origins on the centre line's level (rail_vertical_offset 0),
 // table step 0.1 m or finer when the irregularities need it. Throws SceneError.
-rail::contact::GeometrySpec geometry_spec(const Scene& scene);
+rail::contact::GeometrySpec geometrySpec(const Scene& scene);
 
 // The scene's irregularities when effects.irregularities is on and track.irregularities has a source,
 // else "none" (empty; nothing is read or generated). A PSD realisation gets enough harmonics that it does
 // not repeat within the track. Throws SceneError.
-rail::contact::Irregularities build_irregularities(const Scene& scene);
+rail::contact::Irregularities buildIrregularities(const Scene& scene);
 
 // The track geometry of the scene (geometry_spec + build_irregularities). Throws SceneError.
-rail::contact::TrackGeometry build_track_geometry(const Scene& scene);
+rail::contact::TrackGeometry buildTrackGeometry(const Scene& scene);
 
 }  // namespace rail::core

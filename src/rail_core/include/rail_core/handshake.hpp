@@ -18,10 +18,10 @@ struct HandshakeInfo {
   std::string transport;
 };
 
-HandshakeInfo handshake_info(const Scene& scene, const std::string& node);
+HandshakeInfo handshakeInfo(const Scene& scene, const std::string& node);
 
 // Empty when the two agree; otherwise one message naming each field that differs and both values, e.g.
 // "scene differs from /rail_vehicle's: wheel_count 8 here, 4 there; scene_hash ... ".
-std::string compare_handshake(const HandshakeInfo& mine, const HandshakeInfo& theirs);
+std::string compareHandshake(const HandshakeInfo& mine, const HandshakeInfo& theirs);
 
 }  // namespace rail::core

@@ -50,10 +50,10 @@ struct Segment {
   bool jump_allowed = false;       // the scene accepts a curvature or cant jump at this segment's start
 
   // Signed values used by the geometry: curvature > 0 curves left; cant > 0 raises the right rail.
-  double curvature_at_start() const;
-  double curvature_at_end() const;
-  double signed_cant_at_start() const;
-  double signed_cant_at_end() const;
+  double curvatureAtStart() const;
+  double curvatureAtEnd() const;
+  double signedCantAtStart() const;
+  double signedCantAtEnd() const;
 };
 
 struct Irregularities {
@@ -80,7 +80,7 @@ struct Track {
   Irregularities irregularities;
 
   double length() const;                 // sum of the segment lengths [m]
-  double end_arc_length() const { return start_arc_length + length(); }
+  double endArcLength() const { return start_arc_length + length(); }
 };
 
 struct Vehicle {
@@ -184,23 +184,23 @@ struct Scene {
   Output output;
   std::uint64_t hash = 0;                // of the resolved scene and the contents of its data files
 
-  int wheel_count() const { return has_vehicle ? 2 * vehicle.wheelsets : 0; }
+  int wheelCount() const { return has_vehicle ? 2 * vehicle.wheelsets : 0; }
   bool cosimulation() const { return has_vehicle && effects.track_model != TrackModel::kRigid; }
-  bool needs_track_node() const { return effects.track_model != TrackModel::kRigid; }
-  bool runs_fe_integration() const { return effects.track_model == TrackModel::kFlexible; }
+  bool needsTrackNode() const { return effects.track_model != TrackModel::kRigid; }
+  bool runsFeIntegration() const { return effects.track_model == TrackModel::kFlexible; }
 };
 
 // Topics a scene may record (output.topics).
 extern const std::vector<std::string> kKnownTopics;
 
-const char* to_string(TrackModel v);
-const char* to_string(Transport v);
-const char* to_string(CreepLaw v);
-const char* to_string(SegmentType v);
-const char* to_string(Direction v);
-const char* to_string(IrregularitySource v);
-const char* to_string(VehicleMethod v);
-const char* to_string(EndKind v);
-const char* to_string(LoadRail v);
+const char* toString(TrackModel v);
+const char* toString(Transport v);
+const char* toString(CreepLaw v);
+const char* toString(SegmentType v);
+const char* toString(Direction v);
+const char* toString(IrregularitySource v);
+const char* toString(VehicleMethod v);
+const char* toString(EndKind v);
+const char* toString(LoadRail v);
 
 }  // namespace rail::core

@@ -26,24 +26,24 @@ using SceneOverrides = std::vector<std::string>;
 
 // Splits a whitespace-separated list of overrides (the launch files' `overrides` argument); spaces inside
 // quotes or a YAML flow collection ({...}, [...]) do not separate.
-SceneOverrides split_overrides(const std::string& text);
+SceneOverrides splitOverrides(const std::string& text);
 
 // Reads, validates and resolves a scene file. Throws SceneError.
-Scene load_scene_file(const std::string& path, const SceneOverrides& overrides = {});
+Scene loadSceneFile(const std::string& path, const SceneOverrides& overrides = {});
 
 // The same from the file's text (e.g. handed over the ROS parameter server): `file` names the scene in
 // messages and `base_dir` is where relative data-file paths start.
-Scene load_scene_text(const std::string& text, const std::string& file, const std::string& base_dir,
+Scene loadSceneText(const std::string& text, const std::string& file, const std::string& base_dir,
                       const SceneOverrides& overrides = {});
 
 // The same, for a scene handed over as text with the path it was read from (relative data files are taken
 // from that path's directory).
-Scene load_scene_handed_over(const std::string& text, const std::string& file,
+Scene loadSceneHandedOver(const std::string& text, const std::string& file,
                              const SceneOverrides& overrides = {});
 
 // The fully resolved scene as YAML (every default filled in). Loading this text again gives the same
 // scene (same hash).
-std::string to_yaml(const Scene& scene);
+std::string toYaml(const Scene& scene);
 
 // Which process a summary is for.
 enum class Role { kVehicle, kTrack, kValidator };

@@ -19,6 +19,6 @@ struct DuplicateKey {
 };
 
 // The first key (in document order) that appears twice in one map of the tree, if any.
-std::optional<DuplicateKey> find_duplicate_key(const YAML::Node& node);
+std::optional<DuplicateKey> findDuplicateKey(const YAML::Node& node);
 
 }  // namespace rail::core

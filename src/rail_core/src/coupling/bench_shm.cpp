@@ -25,7 +25,7 @@ namespace {
 
 constexpr int kWheels = 8;
 
-CouplingConfig bench_config() {
+CouplingConfig benchConfig() {
   CouplingConfig c;
   c.track_step = 2e-5;
   c.exchange_timeout = 10.0;
@@ -35,8 +35,8 @@ CouplingConfig bench_config() {
 }
 
 // Answers `steps` steps with a wrench made from the states; returns 0 if all went well.
-int track_loop(FrameTransport& t, long steps) {
-  TrackCoupling track(bench_config(), t);
+int trackLoop(FrameTransport& t, long steps) {
+  TrackCoupling track(benchConfig(), t);
   for (long k = 0; k < steps; ++k) {
     if (!track.receive()) return 1;
     for (int i = 0; i < kWheels; ++i) {
@@ -49,8 +49,8 @@ int track_loop(FrameTransport& t, long steps) {
 }
 
 // Times `steps` exchanges (after `warmup` untimed ones); fills round-trip times [s].
-bool vehicle_loop(FrameTransport& t, long warmup, long steps, std::vector<double>& rtt) {
-  VehicleCoupling v(bench_config(), t);
+bool vehicleLoop(FrameTransport& t, long warmup, long steps, std::vector<double>& rtt) {
+  VehicleCoupling v(benchConfig(), t);
   rtt.resize(static_cast<std::size_t>(steps));
   for (long k = 0; k < warmup + steps; ++k) {
     for (int i = 0; i < kWheels; ++i) {
@@ -78,9 +78,9 @@ void report(const char* what, std::vector<double>& rtt) {
               1e6 * at(0.5), 1e6 * at(0.99), 1e6 * sum / static_cast<double>(rtt.size()), 1e6 * rtt.back());
 }
 
-bool bench_shm(const char* what, long warmup, long steps, int spin) {
+bool benchShm(const char* what, long warmup, long steps, int spin) {
   ShmOptions o;
-  o.scene_hash = bench_config().scene_hash;
+  o.scene_hash = benchConfig().scene_hash;
   o.wheel_capacity = kWheels;
   o.run_id = "bench" + std::to_string(getpid());
   o.spin_iterations = spin;
@@ -91,7 +91,7 @@ bool bench_shm(const char* what, long warmup, long steps, int spin) {
     int code = 3;
     try {
       ShmTransport t(track_options);
-      code = track_loop(t, warmup + steps);
+      code = trackLoop(t, warmup + steps);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "track: %s\n", e.what());
     }
@@ -102,7 +102,7 @@ bool bench_shm(const char* what, long warmup, long steps, int spin) {
   try {
     o.role = Role::kVehicle;
     ShmTransport t(o);
-    ok = vehicle_loop(t, warmup, steps, rtt);
+    ok = vehicleLoop(t, warmup, steps, rtt);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "vehicle: %s\n", e.what());
   }
@@ -114,13 +114,13 @@ bool bench_shm(const char* what, long warmup, long steps, int spin) {
   return ok;
 }
 
-bool bench_loopback(long warmup, long steps) {
+bool benchLoopback(long warmup, long steps) {
   LoopbackLink link(kWheels);
   int track_code = -1;
-  std::thread track([&] { track_code = track_loop(link.track_end(), warmup + steps); });
+  std::thread track([&] { track_code = trackLoop(link.trackEnd(), warmup + steps); });
   std::vector<double> rtt;
-  const bool ok = vehicle_loop(link.vehicle_end(), warmup, steps, rtt);
-  if (!ok) link.vehicle_end().close();
+  const bool ok = vehicleLoop(link.vehicleEnd(), warmup, steps, rtt);
+  if (!ok) link.vehicleEnd().close();
   track.join();
   if (ok && track_code == 0) report("loopback (2 threads, mutex + condvar)", rtt);
   return ok && track_code == 0;
@@ -153,8 +153,8 @@ int main(int argc, char** argv) {
                 1e6 * std::chrono::duration<double>(Clock::now() - t0).count() / 100);
   }
 #endif
-  bool ok = bench_shm("shm, 2 processes (spin 2000, then futex)", warmup, steps, 2000);
-  ok = bench_shm("shm, 2 processes (futex only, no spin)", warmup, steps, 0) && ok;
-  ok = bench_loopback(warmup, steps) && ok;
+  bool ok = benchShm("shm, 2 processes (spin 2000, then futex)", warmup, steps, 2000);
+  ok = benchShm("shm, 2 processes (futex only, no spin)", warmup, steps, 0) && ok;
+  ok = benchLoopback(warmup, steps) && ok;
   return ok ? 0 : 1;
 }

@@ -6,7 +6,7 @@
 namespace rail::core::coupling {
 
 namespace {
-int checked_capacity(int capacity, const char* what) {
+int checkedCapacity(int capacity, const char* what) {
   if (capacity < 0)
     throw std::runtime_error(std::string(what) + ": wheel capacity " + std::to_string(capacity) +
                              " is negative");
@@ -14,7 +14,7 @@ int checked_capacity(int capacity, const char* what) {
 }
 
 template <class Frame>
-bool copy_impl(const Frame& src, Frame& dst) {
+bool copyImpl(const Frame& src, Frame& dst) {
   if (src.count > static_cast<std::uint32_t>(dst.capacity())) return false;
   static_cast<FrameStamp&>(dst) = static_cast<const FrameStamp&>(src);
   dst.count = src.count;
@@ -24,12 +24,12 @@ bool copy_impl(const Frame& src, Frame& dst) {
 }  // namespace
 
 WheelStateFrame::WheelStateFrame(int capacity)
-    : wheels(static_cast<std::size_t>(checked_capacity(capacity, "WheelStateFrame"))) {}
+    : wheels(static_cast<std::size_t>(checkedCapacity(capacity, "WheelStateFrame"))) {}
 
 WrenchFrame::WrenchFrame(int capacity)
-    : wheels(static_cast<std::size_t>(checked_capacity(capacity, "WrenchFrame"))) {}
+    : wheels(static_cast<std::size_t>(checkedCapacity(capacity, "WrenchFrame"))) {}
 
-bool copy_frame(const WheelStateFrame& src, WheelStateFrame& dst) { return copy_impl(src, dst); }
-bool copy_frame(const WrenchFrame& src, WrenchFrame& dst) { return copy_impl(src, dst); }
+bool copyFrame(const WheelStateFrame& src, WheelStateFrame& dst) { return copyImpl(src, dst); }
+bool copyFrame(const WrenchFrame& src, WrenchFrame& dst) { return copyImpl(src, dst); }
 
 }  // namespace rail::core::coupling

@@ -9,8 +9,8 @@ namespace {
 // Longest sleep between checks of the interrupt flag.
 constexpr auto kSlice = std::chrono::milliseconds(20);
 
-Result wrong_role(Role role, const char* call) {
-  return {Status::kError, std::string(call) + " called on the " + to_string(role) + " end"};
+Result wrongRole(Role role, const char* call) {
+  return {Status::kError, std::string(call) + " called on the " + toString(role) + " end"};
 }
 }  // namespace
 
@@ -23,7 +23,7 @@ LoopbackLink::LoopbackLink(int wheel_capacity, const std::atomic<bool>* interrup
 
 // Wait on the condition variable until pred() holds or something ends the wait. Called with the lock held.
 template <class Pred>
-static Result wait_for(std::unique_lock<std::mutex>& lock, std::condition_variable& cv, Pred pred,
+static Result waitFor(std::unique_lock<std::mutex>& lock, std::condition_variable& cv, Pred pred,
                        const std::atomic<bool>* interrupt, const bool& own_closed,
                        const bool& peer_closed, Deadline deadline) {
   for (;;) {
@@ -42,9 +42,9 @@ Result LoopbackLink::put(Mailbox<Frame>& box, const Frame& frame, Role writer, D
   std::unique_lock<std::mutex> lock(mutex_);
   const bool& own = writer == Role::kVehicle ? vehicle_closed_ : track_closed_;
   const bool& peer = writer == Role::kVehicle ? track_closed_ : vehicle_closed_;
-  Result r = wait_for(lock, changed_, [&] { return !box.full; }, interrupt_, own, peer, deadline);
+  Result r = waitFor(lock, changed_, [&] { return !box.full; }, interrupt_, own, peer, deadline);
   if (!r) return r;
-  if (!copy_frame(frame, box.frame))
+  if (!copyFrame(frame, box.frame))
     return {Status::kError, "frame of " + std::to_string(frame.count) + " wheels exceeds the capacity " +
                                 std::to_string(box.frame.capacity())};
   box.full = true;
@@ -58,9 +58,9 @@ Result LoopbackLink::take(Mailbox<Frame>& box, Frame& frame, Role reader, Deadli
   std::unique_lock<std::mutex> lock(mutex_);
   const bool& own = reader == Role::kVehicle ? vehicle_closed_ : track_closed_;
   const bool& peer = reader == Role::kVehicle ? track_closed_ : vehicle_closed_;
-  Result r = wait_for(lock, changed_, [&] { return box.full; }, interrupt_, own, peer, deadline);
+  Result r = waitFor(lock, changed_, [&] { return box.full; }, interrupt_, own, peer, deadline);
   if (!r) return r;
-  if (!copy_frame(box.frame, frame))
+  if (!copyFrame(box.frame, frame))
     return {Status::kError, "frame of " + std::to_string(box.frame.count) +
                                 " wheels exceeds the receiving capacity " + std::to_string(frame.capacity())};
   box.full = false;
@@ -69,20 +69,20 @@ Result LoopbackLink::take(Mailbox<Frame>& box, Frame& frame, Role reader, Deadli
   return {};
 }
 
-Result LoopbackLink::End::send_states(const WheelStateFrame& frame, Deadline deadline) {
-  if (role_ != Role::kVehicle) return wrong_role(role_, "send_states");
+Result LoopbackLink::End::sendStates(const WheelStateFrame& frame, Deadline deadline) {
+  if (role_ != Role::kVehicle) return wrongRole(role_, "send_states");
   return link_.put(link_.states_, frame, role_, deadline);
 }
-Result LoopbackLink::End::receive_wrenches(WrenchFrame& frame, Deadline deadline) {
-  if (role_ != Role::kVehicle) return wrong_role(role_, "receive_wrenches");
+Result LoopbackLink::End::receiveWrenches(WrenchFrame& frame, Deadline deadline) {
+  if (role_ != Role::kVehicle) return wrongRole(role_, "receive_wrenches");
   return link_.take(link_.wrenches_, frame, role_, deadline);
 }
-Result LoopbackLink::End::receive_states(WheelStateFrame& frame, Deadline deadline) {
-  if (role_ != Role::kTrack) return wrong_role(role_, "receive_states");
+Result LoopbackLink::End::receiveStates(WheelStateFrame& frame, Deadline deadline) {
+  if (role_ != Role::kTrack) return wrongRole(role_, "receive_states");
   return link_.take(link_.states_, frame, role_, deadline);
 }
-Result LoopbackLink::End::send_wrenches(const WrenchFrame& frame, Deadline deadline) {
-  if (role_ != Role::kTrack) return wrong_role(role_, "send_wrenches");
+Result LoopbackLink::End::sendWrenches(const WrenchFrame& frame, Deadline deadline) {
+  if (role_ != Role::kTrack) return wrongRole(role_, "send_wrenches");
   return link_.put(link_.wrenches_, frame, role_, deadline);
 }
 void LoopbackLink::End::close() {

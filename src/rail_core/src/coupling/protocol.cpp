@@ -21,7 +21,7 @@ std::string num(double v) {
 }
 std::string u64(std::uint64_t v) { return std::to_string(v); }
 
-void check_config(const CouplingConfig& c) {
+void checkConfig(const CouplingConfig& c) {
   if (!(c.track_step > 0.0) || !std::isfinite(c.track_step))
     throw std::runtime_error("coupling: solver.track_step must be > 0 s (got " + num(c.track_step) + ")");
   if (!(c.exchange_timeout > 0.0) || !std::isfinite(c.exchange_timeout))
@@ -31,7 +31,7 @@ void check_config(const CouplingConfig& c) {
     throw std::runtime_error("coupling: wheel count must be > 0 (got " + std::to_string(c.wheel_count) + ")");
 }
 
-Deadline deadline_after(double seconds) {
+Deadline deadlineAfter(double seconds) {
   return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
@@ -40,14 +40,14 @@ struct Budget {
   double seconds;
   bool is_exchange_timeout;
 };
-Budget budget_until(Deadline deadline, const CouplingConfig& c, bool is_default) {
+Budget budgetUntil(Deadline deadline, const CouplingConfig& c, bool is_default) {
   if (is_default) return {c.exchange_timeout, true};
   return {std::chrono::duration<double>(deadline - Clock::now()).count(), false};
 }
 
 // "<role>: <doing> step <k>: <what happened>[ (<detail>)]"
 Result fail(const Result& r, Role self, const char* doing, std::uint64_t step, const Budget& budget) {
-  const char* peer = to_string(peer_of(self));
+  const char* peer = toString(peerOf(self));
   std::string what;
   switch (r.status) {
     case Status::kTimeout:
@@ -56,16 +56,16 @@ Result fail(const Result& r, Role self, const char* doing, std::uint64_t step, c
       break;
     case Status::kPeerClosed: what = std::string("the ") + peer + " closed the connection"; break;
     case Status::kInterrupted: what = "interrupted"; break;
-    default: what = to_string(r.status); break;
+    default: what = toString(r.status); break;
   }
-  std::string msg = std::string(to_string(self)) + ": " + doing + " step " + u64(step) + ": " + what;
+  std::string msg = std::string(toString(self)) + ": " + doing + " step " + u64(step) + ": " + what;
   if (!r.message.empty()) msg += " (" + r.message + ")";
   return {r.status, msg};
 }
 
 // Check a received stamp against the expected step, its time, the wheel count and the scene hash. `what`
 // names the frame. Messages are only built on a refusal.
-Result check_stamp(const FrameStamp& got, std::uint32_t count, const CouplingConfig& c, std::uint64_t step,
+Result checkStamp(const FrameStamp& got, std::uint32_t count, const CouplingConfig& c, std::uint64_t step,
                    Role self, const char* what) {
   const double t = static_cast<double>(step) * c.track_step;
   const bool hash_ok = got.scene_hash == c.scene_hash;
@@ -74,7 +74,7 @@ Result check_stamp(const FrameStamp& got, std::uint32_t count, const CouplingCon
   const bool count_ok = count == static_cast<std::uint32_t>(c.wheel_count);
   if (hash_ok && step_ok && time_ok && count_ok) return {};
 
-  std::string msg = std::string(to_string(self)) + ": " + what + " from the " + to_string(peer_of(self)) +
+  std::string msg = std::string(toString(self)) + ": " + what + " from the " + toString(peerOf(self)) +
                     " refused at step " + u64(step) + ": ";
   if (!hash_ok) {
     msg += "scene hash " + hex(got.scene_hash) + " received, " + hex(c.scene_hash) + " expected";
@@ -91,24 +91,24 @@ Result check_stamp(const FrameStamp& got, std::uint32_t count, const CouplingCon
   return {Status::kRefused, msg};
 }
 
-Result already_failed(Role self) {
-  return {Status::kError, std::string(to_string(self)) + ": the coupling failed earlier; no further exchange"};
+Result alreadyFailed(Role self) {
+  return {Status::kError, std::string(toString(self)) + ": the coupling failed earlier; no further exchange"};
 }
 
 }  // namespace
 
-CouplingConfig coupling_config(const Scene& scene) {
+CouplingConfig couplingConfig(const Scene& scene) {
   CouplingConfig c;
   c.track_step = scene.solver.track_step;
   c.exchange_timeout = scene.solver.exchange_timeout;
   c.scene_hash = scene.hash;
-  c.wheel_count = scene.wheel_count();
+  c.wheel_count = scene.wheelCount();
   return c;
 }
 
 // ---------------------------------------------------------------------------------------------------------
 VehicleCoupling::VehicleCoupling(const CouplingConfig& config, FrameTransport& transport)
-    : config_((check_config(config), config)),
+    : config_((checkConfig(config), config)),
       transport_(transport),
       states_(config.wheel_count),
       buffers_{WrenchFrame(config.wheel_count), WrenchFrame(config.wheel_count), WrenchFrame(config.wheel_count)} {
@@ -120,36 +120,36 @@ VehicleCoupling::VehicleCoupling(const CouplingConfig& config, FrameTransport& t
   }
 }
 
-double VehicleCoupling::next_exchange_time() const {
+double VehicleCoupling::nextExchangeTime() const {
   return static_cast<double>(next_step_) * config_.track_step;
 }
 
-bool VehicleCoupling::exchange_due(double t) const {
-  return t >= next_exchange_time() - 1e-9 * config_.track_step;
+bool VehicleCoupling::exchangeDue(double t) const {
+  return t >= nextExchangeTime() - 1e-9 * config_.track_step;
 }
 
-Result VehicleCoupling::exchange() { return exchange_until(deadline_after(config_.exchange_timeout), true); }
-Result VehicleCoupling::exchange(Deadline deadline) { return exchange_until(deadline, false); }
+Result VehicleCoupling::exchange() { return exchangeUntil(deadlineAfter(config_.exchange_timeout), true); }
+Result VehicleCoupling::exchange(Deadline deadline) { return exchangeUntil(deadline, false); }
 
-Result VehicleCoupling::exchange_until(Deadline deadline, bool default_deadline) {
-  if (failed_) return already_failed(Role::kVehicle);
-  const Budget budget = budget_until(deadline, config_, default_deadline);
+Result VehicleCoupling::exchangeUntil(Deadline deadline, bool default_deadline) {
+  if (failed_) return alreadyFailed(Role::kVehicle);
+  const Budget budget = budgetUntil(deadline, config_, default_deadline);
   const std::uint64_t k = next_step_;
   states_.step = k;
-  states_.time = next_exchange_time();
+  states_.time = nextExchangeTime();
   states_.scene_hash = config_.scene_hash;
   states_.count = static_cast<std::uint32_t>(config_.wheel_count);
-  Result r = transport_.send_states(states_, deadline);
+  Result r = transport_.sendStates(states_, deadline);
   if (!r) {
     failed_ = true;
     return fail(r, Role::kVehicle, "sending the wheel states of", k, budget);
   }
-  r = transport_.receive_wrenches(*incoming_, deadline);
+  r = transport_.receiveWrenches(*incoming_, deadline);
   if (!r) {
     failed_ = true;
     return fail(r, Role::kVehicle, "waiting for the contact wrenches of", k, budget);
   }
-  r = check_stamp(*incoming_, incoming_->count, config_, k, Role::kVehicle, "contact wrenches");
+  r = checkStamp(*incoming_, incoming_->count, config_, k, Role::kVehicle, "contact wrenches");
   if (!r) {
     failed_ = true;
     return r;
@@ -163,7 +163,7 @@ Result VehicleCoupling::exchange_until(Deadline deadline, bool default_deadline)
   return {};
 }
 
-void VehicleCoupling::wrench_at(double t, int i, Eigen::Vector3d& f, Eigen::Vector3d& n) const {
+void VehicleCoupling::wrenchAt(double t, int i, Eigen::Vector3d& f, Eigen::Vector3d& n) const {
   if (frames_ == 0) {
     f.setZero();
     n.setZero();
@@ -189,13 +189,13 @@ void VehicleCoupling::extrapolate(double t, WrenchFrame& out) const {
   out.count = static_cast<std::uint32_t>(config_.wheel_count);
   for (int i = 0; i < config_.wheel_count; ++i) {
     out.wheels[i].id = last_->wheels[i].id;
-    wrench_at(t, i, out.wheels[i].f_wheel_in_world, out.wheels[i].n_wheel_in_world);
+    wrenchAt(t, i, out.wheels[i].f_wheel_in_world, out.wheels[i].n_wheel_in_world);
   }
 }
 
 // ---------------------------------------------------------------------------------------------------------
 TrackCoupling::TrackCoupling(const CouplingConfig& config, FrameTransport& transport)
-    : config_((check_config(config), config)),
+    : config_((checkConfig(config), config)),
       transport_(transport),
       states_(config.wheel_count),
       incoming_(config.wheel_count),
@@ -204,24 +204,24 @@ TrackCoupling::TrackCoupling(const CouplingConfig& config, FrameTransport& trans
   for (int i = 0; i < config.wheel_count; ++i) wrenches_.wheels[i].id = static_cast<std::uint32_t>(i);
 }
 
-double TrackCoupling::next_time() const { return static_cast<double>(next_step_) * config_.track_step; }
+double TrackCoupling::nextTime() const { return static_cast<double>(next_step_) * config_.track_step; }
 
-Result TrackCoupling::receive() { return receive_until(deadline_after(config_.exchange_timeout), true); }
-Result TrackCoupling::receive(Deadline deadline) { return receive_until(deadline, false); }
+Result TrackCoupling::receive() { return receiveUntil(deadlineAfter(config_.exchange_timeout), true); }
+Result TrackCoupling::receive(Deadline deadline) { return receiveUntil(deadline, false); }
 
-Result TrackCoupling::receive_until(Deadline deadline, bool default_deadline) {
-  if (failed_) return already_failed(Role::kTrack);
-  const Budget budget = budget_until(deadline, config_, default_deadline);
+Result TrackCoupling::receiveUntil(Deadline deadline, bool default_deadline) {
+  if (failed_) return alreadyFailed(Role::kTrack);
+  const Budget budget = budgetUntil(deadline, config_, default_deadline);
   if (awaiting_send_)
     return {Status::kError, "track: receive() called twice for step " + u64(next_step_ - 1) +
                                 " without send() in between"};
   const std::uint64_t k = next_step_;
-  Result r = transport_.receive_states(incoming_, deadline);
+  Result r = transport_.receiveStates(incoming_, deadline);
   if (!r) {
     failed_ = true;
     return fail(r, Role::kTrack, "waiting for the wheel states of", k, budget);
   }
-  r = check_stamp(incoming_, incoming_.count, config_, k, Role::kTrack, "wheel states");
+  r = checkStamp(incoming_, incoming_.count, config_, k, Role::kTrack, "wheel states");
   if (!r) {
     failed_ = true;
     return r;
@@ -232,12 +232,12 @@ Result TrackCoupling::receive_until(Deadline deadline, bool default_deadline) {
   return {};
 }
 
-Result TrackCoupling::send() { return send_until(deadline_after(config_.exchange_timeout), true); }
-Result TrackCoupling::send(Deadline deadline) { return send_until(deadline, false); }
+Result TrackCoupling::send() { return sendUntil(deadlineAfter(config_.exchange_timeout), true); }
+Result TrackCoupling::send(Deadline deadline) { return sendUntil(deadline, false); }
 
-Result TrackCoupling::send_until(Deadline deadline, bool default_deadline) {
-  if (failed_) return already_failed(Role::kTrack);
-  const Budget budget = budget_until(deadline, config_, default_deadline);
+Result TrackCoupling::sendUntil(Deadline deadline, bool default_deadline) {
+  if (failed_) return alreadyFailed(Role::kTrack);
+  const Budget budget = budgetUntil(deadline, config_, default_deadline);
   if (!awaiting_send_)
     return {Status::kError, "track: send() called before receive() for step " + u64(next_step_)};
   const std::uint64_t k = states_.step;
@@ -245,7 +245,7 @@ Result TrackCoupling::send_until(Deadline deadline, bool default_deadline) {
   wrenches_.time = static_cast<double>(k) * config_.track_step;
   wrenches_.scene_hash = config_.scene_hash;
   wrenches_.count = static_cast<std::uint32_t>(config_.wheel_count);
-  Result r = transport_.send_wrenches(wrenches_, deadline);
+  Result r = transport_.sendWrenches(wrenches_, deadline);
   if (!r) {
     failed_ = true;
     return fail(r, Role::kTrack, "sending the contact wrenches of", k, budget);

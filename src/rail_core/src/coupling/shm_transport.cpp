@@ -41,9 +41,9 @@ std::string num(double v) {
   std::snprintf(buf, sizeof(buf), "%g", v);
   return buf;
 }
-std::string sys_error(const std::string& what) { return what + ": " + std::strerror(errno); }
+std::string sysError(const std::string& what) { return what + ": " + std::strerror(errno); }
 
-const char* kind_name(std::uint32_t k) {
+const char* kindName(std::uint32_t k) {
   switch (static_cast<FrameKind>(k)) {
     case FrameKind::kWheelStates: return "wheel states";
     case FrameKind::kWrenches: return "wrenches";
@@ -51,13 +51,13 @@ const char* kind_name(std::uint32_t k) {
   return "unknown";
 }
 
-std::string this_host() {
+std::string thisHost() {
   char buf[kShmHostNameSize] = {};
   if (gethostname(buf, sizeof(buf) - 1) != 0) return {};
   return buf;
 }
 
-bool same_host(const std::string& a, const std::string& b) {
+bool sameHost(const std::string& a, const std::string& b) {
   if (a == b) return true;
   auto is_local = [](const std::string& h) { return h == "localhost" || h == "127.0.0.1" || h == "::1"; };
   if (is_local(a) || is_local(b)) return true;
@@ -66,7 +66,7 @@ bool same_host(const std::string& a, const std::string& b) {
 }
 
 // /proc/<pid>/stat: state (field 3) and start time (field 22); false if unreadable. No allocation.
-bool read_proc_stat(std::int64_t pid, char& state, std::uint64_t& start_time) {
+bool readProcStat(std::int64_t pid, char& state, std::uint64_t& start_time) {
   char path[48];
   std::snprintf(path, sizeof(path), "/proc/%lld/stat", static_cast<long long>(pid));
   const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
@@ -92,13 +92,13 @@ bool read_proc_stat(std::int64_t pid, char& state, std::uint64_t& start_time) {
   return false;
 }
 
-std::uint64_t own_start_time() {
+std::uint64_t ownStartTime() {
   char state = 0;
   std::uint64_t start = 0;
-  return read_proc_stat(getpid(), state, start) ? start : 0;
+  return readProcStat(getpid(), state, start) ? start : 0;
 }
 
-void check_name_part(const std::string& value, const char* field, std::size_t max_len) {
+void checkNamePart(const std::string& value, const char* field, std::size_t max_len) {
   if (value.empty() || value.size() > max_len)
     throw std::runtime_error("shm transport: " + std::string(field) + " '" + value + "' must have 1 to " +
                              std::to_string(max_len) + " characters");
@@ -108,17 +108,17 @@ void check_name_part(const std::string& value, const char* field, std::size_t ma
                                "' may only contain letters, digits, '_', '-' and '.'");
 }
 
-int futex_wait(std::atomic<std::uint32_t>& word, std::uint32_t expected, Clock::duration timeout) {
+int futexWait(std::atomic<std::uint32_t>& word, std::uint32_t expected, Clock::duration timeout) {
   const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(timeout).count();
   timespec ts{static_cast<time_t>(ns / 1000000000), static_cast<long>(ns % 1000000000)};
   return static_cast<int>(
       syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAIT, expected, &ts, nullptr, 0));
 }
-void futex_wake_all(std::atomic<std::uint32_t>& word) {
+void futexWakeAll(std::atomic<std::uint32_t>& word) {
   syscall(SYS_futex, reinterpret_cast<std::uint32_t*>(&word), FUTEX_WAKE, INT_MAX, nullptr, nullptr, 0);
 }
 
-inline void cpu_relax() {
+inline void cpuRelax() {
 #if defined(__x86_64__) || defined(__i386__)
   __builtin_ia32_pause();
 #elif defined(__aarch64__)
@@ -127,30 +127,30 @@ inline void cpu_relax() {
 }
 
 // Set `set` and clear `clear` in the state word; wake sleepers if any were announced.
-void change_state(std::atomic<std::uint32_t>& word, std::uint32_t set, std::uint32_t clear) {
+void changeState(std::atomic<std::uint32_t>& word, std::uint32_t set, std::uint32_t clear) {
   std::uint32_t old = word.load(std::memory_order_relaxed);
   while (!word.compare_exchange_weak(old, (old | set) & ~(clear | kWaiters), std::memory_order_acq_rel,
                                      std::memory_order_relaxed)) {
   }
-  if (old & kWaiters) futex_wake_all(word);
+  if (old & kWaiters) futexWakeAll(word);
 }
 
 // Liveness of a region's creator as recorded in its header.
-bool creator_alive(const ShmHeader& h) { return shm_process_alive(h.creator_pid, h.creator_start_time); }
+bool creatorAlive(const ShmHeader& h) { return shmProcessAlive(h.creator_pid, h.creator_start_time); }
 
 }  // namespace
 
-std::string shm_region_name(const std::string& prefix, std::uint64_t scene_hash, const std::string& run_id,
+std::string shmRegionName(const std::string& prefix, std::uint64_t scene_hash, const std::string& run_id,
                             Role writer) {
   return "/" + prefix + "_" + hex(scene_hash) + "_" + run_id + (writer == Role::kVehicle ? "_v2t" : "_t2v");
 }
 
-bool shm_process_alive(std::int64_t pid, std::uint64_t start_time) {
+bool shmProcessAlive(std::int64_t pid, std::uint64_t start_time) {
   if (pid <= 0 || pid > INT_MAX) return false;
   if (kill(static_cast<pid_t>(pid), 0) != 0 && errno != EPERM) return false;
   char state = 0;
   std::uint64_t start = 0;
-  if (!read_proc_stat(pid, state, start)) return true;  // exists; /proc not readable: trust kill()
+  if (!readProcStat(pid, state, start)) return true;  // exists; /proc not readable: trust kill()
   if (state == 'Z' || state == 'X') return false;       // ended, not yet reaped
   return start_time == 0 || start == start_time;
 }
@@ -189,7 +189,7 @@ void ShmRegion::unmap() {
   size_ = 0;
 }
 
-void ShmRegion::unlink_if_same() {
+void ShmRegion::unlinkIfSame() {
   if (fd_ < 0 || name_.empty()) return;
   struct stat mine {};
   if (fstat(fd_, &mine) != 0) return;
@@ -202,7 +202,7 @@ void ShmRegion::unlink_if_same() {
 }
 
 ShmRegion ShmRegion::create(const Spec& spec) {
-  const std::size_t size = shm_region_size(spec.kind, spec.wheel_capacity);
+  const std::size_t size = shmRegionSize(spec.kind, spec.wheel_capacity);
   std::string replaced;  // what was replaced on an earlier attempt
   for (int attempt = 0;; ++attempt) {
     const int fd = shm_open(spec.name.c_str(), O_CREAT | O_EXCL | O_RDWR, 0600);
@@ -212,13 +212,13 @@ ShmRegion ShmRegion::create(const Spec& spec) {
       r.fd_ = fd;
       // Exactly 0600 whatever the umask: the region is private to the user.
       if (fchmod(fd, S_IRUSR | S_IWUSR) != 0 || ftruncate(fd, static_cast<off_t>(size)) != 0) {
-        const std::string msg = sys_error("shm transport: setting up region " + spec.name);
+        const std::string msg = sysError("shm transport: setting up region " + spec.name);
         shm_unlink(spec.name.c_str());
         throw CouplingError(Status::kError, msg);
       }
       void* base = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
       if (base == MAP_FAILED) {
-        const std::string msg = sys_error("shm transport: mapping region " + spec.name);
+        const std::string msg = sysError("shm transport: mapping region " + spec.name);
         shm_unlink(spec.name.c_str());
         throw CouplingError(Status::kError, msg);
       }
@@ -228,13 +228,13 @@ ShmRegion ShmRegion::create(const Spec& spec) {
       ShmHeader* h = new (base) ShmHeader;
       h->layout_version = kShmLayoutVersion;
       h->header_size = static_cast<std::uint32_t>(kShmPayloadOffset);
-      h->payload_size = shm_payload_size(spec.kind, spec.wheel_capacity);
+      h->payload_size = shmPayloadSize(spec.kind, spec.wheel_capacity);
       h->wheel_capacity = spec.wheel_capacity;
       h->frame_kind = static_cast<std::uint32_t>(spec.kind);
       h->scene_hash = spec.scene_hash;
       h->creator_pid = getpid();
-      h->creator_start_time = own_start_time();
-      const std::string host = this_host();
+      h->creator_start_time = ownStartTime();
+      const std::string host = thisHost();
       std::strncpy(h->creator_host, host.c_str(), kShmHostNameSize - 1);
       h->state.store(0, std::memory_order_relaxed);
       h->magic.store(kShmMagic, std::memory_order_release);
@@ -242,7 +242,7 @@ ShmRegion ShmRegion::create(const Spec& spec) {
       return r;
     }
     if (errno != EEXIST || attempt >= 20)
-      throw CouplingError(Status::kError, sys_error("shm transport: creating region " + spec.name));
+      throw CouplingError(Status::kError, sysError("shm transport: creating region " + spec.name));
 
     // The name exists: replace it if stale, refuse it if a live process owns it.
     const int old = shm_open(spec.name.c_str(), O_RDONLY, 0);
@@ -262,7 +262,7 @@ ShmRegion ShmRegion::create(const Spec& spec) {
           std::this_thread::sleep_for(kIncompleteHeaderGrace);
           stale = h->magic.load(std::memory_order_acquire) != kShmMagic;
         } else {
-          const bool alive = creator_alive(*h);
+          const bool alive = creatorAlive(*h);
           stale = !alive || (h->state.load(std::memory_order_acquire) & kWriterClosed);
           owner = "pid " + std::to_string(h->creator_pid) + " on host '" +
                   std::string(h->creator_host, strnlen(h->creator_host, kShmHostNameSize)) + "'";
@@ -286,8 +286,8 @@ ShmRegion ShmRegion::create(const Spec& spec) {
 
 ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, double timeout_s,
                             const std::atomic<bool>* interrupt) {
-  const std::size_t expected_size = shm_region_size(spec.kind, spec.wheel_capacity);
-  const std::string host = this_host();
+  const std::size_t expected_size = shmRegionSize(spec.kind, spec.wheel_capacity);
+  const std::string host = thisHost();
   std::string last_seen;  // why the last region found was not taken, for the timeout message
   auto refuse = [&](const std::string& field, const std::string& here, const std::string& there) {
     return CouplingError(Status::kRefused, "shm transport: region " + spec.name + " refused: " + field + " " +
@@ -301,7 +301,7 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
         const std::size_t size = static_cast<std::size_t>(st.st_size);
         void* base = mmap(nullptr, size, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
         if (base == MAP_FAILED) {
-          const std::string msg = sys_error("shm transport: mapping region " + spec.name);
+          const std::string msg = sysError("shm transport: mapping region " + spec.name);
           ::close(fd);
           throw CouplingError(Status::kError, msg);
         }
@@ -313,15 +313,15 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
         const ShmHeader& h = r.header();
         const std::uint64_t magic = h.magic.load(std::memory_order_acquire);
         if (magic == kShmMagic) {
-          if (!creator_alive(h) || (h.state.load(std::memory_order_acquire) & kWriterClosed)) {
+          if (!creatorAlive(h) || (h.state.load(std::memory_order_acquire) & kWriterClosed)) {
             last_seen = "only a stale region left by pid " + std::to_string(h.creator_pid) + " was found";
           } else {
             if (h.layout_version != kShmLayoutVersion)
               throw refuse("layout version", std::to_string(kShmLayoutVersion), std::to_string(h.layout_version));
             if (h.frame_kind != static_cast<std::uint32_t>(spec.kind))
-              throw refuse("frame kind", kind_name(static_cast<std::uint32_t>(spec.kind)), kind_name(h.frame_kind));
+              throw refuse("frame kind", kindName(static_cast<std::uint32_t>(spec.kind)), kindName(h.frame_kind));
             const std::string their_host(h.creator_host, strnlen(h.creator_host, kShmHostNameSize));
-            if (!same_host(host, their_host))
+            if (!sameHost(host, their_host))
               throw CouplingError(Status::kRefused,
                                   "shm transport: region " + spec.name + " refused: created on host '" +
                                       their_host + "', this is host '" + host +
@@ -330,9 +330,9 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
             if (h.header_size != kShmPayloadOffset)
               throw refuse("header size", std::to_string(kShmPayloadOffset), std::to_string(h.header_size));
             if (h.wheel_capacity != spec.wheel_capacity ||
-                h.payload_size != shm_payload_size(spec.kind, spec.wheel_capacity))
+                h.payload_size != shmPayloadSize(spec.kind, spec.wheel_capacity))
               throw refuse("payload size",
-                           std::to_string(shm_payload_size(spec.kind, spec.wheel_capacity)) + " bytes (" +
+                           std::to_string(shmPayloadSize(spec.kind, spec.wheel_capacity)) + " bytes (" +
                                std::to_string(spec.wheel_capacity) + " wheels)",
                            std::to_string(h.payload_size) + " bytes (" + std::to_string(h.wheel_capacity) +
                                " wheels)");
@@ -351,9 +351,9 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
     }
     if (interrupt && interrupt->load(std::memory_order_relaxed))
       throw CouplingError(Status::kInterrupted, "shm transport: interrupted while waiting for the " +
-                                                    std::string(to_string(peer)) + "'s region " + spec.name);
+                                                    std::string(toString(peer)) + "'s region " + spec.name);
     if (Clock::now() >= deadline)
-      throw CouplingError(Status::kTimeout, "shm transport: the " + std::string(to_string(peer)) +
+      throw CouplingError(Status::kTimeout, "shm transport: the " + std::string(toString(peer)) +
                                                 "'s region " + spec.name + " did not appear within " +
                                                 num(timeout_s) + " s" +
                                                 (last_seen.empty() ? "" : " (" + last_seen + ")"));
@@ -364,7 +364,7 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
 // --- ShmTransport ---------------------------------------------------------------------------------------
 
 ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
-  const char* self = to_string(options.role);
+  const char* self = toString(options.role);
   if (options.wheel_capacity <= 0)
     throw std::runtime_error("shm transport: wheel capacity must be > 0 (got " +
                              std::to_string(options.wheel_capacity) + ")");
@@ -374,11 +374,11 @@ ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
   if (options.spin_iterations < 0)
     throw std::runtime_error("shm transport: spin iterations must be >= 0 (got " +
                              std::to_string(options.spin_iterations) + ")");
-  check_name_part(options.run_id, "run id", 48);
-  check_name_part(options.name_prefix, "name prefix", 32);
-  const std::string host = this_host();
-  if (!options.peer_host.empty() && !same_host(host, options.peer_host))
-    throw CouplingError(Status::kRefused, std::string("shm transport: the ") + to_string(peer_of(options.role)) +
+  checkNamePart(options.run_id, "run id", 48);
+  checkNamePart(options.name_prefix, "name prefix", 32);
+  const std::string host = thisHost();
+  if (!options.peer_host.empty() && !sameHost(host, options.peer_host))
+    throw CouplingError(Status::kRefused, std::string("shm transport: the ") + toString(peerOf(options.role)) +
                                               " runs on host '" + options.peer_host + "', this " + self +
                                               " on host '" + host +
                                               "'; the shm transport needs both nodes on one host (use transport "
@@ -386,19 +386,19 @@ ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
 
   const auto cap = static_cast<std::uint32_t>(options.wheel_capacity);
   const bool vehicle = options.role == Role::kVehicle;
-  ShmRegion::Spec mine{shm_region_name(options.name_prefix, options.scene_hash, options.run_id, options.role),
+  ShmRegion::Spec mine{shmRegionName(options.name_prefix, options.scene_hash, options.run_id, options.role),
                        vehicle ? FrameKind::kWheelStates : FrameKind::kWrenches, cap, options.scene_hash};
   ShmRegion::Spec theirs{
-      shm_region_name(options.name_prefix, options.scene_hash, options.run_id, peer_of(options.role)),
+      shmRegionName(options.name_prefix, options.scene_hash, options.run_id, peerOf(options.role)),
       vehicle ? FrameKind::kWrenches : FrameKind::kWheelStates, cap, options.scene_hash};
   const Deadline deadline =
       Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.attach_timeout));
   write_ = ShmRegion::create(mine);
   try {
-    read_ = ShmRegion::attach(theirs, deadline, peer_of(options.role), options.attach_timeout, options.interrupt);
+    read_ = ShmRegion::attach(theirs, deadline, peerOf(options.role), options.attach_timeout, options.interrupt);
   } catch (...) {
     write_.header().state.fetch_or(kWriterClosed);
-    write_.unlink_if_same();
+    write_.unlinkIfSame();
     write_.unmap();
     throw;
   }
@@ -413,24 +413,24 @@ void ShmTransport::close() {
   closed_ = true;
   if (write_.mapped()) {
     write_.header().state.fetch_or(kWriterClosed, std::memory_order_acq_rel);
-    futex_wake_all(write_.header().state);
-    write_.unlink_if_same();
+    futexWakeAll(write_.header().state);
+    write_.unlinkIfSame();
     write_.unmap();
   }
   if (read_.mapped()) {
     read_.header().state.fetch_or(kReaderClosed, std::memory_order_acq_rel);
-    futex_wake_all(read_.header().state);
-    read_.unlink_if_same();
+    futexWakeAll(read_.header().state);
+    read_.unlinkIfSame();
     read_.unmap();
   }
 }
 
 Result ShmTransport::misuse(const char* call) const {
   if (closed_) return {Status::kError, std::string(call) + ": the transport is closed"};
-  return {Status::kError, std::string(call) + " called on the " + to_string(options_.role) + " end"};
+  return {Status::kError, std::string(call) + " called on the " + toString(options_.role) + " end"};
 }
 
-Result ShmTransport::wait_turn(ShmRegion& region, bool want_reader_turn, std::uint32_t peer_closed_bit,
+Result ShmTransport::waitTurn(ShmRegion& region, bool want_reader_turn, std::uint32_t peer_closed_bit,
                                Deadline deadline) {
   std::atomic<std::uint32_t>& word = region.header().state;
   auto ready = [&](std::uint32_t s) { return ((s & kTurnReader) != 0) == want_reader_turn; };
@@ -438,7 +438,7 @@ Result ShmTransport::wait_turn(ShmRegion& region, bool want_reader_turn, std::ui
     const std::uint32_t s = word.load(std::memory_order_acquire);
     if (ready(s)) return {};
     if (s & peer_closed_bit) break;
-    cpu_relax();
+    cpuRelax();
   }
   bool slept_a_slice = false;  // the peer's process is only looked at after a whole slice of waiting
   for (;;) {
@@ -449,7 +449,7 @@ Result ShmTransport::wait_turn(ShmRegion& region, bool want_reader_turn, std::ui
       return {Status::kInterrupted, {}};
     const auto now = Clock::now();
     if (now >= deadline) return {Status::kTimeout, {}};
-    if (slept_a_slice && !shm_process_alive(peer_pid_, peer_start_time_))
+    if (slept_a_slice && !shmProcessAlive(peer_pid_, peer_start_time_))
       return {Status::kPeerClosed, "its process " + std::to_string(peer_pid_) + " ended without closing"};
     if (!(s & kWaiters)) {
       if (!word.compare_exchange_weak(s, s | kWaiters, std::memory_order_acq_rel, std::memory_order_acquire))
@@ -458,16 +458,16 @@ Result ShmTransport::wait_turn(ShmRegion& region, bool want_reader_turn, std::ui
     }
     // Sleeps only while the word still equals s: any turn or closed change in between returns at once.
     const auto slice = std::min<Clock::duration>(deadline - now, kSleepSlice);
-    if (futex_wait(word, s, slice) != 0 && errno == ETIMEDOUT) slept_a_slice = true;
+    if (futexWait(word, s, slice) != 0 && errno == ETIMEDOUT) slept_a_slice = true;
   }
 }
 
 namespace {
-void write_stamp(unsigned char* payload, const FrameStamp& stamp, std::uint32_t count) {
+void writeStamp(unsigned char* payload, const FrameStamp& stamp, std::uint32_t count) {
   ShmFrameHead head{stamp.step, stamp.time, stamp.scene_hash, count, 0};
   std::memcpy(payload, &head, sizeof(head));
 }
-std::uint32_t read_stamp(const unsigned char* payload, FrameStamp& stamp) {
+std::uint32_t readStamp(const unsigned char* payload, FrameStamp& stamp) {
   ShmFrameHead head;
   std::memcpy(&head, payload, sizeof(head));
   stamp.step = head.step;
@@ -483,21 +483,21 @@ template <class Vec>
 void get(const double* src, Vec& v) {
   for (int i = 0; i < v.size(); ++i) v[i] = src[i];
 }
-Result too_many(std::uint32_t count, std::uint32_t capacity, const char* where) {
+Result tooMany(std::uint32_t count, std::uint32_t capacity, const char* where) {
   return {Status::kError, "frame of " + std::to_string(count) + " wheels exceeds the " + where + " capacity " +
                               std::to_string(capacity)};
 }
 }  // namespace
 
-Result ShmTransport::send_states(const WheelStateFrame& frame, Deadline deadline) {
+Result ShmTransport::sendStates(const WheelStateFrame& frame, Deadline deadline) {
   if (closed_ || options_.role != Role::kVehicle) return misuse("send_states");
   const std::uint32_t cap = write_.header().wheel_capacity;
   if (frame.count > cap || frame.count > static_cast<std::uint32_t>(frame.capacity()))
-    return too_many(frame.count, cap, "region's");
-  Result r = wait_turn(write_, false, kReaderClosed, deadline);
+    return tooMany(frame.count, cap, "region's");
+  Result r = waitTurn(write_, false, kReaderClosed, deadline);
   if (!r) return r;
   unsigned char* p = write_.payload();
-  write_stamp(p, frame, frame.count);
+  writeStamp(p, frame, frame.count);
   auto* rec = reinterpret_cast<ShmWheelState*>(p + sizeof(ShmFrameHead));
   for (std::uint32_t i = 0; i < frame.count; ++i) {
     const WheelState& w = frame.wheels[i];
@@ -510,19 +510,19 @@ Result ShmTransport::send_states(const WheelStateFrame& frame, Deadline deadline
     put(o.v_wheel_in_world, w.v_wheel_in_world);
     put(o.omega_wheelset_in_world, w.omega_wheelset_in_world);
   }
-  change_state(write_.header().state, kTurnReader, 0);
+  changeState(write_.header().state, kTurnReader, 0);
   return {};
 }
 
-Result ShmTransport::receive_states(WheelStateFrame& frame, Deadline deadline) {
+Result ShmTransport::receiveStates(WheelStateFrame& frame, Deadline deadline) {
   if (closed_ || options_.role != Role::kTrack) return misuse("receive_states");
-  Result r = wait_turn(read_, true, kWriterClosed, deadline);
+  Result r = waitTurn(read_, true, kWriterClosed, deadline);
   if (!r) return r;
   const unsigned char* p = read_.payload();
   FrameStamp stamp;
-  const std::uint32_t count = read_stamp(p, stamp);
+  const std::uint32_t count = readStamp(p, stamp);
   if (count > read_.header().wheel_capacity || count > static_cast<std::uint32_t>(frame.capacity()))
-    return too_many(count, static_cast<std::uint32_t>(frame.capacity()), "receiving");
+    return tooMany(count, static_cast<std::uint32_t>(frame.capacity()), "receiving");
   static_cast<FrameStamp&>(frame) = stamp;
   frame.count = count;
   const auto* rec = reinterpret_cast<const ShmWheelState*>(p + sizeof(ShmFrameHead));
@@ -536,19 +536,19 @@ Result ShmTransport::receive_states(WheelStateFrame& frame, Deadline deadline) {
     get(o.v_wheel_in_world, w.v_wheel_in_world);
     get(o.omega_wheelset_in_world, w.omega_wheelset_in_world);
   }
-  change_state(read_.header().state, 0, kTurnReader);
+  changeState(read_.header().state, 0, kTurnReader);
   return {};
 }
 
-Result ShmTransport::send_wrenches(const WrenchFrame& frame, Deadline deadline) {
+Result ShmTransport::sendWrenches(const WrenchFrame& frame, Deadline deadline) {
   if (closed_ || options_.role != Role::kTrack) return misuse("send_wrenches");
   const std::uint32_t cap = write_.header().wheel_capacity;
   if (frame.count > cap || frame.count > static_cast<std::uint32_t>(frame.capacity()))
-    return too_many(frame.count, cap, "region's");
-  Result r = wait_turn(write_, false, kReaderClosed, deadline);
+    return tooMany(frame.count, cap, "region's");
+  Result r = waitTurn(write_, false, kReaderClosed, deadline);
   if (!r) return r;
   unsigned char* p = write_.payload();
-  write_stamp(p, frame, frame.count);
+  writeStamp(p, frame, frame.count);
   auto* rec = reinterpret_cast<ShmWheelWrench*>(p + sizeof(ShmFrameHead));
   for (std::uint32_t i = 0; i < frame.count; ++i) {
     const WheelWrench& w = frame.wheels[i];
@@ -558,19 +558,19 @@ Result ShmTransport::send_wrenches(const WrenchFrame& frame, Deadline deadline) 
     put(o.f_wheel_in_world, w.f_wheel_in_world);
     put(o.n_wheel_in_world, w.n_wheel_in_world);
   }
-  change_state(write_.header().state, kTurnReader, 0);
+  changeState(write_.header().state, kTurnReader, 0);
   return {};
 }
 
-Result ShmTransport::receive_wrenches(WrenchFrame& frame, Deadline deadline) {
+Result ShmTransport::receiveWrenches(WrenchFrame& frame, Deadline deadline) {
   if (closed_ || options_.role != Role::kVehicle) return misuse("receive_wrenches");
-  Result r = wait_turn(read_, true, kWriterClosed, deadline);
+  Result r = waitTurn(read_, true, kWriterClosed, deadline);
   if (!r) return r;
   const unsigned char* p = read_.payload();
   FrameStamp stamp;
-  const std::uint32_t count = read_stamp(p, stamp);
+  const std::uint32_t count = readStamp(p, stamp);
   if (count > read_.header().wheel_capacity || count > static_cast<std::uint32_t>(frame.capacity()))
-    return too_many(count, static_cast<std::uint32_t>(frame.capacity()), "receiving");
+    return tooMany(count, static_cast<std::uint32_t>(frame.capacity()), "receiving");
   static_cast<FrameStamp&>(frame) = stamp;
   frame.count = count;
   const auto* rec = reinterpret_cast<const ShmWheelWrench*>(p + sizeof(ShmFrameHead));
@@ -581,7 +581,7 @@ Result ShmTransport::receive_wrenches(WrenchFrame& frame, Deadline deadline) {
     get(o.f_wheel_in_world, w.f_wheel_in_world);
     get(o.n_wheel_in_world, w.n_wheel_in_world);
   }
-  change_state(read_.header().state, 0, kTurnReader);
+  changeState(read_.header().state, 0, kTurnReader);
   return {};
 }
 

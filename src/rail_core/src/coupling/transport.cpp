@@ -4,9 +4,9 @@
 
 namespace rail::core::coupling {
 
-const char* to_string(Role r) { return r == Role::kVehicle ? "vehicle" : "track"; }
+const char* toString(Role r) { return r == Role::kVehicle ? "vehicle" : "track"; }
 
-const char* to_string(Status s) {
+const char* toString(Status s) {
   switch (s) {
     case Status::kOk: return "ok";
     case Status::kTimeout: return "timeout";
@@ -18,7 +18,7 @@ const char* to_string(Status s) {
   return "unknown";
 }
 
-int exit_code(Status s) {
+int exitCode(Status s) {
   switch (s) {
     case Status::kOk: return kExitOk;
     case Status::kTimeout:

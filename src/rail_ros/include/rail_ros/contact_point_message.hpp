@@ -10,7 +10,7 @@
 namespace rail::ros_glue {
 
 // Contact k (rail::contact::kTread or kFlange) of wheel `wheel_id` on rail `side` (WheelState::SIDE_*).
-inline void to_message(const rail::contact::ContactPointResult& c, int wheel_id, int side, int k,
+inline void toMessage(const rail::contact::ContactPointResult& c, int wheel_id, int side, int k,
                        rail_msgs::ContactPoint& p) {
   p.wheel_id = static_cast<std::uint8_t>(wheel_id);
   p.side = static_cast<std::uint8_t>(side);

@@ -27,7 +27,7 @@ namespace coupling = rail::core::coupling;
 // The run id of the shm regions: ~run_id, else /railsim/run_id (cosim.launch sets it with $(anon run)),
 // else "run". A value that is not 1..48 characters of [A-Za-z0-9_.-] is replaced by its 64-bit FNV-1a
 // hash in hex, so both nodes derive the same id from the same parameter.
-inline std::string ShmRunId(ros::NodeHandle& pnh) {
+inline std::string shmRunId(ros::NodeHandle& pnh) {
   std::string id;
   if (!pnh.getParam("run_id", id) && !ros::param::get("/railsim/run_id", id)) id = "run";
   bool ok = !id.empty() && id.size() <= 48;
@@ -50,7 +50,7 @@ inline std::string ShmRunId(ros::NodeHandle& pnh) {
 // Opens this end of the scene's transport. peer_node: the peer's node name from the handshake. Waits up to
 // solver.handshake_timeout for the peer. Throws rail::core::coupling::CouplingError (timeout, refused) or
 // std::runtime_error (bad options).
-inline std::unique_ptr<rail::core::coupling::FrameTransport> MakeTransport(
+inline std::unique_ptr<rail::core::coupling::FrameTransport> makeTransport(
     const rail::core::Scene& scene, rail::core::coupling::Role role, ros::NodeHandle& nh, ros::NodeHandle& pnh,
     const std::string& peer_node, const std::atomic<bool>* interrupt) {
   using namespace rail::core;
@@ -59,13 +59,13 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> MakeTransport(
       coupling::ShmOptions o;
       o.role = role;
       o.scene_hash = scene.hash;
-      o.wheel_capacity = scene.wheel_count();
-      o.run_id = ShmRunId(pnh);
+      o.wheel_capacity = scene.wheelCount();
+      o.run_id = shmRunId(pnh);
       o.attach_timeout = scene.solver.handshake_timeout;
       o.interrupt = interrupt;
       auto t = std::make_unique<coupling::ShmTransport>(o);
-      if (!t->replaced_stale().empty()) {  // a crashed run's region: say so, the run goes on
-        ROS_WARN("%s: shm transport: %s", ros::this_node::getName().c_str(), t->replaced_stale().c_str());
+      if (!t->replacedStale().empty()) {  // a crashed run's region: say so, the run goes on
+        ROS_WARN("%s: shm transport: %s", ros::this_node::getName().c_str(), t->replacedStale().c_str());
       }
       return t;
     }
@@ -73,7 +73,7 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> MakeTransport(
       ros_glue::ServiceTransportOptions o;
       o.role = role;
       o.track_step = scene.solver.track_step;
-      o.wheel_capacity = scene.wheel_count();
+      o.wheel_capacity = scene.wheelCount();
       o.attach_timeout = scene.solver.handshake_timeout;
       o.peer_node = peer_node;
       o.interrupt = interrupt;
@@ -84,7 +84,7 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> MakeTransport(
       ros_glue::TopicTransportOptions o;
       o.role = role;
       o.track_step = scene.solver.track_step;
-      o.wheel_capacity = scene.wheel_count();
+      o.wheel_capacity = scene.wheelCount();
       o.attach_timeout = scene.solver.handshake_timeout;
       o.peer_node = peer_node;
       o.interrupt = interrupt;

@@ -26,20 +26,20 @@ constexpr std::uint64_t kCloseStep = ~std::uint64_t{0};
 constexpr const char* kWorldFrameId = "world";
 
 // Reserve room for `capacity` wheels and set the header's frame id (the only allocations).
-void reserve_message(rail_msgs::WheelStates& msg, int capacity);
-void reserve_message(rail_msgs::ContactWrenches& msg, int capacity);
+void reserveMessage(rail_msgs::WheelStates& msg, int capacity);
+void reserveMessage(rail_msgs::ContactWrenches& msg, int capacity);
 
 // Frame -> message: step, scene hash, stamp = frame.time, the first frame.count wheels. wheelset and side
 // of a WheelState follow from the id (id = 2 * wheelset + side). kError (message unchanged) when a wheel
 // id does not fit the message's uint8 or the time is not a valid ros::Time (negative or beyond 2^32 s).
-coupling::Result to_message(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates& msg);
-coupling::Result to_message(const coupling::WrenchFrame& frame, rail_msgs::ContactWrenches& msg);
+coupling::Result toMessage(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates& msg);
+coupling::Result toMessage(const coupling::WrenchFrame& frame, rail_msgs::ContactWrenches& msg);
 
 // The close marker (kCloseStep, no wheels; scene hash kept).
-void make_close_marker(rail_msgs::WheelStates& msg);
-void make_close_marker(rail_msgs::ContactWrenches& msg);
-inline bool is_close_marker(const rail_msgs::WheelStates& m) { return m.step == kCloseStep && m.wheels.empty(); }
-inline bool is_close_marker(const rail_msgs::ContactWrenches& m) {
+void makeCloseMarker(rail_msgs::WheelStates& msg);
+void makeCloseMarker(rail_msgs::ContactWrenches& msg);
+inline bool isCloseMarker(const rail_msgs::WheelStates& m) { return m.step == kCloseStep && m.wheels.empty(); }
+inline bool isCloseMarker(const rail_msgs::ContactWrenches& m) {
   return m.step == kCloseStep && m.wrenches.empty();
 }
 
@@ -47,9 +47,9 @@ inline bool is_close_marker(const rail_msgs::ContactWrenches& m) {
 // kRefused (frame unchanged) when the message has more wheels than the frame's capacity or its stamp
 // differs from step * track_step by more than 1 ns (the stamp's rounding). `source` names the topic or
 // service for the message.
-coupling::Result from_message(const rail_msgs::WheelStates& msg, double track_step,
+coupling::Result fromMessage(const rail_msgs::WheelStates& msg, double track_step,
                               coupling::WheelStateFrame& frame, const char* source);
-coupling::Result from_message(const rail_msgs::ContactWrenches& msg, double track_step,
+coupling::Result fromMessage(const rail_msgs::ContactWrenches& msg, double track_step,
                               coupling::WrenchFrame& frame, const char* source);
 
 }  // namespace rail::ros_glue

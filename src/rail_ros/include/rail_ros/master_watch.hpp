@@ -35,16 +35,16 @@ class MasterWatch {
 // server (/railsim/node_exit/<name>: {code, run_id}, same /railsim/run_id as this node's): "rail_track
 // exited with code 2", or "" when none has. Lets a node waiting for its handshake report a dead peer at
 // once instead of after the whole timeout.
-std::string exited_peer(const std::string& me);
+std::string exitedPeer(const std::string& me);
 
 // Before a node's first NodeHandle (whose registration roscpp retries for ever, deaf to the node's own
 // signal handler): waits for the master with a deadline. Returns 0 when it answers; kExitNoPeer-like 4
 // after timeout_s with an error naming the master's URI; 5 when `signal` becomes non-zero (SIGINT,
 // SIGTERM) meanwhile. node: the node's name for the message.
-int wait_for_master(const std::string& node, const std::atomic<int>& signal, double timeout_s = 30.0);
+int waitForMaster(const std::string& node, const std::atomic<int>& signal, double timeout_s = 30.0);
 
 // True, after printing what the node is and how it is started, when argv holds -h or --help (the nodes
 // are started by roslaunch; their settings are private parameters, not options).
-bool node_help_requested(int argc, char** argv, const char* node, const char* what);
+bool nodeHelpRequested(int argc, char** argv, const char* node, const char* what);
 
 }  // namespace rail::ros_glue

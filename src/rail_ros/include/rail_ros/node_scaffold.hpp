@@ -23,18 +23,18 @@ struct NodeStop {
 };
 
 // The one NodeStop of this process.
-NodeStop& node_stop();
+NodeStop& nodeStop();
 
 // SIGINT and SIGTERM set node_stop() (the run loop then closes the bags and exits 5).
-void install_stop_signals();
+void installStopSignals();
 
 // The vehicle's side: waits for the track's service (up to solver.handshake_timeout; a track node that died
 // meanwhile is reported at once with its exit code) and calls it. Returns 0 and the track node's name in
 // `peer`, else the exit code (4 no or dead peer, 3 refused, 5 stopped) after a FATAL line saying why.
-int handshake_as_vehicle(const core::Scene& scene, std::string& peer);
+int handshakeAsVehicle(const core::Scene& scene, std::string& peer);
 
 // The track's side: serves /railsim/handshake until the vehicle has called (same timeout and dead-peer
 // check). Returns 0 and the vehicle node's name in `peer`, else the exit code after a FATAL line.
-int handshake_as_track(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer);
+int handshakeAsTrack(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer);
 
 }  // namespace rail::ros_glue

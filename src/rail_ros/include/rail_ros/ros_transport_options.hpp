@@ -21,6 +21,6 @@ struct RosTransportOptions {
 
 // Throws std::runtime_error naming the field and value when an option is out of range; `what` names the
 // transport ("service transport").
-void check_options(const RosTransportOptions& o, const char* what);
+void checkOptions(const RosTransportOptions& o, const char* what);
 
 }  // namespace rail::ros_glue

@@ -14,6 +14,6 @@ namespace rail::ros_glue {
 // (<ns>/scene_file); ns is ~scene_ns, default /railsim (tests give nodes different scenes this way).
 // On failure logs one fatal message naming the node, the parameter or the scene's file and field, and
 // returns false.
-bool read_scene(ros::NodeHandle& private_nh, core::Scene& scene);
+bool readScene(ros::NodeHandle& private_nh, core::Scene& scene);
 
 }  // namespace rail::ros_glue

@@ -41,15 +41,15 @@ class ServiceTransport : public coupling::FrameTransport {
   ServiceTransport& operator=(const ServiceTransport&) = delete;
 
   coupling::Role role() const override;
-  coupling::Result send_states(const coupling::WheelStateFrame& frame, coupling::Deadline deadline) override;
-  coupling::Result receive_wrenches(coupling::WrenchFrame& frame, coupling::Deadline deadline) override;
-  coupling::Result receive_states(coupling::WheelStateFrame& frame, coupling::Deadline deadline) override;
-  coupling::Result send_wrenches(const coupling::WrenchFrame& frame, coupling::Deadline deadline) override;
+  coupling::Result sendStates(const coupling::WheelStateFrame& frame, coupling::Deadline deadline) override;
+  coupling::Result receiveWrenches(coupling::WrenchFrame& frame, coupling::Deadline deadline) override;
+  coupling::Result receiveStates(coupling::WheelStateFrame& frame, coupling::Deadline deadline) override;
+  coupling::Result sendWrenches(const coupling::WrenchFrame& frame, coupling::Deadline deadline) override;
   void close() override;
 
-  const std::string& service_name() const;  // resolved
+  const std::string& serviceName() const;  // resolved
   // The peer's node: the service's provider (vehicle end) or the last caller (track end); empty if unknown.
-  std::string peer_node() const;
+  std::string peerNode() const;
 
   struct VehicleEnd;  // implementation of each end (service_transport.cpp)
   struct TrackEnd;

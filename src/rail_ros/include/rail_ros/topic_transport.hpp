@@ -44,15 +44,15 @@ class TopicTransport : public coupling::FrameTransport {
   TopicTransport& operator=(const TopicTransport&) = delete;
 
   coupling::Role role() const override;
-  coupling::Result send_states(const coupling::WheelStateFrame& frame, coupling::Deadline deadline) override;
-  coupling::Result receive_wrenches(coupling::WrenchFrame& frame, coupling::Deadline deadline) override;
-  coupling::Result receive_states(coupling::WheelStateFrame& frame, coupling::Deadline deadline) override;
-  coupling::Result send_wrenches(const coupling::WrenchFrame& frame, coupling::Deadline deadline) override;
+  coupling::Result sendStates(const coupling::WheelStateFrame& frame, coupling::Deadline deadline) override;
+  coupling::Result receiveWrenches(coupling::WrenchFrame& frame, coupling::Deadline deadline) override;
+  coupling::Result receiveStates(coupling::WheelStateFrame& frame, coupling::Deadline deadline) override;
+  coupling::Result sendWrenches(const coupling::WrenchFrame& frame, coupling::Deadline deadline) override;
   // Publishes the close marker and withdraws both topics. Never blocks.
   void close() override;
 
   // The peer's node (given, or the publisher of the first frame received); empty if unknown.
-  const std::string& peer_node() const;
+  const std::string& peerNode() const;
 
   struct Impl;
 

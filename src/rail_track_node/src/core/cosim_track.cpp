@@ -131,10 +131,10 @@ struct CosimTrack::Implicit {
 CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     : cost_(options.cost), contact_cost_(options.cost != nullptr ? &options.cost->contact : nullptr) {
   if (!scene.has_vehicle) throw SceneError(scene.file + ": the co-simulation track needs a vehicle (none in the scene)");
-  if (!scene.needs_track_node())
+  if (!scene.needsTrackNode())
     throw SceneError(scene.file + ": effects.track_model: rigid runs the vehicle alone; the track side needs "
                                   "rigid_fe or flexible");
-  const int n_wheels = scene.wheel_count();
+  const int n_wheels = scene.wheelCount();
   if (n_wheels <= 0) {
     std::ostringstream os;
     os << scene.file << ": vehicle.wheelsets: must be > 0, got " << scene.vehicle.wheelsets;
@@ -143,7 +143,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
 
   // Geometry (both cases), FE track (flexible only).
   double section_depth = rc::uic60::kCentroidDepth;  // rail section centre below the head top, as the vehicle
-  if (scene.runs_fe_integration() && scene.solver.track_window.enabled) {
+  if (scene.runsFeIntegration() && scene.solver.track_window.enabled) {
     // Moving window: settings of the scene, vehicle length from the options or the vehicle data, first
     // window around the vehicle's start position (leading wheelset at vehicle.start_arc_length).
     TrackWindowSettings ws = options.window;
@@ -160,20 +160,20 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     window_ = std::make_unique<TrackWindow>(scene, ws, s_front - ws.vehicle_length, s_front);
     geometry_ = &window_->geometry();
     section_depth = options.track.rail_height - window_->data().layout.rail_centroid_height;
-  } else if (scene.runs_fe_integration()) {
+  } else if (scene.runsFeIntegration()) {
     fe_ = std::make_unique<SceneTrack>(buildSceneTrack(scene, options.track));
     geometry_ = &fe_->geometry;
     // The contact's section centre on the FE beam axis (the rail centroid node).
     section_depth = fe_->rail_height - fe_->model.data.layout.rail_centroid_height;
   } else {
-    rigid_geometry_ = std::make_unique<rc::TrackGeometry>(rail::core::build_track_geometry(scene));
+    rigid_geometry_ = std::make_unique<rc::TrackGeometry>(rail::core::buildTrackGeometry(scene));
     geometry_ = rigid_geometry_.get();
   }
 
   // Contact model, built from the scene as the vehicle side builds it (rail_core's geometry builder).
-  wheel_profile_ = rail::core::wheel_profile(scene);
-  rail_profile_ = rail::core::rail_profile_curve(scene);
-  const rc::WheelContactOptions contact = rail::core::contact_options(scene, options.contact);
+  wheel_profile_ = rail::core::wheelProfile(scene);
+  rail_profile_ = rail::core::railProfileCurve(scene);
+  const rc::WheelContactOptions contact = rail::core::contactOptions(scene, options.contact);
   contact_model_ = std::make_unique<rc::WheelContactModel>(wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
                                                            rc::railSectionCentre(rail_profile_, section_depth),
                                                            contact);
@@ -548,12 +548,12 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
   o = LawOut();
   o.delta = L.delta_p + n.dot(u - L.u_p);
   o.delta_dot = -(L.v_wheel - v_rail).dot(n);
-  o.N = rc::damped_normal_force(L.K, o.delta, o.delta_dot, L.v_impact, opt.damping);
+  o.N = rc::dampedNormalForce(L.K, o.delta, o.delta_dot, L.v_impact, opt.damping);
   if (!(o.N > 0.0)) return;
   const double cbrt_N = std::cbrt(o.N);
   o.a = L.a_coeff * cbrt_N;
   o.b = L.b_coeff * cbrt_N;
-  const rc::Creepages cr = rc::compute_creepages(L.v_wheel, v_rail, L.omega_wheel, L.omega_rail_p,
+  const rc::Creepages cr = rc::computeCreepages(L.v_wheel, v_rail, L.omega_wheel, L.omega_rail_p,
                                                  L.R_contact_to_world, L.V_p - dv_rail.dot(t_w), opt.creepage);
   o.nu_x = cr.nu_x;
   o.nu_y = cr.nu_y;
@@ -570,7 +570,7 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
     pin.mu0 = opt.friction;
     pin.V = cr.V_ref;
     pin.c = L.kalker;
-    const rc::PolachResult pr = rc::polach_forces(pin, polach);
+    const rc::PolachResult pr = rc::polachForces(pin, polach);
     o.F_long = pr.Fx;
     o.F_lat = pr.Fy;
     if (cost != nullptr) {
@@ -578,7 +578,7 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
       if (polach.spin) ++cost->spin_evaluations;  // polach_forces evaluated its spin terms
     }
   }
-  o.F_wheel = rc::contact_force_in_world(L.R_contact_to_world, o.F_long, o.F_lat, o.N);
+  o.F_wheel = rc::contactForceInWorld(L.R_contact_to_world, o.F_long, o.F_lat, o.N);
 }
 
 // Semi-implicit coupling, after the solve x0 = K_eff^{-1} (rhs + contact loads at the predicted state).
@@ -809,7 +809,7 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     cp.penetration = lo.delta;
     cp.penetration_rate = lo.delta_dot;
     cp.force_on_wheel_in_world = lo.F_wheel;  // = -f, the force the rails carry
-    cp.rail_wrench = rc::rail_section_wrench(Lc.f, Eigen::Vector3d::Zero(),
+    cp.rail_wrench = rc::railSectionWrench(Lc.f, Eigen::Vector3d::Zero(),
                                              cp.p_rail_in_world - cp.p_section_centre_in_world,
                                              Eigen::Vector3d::Zero());
     const Eigen::Matrix<double, 12, 1> df = Lc.W * (Lc.f - Lc.f_p);
@@ -832,12 +832,12 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     const rc::ContactPointResult& tr = res.contact[rc::kTread];
     const rc::ContactPointResult& fl = res.contact[rc::kFlange];
     const Eigen::Matrix3d& A = ws.R_wheelset_to_world;
-    res.wheel_centre = rc::wheel_centre_wrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
+    res.wheel_centre = rc::wheelCentreWrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
                                                A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
                                                A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
     const rc::ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
     res.rail_section_s = ref.s_r;
-    res.rail_section = rc::rail_section_wrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
+    res.rail_section = rc::railSectionWrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
                                                tr.p_rail_in_world - ref.p_section_centre_in_world,
                                                fl.p_rail_in_world - ref.p_section_centre_in_world);
     writeWrench(Le.frame_index, ws, res, out);

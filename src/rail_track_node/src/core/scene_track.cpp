@@ -60,7 +60,7 @@ TrackFrameFunction seatPlaneFrames(const rc::TrackGeometry& geometry, double sea
 }
 
 SceneTrack buildSceneTrack(const Scene& scene, const SceneTrackOptions& options) {
-  rc::TrackGeometry geometry = rail::core::build_track_geometry(scene);
+  rc::TrackGeometry geometry = rail::core::buildTrackGeometry(scene);
   const TrackData data = sceneTrackData(scene, geometry.spec(), options);
   const double seat = seatPlaneBelowCentreLine(data, options.rail_height);
   MeshOptions mesh;

@@ -188,7 +188,7 @@ TrackData parseTrackData(const std::string& yaml_text, const std::string& source
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(source_name + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
   }
-  if (const auto dup = core::find_duplicate_key(root)) {
+  if (const auto dup = core::findDuplicateKey(root)) {
     throw std::runtime_error(source_name + ": " + dup->field + ": " + dup->describe());
   }
   MapReader r(root, "", source_name);

@@ -99,7 +99,7 @@ double movingLoadsLength(const rail::core::MovingLoads& loads) {
 }
 
 TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings, double s_rear, double s_front)
-    : settings_(settings), geometry_(rail::core::build_track_geometry(scene)) {
+    : settings_(settings), geometry_(rail::core::buildTrackGeometry(scene)) {
   const TrackWindowSettings& S = settings_;
   auto refuse = [&scene](const std::string& field, const std::string& what, double value) {
     throw std::runtime_error(scene.file + ": track window: " + field + " " + what + ", got " + fmt(value));

@@ -52,9 +52,9 @@ namespace rt = rail::track;
 namespace {
 
 // The stop request of this process (rail_ros/node_scaffold.hpp): SIGINT, SIGTERM or a lost master.
-std::atomic<bool>& g_stop = rail::ros_glue::node_stop().requested;
-std::atomic<int>& g_signal = rail::ros_glue::node_stop().signal;
-const char* stopReason() { return rail::ros_glue::node_stop().reason(); }
+std::atomic<bool>& g_stop = rail::ros_glue::nodeStop().requested;
+std::atomic<int>& g_signal = rail::ros_glue::nodeStop().signal;
+const char* stopReason() { return rail::ros_glue::nodeStop().reason(); }
 
 // mkdir -p; false on failure.
 bool makeDirs(const std::string& dir) {
@@ -411,16 +411,16 @@ class ReplayTransport final : public rail::core::coupling::FrameTransport {
                                " s; a replay starts at t = 0");
     }
   }
-  double end_time() const { return t_stop_; }
+  double endTime() const { return t_stop_; }
   rail::core::coupling::Role role() const override { return rail::core::coupling::Role::kTrack; }
-  Result send_states(const rail::core::coupling::WheelStateFrame&, rail::core::coupling::Deadline) override {
+  Result sendStates(const rail::core::coupling::WheelStateFrame&, rail::core::coupling::Deadline) override {
     return {Status::kError, "replay: the track end does not send states"};
   }
-  Result receive_wrenches(rail::core::coupling::WrenchFrame&, rail::core::coupling::Deadline) override {
+  Result receiveWrenches(rail::core::coupling::WrenchFrame&, rail::core::coupling::Deadline) override {
     return {Status::kError, "replay: the track end does not receive wrenches"};
   }
   // States of the next step k, interpolated at k h; kPeerClosed after the bag's last instant.
-  Result receive_states(rail::core::coupling::WheelStateFrame& out, rail::core::coupling::Deadline) override {
+  Result receiveStates(rail::core::coupling::WheelStateFrame& out, rail::core::coupling::Deadline) override {
     const double t = static_cast<double>(step_) * h_;
     if (t > t_stop_ + 1e-9 * h_) return {Status::kPeerClosed, "end of the replayed run"};
     while (seg_ + 2 < times_.size() && times_[seg_ + 1] < t) ++seg_;
@@ -446,7 +446,7 @@ class ReplayTransport final : public rail::core::coupling::FrameTransport {
     ++step_;
     return {};
   }
-  Result send_wrenches(const rail::core::coupling::WrenchFrame&, rail::core::coupling::Deadline) override {
+  Result sendWrenches(const rail::core::coupling::WrenchFrame&, rail::core::coupling::Deadline) override {
     return {};
   }
   void close() override {}
@@ -499,7 +499,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   if (replay) {
     try {
       auto r = std::make_unique<ReplayTransport>(replay_bag, scene, track->wheelCount());
-      ROS_INFO("%s: replaying the wheel states of %s (t = 0 .. %.4f s)", me.c_str(), replay_bag.c_str(), r->end_time());
+      ROS_INFO("%s: replaying the wheel states of %s (t = 0 .. %.4f s)", me.c_str(), replay_bag.c_str(), r->endTime());
       transport = std::move(r);
     } catch (const std::exception& e) {
       ROS_FATAL("%s: %s", me.c_str(), e.what());
@@ -507,17 +507,17 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
   }
   try {
-    if (!replay) transport = rail::ros_glue::MakeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &g_stop);
+    if (!replay) transport = rail::ros_glue::makeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &g_stop);
   } catch (const cc::CouplingError& e) {
-    ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), to_string(scene.solver.transport),
+    ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), toString(scene.solver.transport),
               peer.c_str(), e.what());
-    return cc::exit_code(e.status());
+    return cc::exitCode(e.status());
   } catch (const std::exception& e) {
-    ROS_FATAL("%s: cannot open the %s transport: %s", me.c_str(), to_string(scene.solver.transport), e.what());
+    ROS_FATAL("%s: cannot open the %s transport: %s", me.c_str(), toString(scene.solver.transport), e.what());
     return kExitBadInput;
   }
   ROS_INFO("%s: %s track built (%d wheels); serving the %s transport, track step %g s", me.c_str(),
-           track->flexible() ? "flexible" : "rigid", track->wheelCount(), to_string(scene.solver.transport),
+           track->flexible() ? "flexible" : "rigid", track->wheelCount(), toString(scene.solver.transport),
            scene.solver.track_step);
 
   ros::Publisher points_pub, deflection_pub;
@@ -586,13 +586,13 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
 
   auto publish = [&](const ros::Time& stamp, const cc::WheelStateFrame& states) {
     CostProfile::Scope timing(cost, CostProfile::kPublish);
-    rail::core::TimedOutput(&clock, rail::core::CostClock::kContactPointOutput, scene.effects.contact_point_output, [&] {
+    rail::core::timedOutput(&clock, rail::core::CostClock::kContactPointOutput, scene.effects.contact_point_output, [&] {
       points_msg.header.stamp = stamp;
       for (int id = 0; id < track->wheelCount(); ++id) {
         for (int k = 0; k < 2; ++k) {
           const rail::contact::ContactPointResult& c = track->contact(id).contact[k];
           rail_msgs::ContactPoint& p = points_msg.points[2 * static_cast<std::size_t>(id) + static_cast<std::size_t>(k)];
-          rail::ros_glue::to_message(c, id, id % 2, k, p);
+          rail::ros_glue::toMessage(c, id, id % 2, k, p);
         }
       }
       points_pub.publish(points_msg);
@@ -645,7 +645,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         bag.write("/pad_forces", stamp, pads_msg);
       }
     }
-    rail::core::TimedOutput(&clock, rail::core::CostClock::kEnergyOutput, energy, [&] {
+    rail::core::timedOutput(&clock, rail::core::CostClock::kEnergyOutput, energy, [&] {
       track->energy(energy_msg.kinetic, energy_msg.potential);
       energy_msg.total = energy_msg.kinetic + energy_msg.potential;
       energy_msg.header.stamp = stamp;
@@ -655,7 +655,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         bag.write("/track_energy", stamp, energy_msg);
       }
     });
-    rail::core::TimedOutput(&clock, rail::core::CostClock::kMarkers, draw_markers && stamp.toSec() + 1e-12 >= next_marker, [&] {
+    rail::core::timedOutput(&clock, rail::core::CostClock::kMarkers, draw_markers && stamp.toSec() + 1e-12 >= next_marker, [&] {
       next_marker += marker_period;
       if (window == nullptr) {
         marker_pub.publish(markers->update(track->state()->d, stamp));
@@ -672,7 +672,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   };
 
   cc::TimedTransport timed_transport(*transport, cost);  // adds exchange waits to `cost`
-  cc::TrackCoupling coupling(cc::coupling_config(scene), timed_transport);
+  cc::TrackCoupling coupling(cc::couplingConfig(scene), timed_transport);
   const double h = scene.solver.track_step;
   const double period = 1.0 / scene.output.rate;
   std::uint64_t n_out = 0;
@@ -685,18 +685,18 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     // Step 0 waits for the vehicle's set-up (settling): the handshake timeout; later steps the exchange
     // timeout.
     const cc::Result r =
-        coupling.next_step() == 0
+        coupling.nextStep() == 0
             ? coupling.receive(cc::Clock::now() + std::chrono::duration_cast<cc::Clock::duration>(
                                                       std::chrono::duration<double>(scene.solver.handshake_timeout)))
             : coupling.receive();
     if (r.status == cc::Status::kPeerClosed) {
       // The vehicle closes after the step that reaches solver.end; closing (or dying) earlier, with a time
       // end, is a peer that went away.
-      const double t_last = coupling.next_step() == 0 ? -1.0 : static_cast<double>(coupling.next_step() - 1) * h;
-      if (!replay && (coupling.next_step() == 0 ||
+      const double t_last = coupling.nextStep() == 0 ? -1.0 : static_cast<double>(coupling.nextStep() - 1) * h;
+      if (!replay && (coupling.nextStep() == 0 ||
                       (scene.solver.end.kind == EndKind::kTime && t_last < scene.solver.end.value - 0.5 * h))) {
         ROS_FATAL("%s: the vehicle node %s went away after step %lld (t = %.6f s), before solver.end: %s",
-                  me.c_str(), peer.c_str(), static_cast<long long>(coupling.next_step()) - 1, t_last,
+                  me.c_str(), peer.c_str(), static_cast<long long>(coupling.nextStep()) - 1, t_last,
                   r.message.c_str());
         exit_code = kExitPeerTimeout;
       }
@@ -704,8 +704,8 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
     if (!r) {
       ROS_FATAL("%s: exchange with the vehicle node %s failed at step %llu: %s", me.c_str(), peer.c_str(),
-                static_cast<unsigned long long>(coupling.next_step()), r.message.c_str());
-      exit_code = cc::exit_code(r.status);
+                static_cast<unsigned long long>(coupling.nextStep()), r.message.c_str());
+      exit_code = cc::exitCode(r.status);
       break;
     }
     rt::CosimStepStatus st;
@@ -728,7 +728,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     if (!w) {
       ROS_FATAL("%s: sending the wrenches of step %llu to the vehicle node %s failed: %s", me.c_str(),
                 static_cast<unsigned long long>(coupling.states().step), peer.c_str(), w.message.c_str());
-      exit_code = cc::exit_code(w.status);
+      exit_code = cc::exitCode(w.status);
       break;
     }
     const double t = static_cast<double>(coupling.states().step) * h;
@@ -744,7 +744,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
   }
   coupling.close();
-  const double t_stop = coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h;
+  const double t_stop = coupling.nextStep() == 0 ? 0.0 : static_cast<double>(coupling.nextStep() - 1) * h;
   if (master_watch.lost()) {
     ROS_ERROR("%s: the ROS master %s went away: stopped at t = %.4f s", me.c_str(), master_watch.uri().c_str(),
               t_stop);
@@ -754,30 +754,30 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     ROS_WARN("%s: stopped at t = %.4f s (%s)", me.c_str(), t_stop, stopReason());
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  const double t_end = coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h;
+  const double t_end = coupling.nextStep() == 0 ? 0.0 : static_cast<double>(coupling.nextStep() - 1) * h;
   cost.add(CostProfile::kPublish, -cost.seconds(CostProfile::kBagWrite));  // bag writes are inside publishing
-  cost.set_count("track_steps", static_cast<double>(coupling.next_step()));
-  cost.set_count("newmark_steps", static_cast<double>(track->newmarkSteps()));
+  cost.setCount("track_steps", static_cast<double>(coupling.nextStep()));
+  cost.setCount("newmark_steps", static_cast<double>(track->newmarkSteps()));
   if (window != nullptr) {
-    cost.set_count("window_moves", track->windowMoves());
-    cost.set_count("window_rebuilds", track->windowRebuilds());
-    cost.set_count("window_move_ms_total", 1e3 * track->windowMoveSeconds());
+    cost.setCount("window_moves", track->windowMoves());
+    cost.setCount("window_rebuilds", track->windowRebuilds());
+    cost.setCount("window_move_ms_total", 1e3 * track->windowMoveSeconds());
   }
   clock.counts[rail::core::CostClock::kIrregularityEvaluations] =
       rail::contact::Irregularities::stationsEvaluated() - irregularity_stations0;
-  ROS_INFO_STREAM(cost.to_text(me, wall, t_end, &clock));
+  ROS_INFO_STREAM(cost.toText(me, wall, t_end, &clock));
   if (bag.isOpen()) {
     bag.close();
     ROS_INFO("%s: bag closed: %s", me.c_str(), bag_path.c_str());
     const std::string cost_path = bag_path.substr(0, bag_path.size() - 4) + ".cost.yaml";  // <stem>.track.cost.yaml
     if (std::FILE* f = std::fopen(cost_path.c_str(), "w")) {
-      std::fputs(cost.to_yaml(me, scene, wall, t_end, &clock).c_str(), f);
+      std::fputs(cost.toYaml(me, scene, wall, t_end, &clock).c_str(), f);
       std::fclose(f);
     }
   }
   ROS_INFO("%s: %s after %llu steps (t = %.4f s), %ld Newmark steps, %.2f s wall", me.c_str(),
-           exit_code == kExitOk ? "finished" : "stopped", static_cast<unsigned long long>(coupling.next_step()),
-           coupling.next_step() == 0 ? 0.0 : static_cast<double>(coupling.next_step() - 1) * h,
+           exit_code == kExitOk ? "finished" : "stopped", static_cast<unsigned long long>(coupling.nextStep()),
+           coupling.nextStep() == 0 ? 0.0 : static_cast<double>(coupling.nextStep() - 1) * h,
            track->newmarkSteps(), wall);
   // How the contact was found, so that a run never hides approximate contact points.
   rail::contact::DetectionCounts detection;
@@ -793,17 +793,17 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (ros_glue::node_help_requested(argc, argv, "rail_track", "the track side of a railsim run (FE track and the wheel-rail contact in co-simulation, moving loads, replay)")) return 0;
+  if (ros_glue::nodeHelpRequested(argc, argv, "rail_track", "the track side of a railsim run (FE track and the wheel-rail contact in co-simulation, moving loads, replay)")) return 0;
   ros::init(argc, argv, "rail_track", ros::init_options::NoSigintHandler);
   // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
   ::umask(077);
-  ros_glue::install_stop_signals();
-  if (const int rc = ros_glue::wait_for_master(ros::this_node::getName(), g_signal); rc != 0) return rc;
+  ros_glue::installStopSignals();
+  if (const int rc = ros_glue::waitForMaster(ros::this_node::getName(), g_signal); rc != 0) return rc;
   ros::NodeHandle nh, pnh("~");
   Scene scene;
-  if (!ros_glue::read_scene(pnh, scene)) return kExitBadInput;
+  if (!ros_glue::readScene(pnh, scene)) return kExitBadInput;
   ROS_INFO_STREAM(ros::this_node::getName() << ": will simulate\n" << describe(scene, Role::kTrack));
-  if (!scene.needs_track_node()) {
+  if (!scene.needsTrackNode()) {
     ROS_INFO("%s: track_model is rigid: the vehicle runs alone, nothing to do here",
              ros::this_node::getName().c_str());
     return kExitOk;
@@ -820,7 +820,7 @@ int main(int argc, char** argv) {
     }
     if (scene.has_vehicle) {
       std::string peer;
-      const int rc = ros_glue::handshake_as_track(nh, scene, peer);
+      const int rc = ros_glue::handshakeAsTrack(nh, scene, peer);
       if (rc != kExitOk) return rc;
       return runCosim(nh, pnh, scene, peer);
     }

@@ -177,7 +177,7 @@ int main(int argc, char** argv) {
   const int window_steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20000, 0, kUsage));
   g_cost = rail::tools::positionalNumber(argc, argv, 3, 0, 0, kUsage) != 0;
   std::printf("cost clock %s\n", g_cost ? "on" : "off");
-  const rail::core::Scene scene = rail::core::load_scene_file(configDir() + "/scenes/paper_demo.yaml");
+  const rail::core::Scene scene = rail::core::loadSceneFile(configDir() + "/scenes/paper_demo.yaml");
   run(scene, rail::core::TrackModel::kRigidFe, rt::CosimCoupling::kExplicit, steps);
   run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kSemiImplicit, steps);
   run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kExplicit, steps);

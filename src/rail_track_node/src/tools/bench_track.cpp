@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
                              "moving_loads:\n  start_arc_length: " + std::to_string(0.25 * L) +
                              "\n  speed: 30.0\n  loads:\n    - {offset: 0.0, rail: both, vertical: 100000.0}\n"
                              "solver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
-    const rail::core::Scene scene = rail::core::load_scene_text(text, "bench.yaml", configDir() + "/scenes");
+    const rail::core::Scene scene = rail::core::loadSceneText(text, "bench.yaml", configDir() + "/scenes");
     const auto t0 = Clock::now();
     const rt::SceneTrack track = rt::buildSceneTrack(scene);
     const auto t1 = Clock::now();

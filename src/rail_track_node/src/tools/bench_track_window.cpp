@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
   rt::TrackWindowSettings set;
   set.vehicle_length = kOffsets[3];
 
-  const rail::core::Scene paper = rail::core::load_scene_file(configDir() + "/scenes/paper_demo.yaml");
+  const rail::core::Scene paper = rail::core::loadSceneFile(configDir() + "/scenes/paper_demo.yaml");
   std::printf("paper scene (%s): %.0f m, h = %g s, %.2f m/s; window behind %.1f m, ahead %.1f m, shift %.1f m\n",
               paper.file.c_str(), paper.track.length(), paper.solver.track_step, paper.vehicle.speed, set.behind,
               set.ahead, set.shift);
@@ -146,7 +146,7 @@ int main(int argc, char** argv) {
                            "  speed: " + std::to_string(paper.vehicle.speed) +
                            "\n  back_to_back: 1.592\neffects:\n  track_model: flexible\nsolver:\n  track_step: " +
                            std::to_string(paper.solver.track_step) + "\n";
-  const rail::core::Scene line = rail::core::load_scene_text(text, "line_5km.yaml", configDir() + "/scenes");
+  const rail::core::Scene line = rail::core::loadSceneText(text, "line_5km.yaml", configDir() + "/scenes");
   std::printf("5 km straight line: h = %g s, %.2f m/s\n", line.solver.track_step, line.vehicle.speed);
   benchWindow(line, set, 2500.0, steps, 2500.0, 2800.0);
   if (full_long_steps > 0) benchFull(line, 2500.0, full_long_steps);

@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
                << "moving_loads:\n  loads:\n    - {vertical: 0.0}\n"
                << "effects:\n  track_damping: " << (damping ? "true" : "false")
                << "\n  absorbing_ends: " << (absorbing ? "true" : "false") << "\nsolver:\n  end: {time: 1.0}\n";
-    const rail::core::Scene scene = rail::core::load_scene_text(scene_text.str(), "receptance.yaml", ".");
+    const rail::core::Scene scene = rail::core::loadSceneText(scene_text.str(), "receptance.yaml", ".");
     const auto t0 = std::chrono::steady_clock::now();
     rt::SceneTrack t = rt::buildSceneTrack(scene);
     if (rail_beta >= 0.0) {

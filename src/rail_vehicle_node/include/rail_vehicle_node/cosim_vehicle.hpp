@@ -38,30 +38,30 @@ class CosimVehicle {
   CosimVehicle& operator=(const CosimVehicle&) = delete;
 
   // Replaces the state before Start() (e.g. an initial lateral offset); throws after Start().
-  void ResetState(const Eigen::VectorXd& y);
+  void resetState(const Eigen::VectorXd& y);
 
   // Step 0 at t = 0: sends the initial wheel states, receives the wrenches of step 0. kRunning on success,
   // kIntegratorFailed with message() naming the exchange failure otherwise.
-  RunStatus Start();
+  RunStatus start();
   // One track step: integrates to t_{k} = k h (the next exchange), interpolates the wheel states there
   // (dense output), exchanges them for the wrenches of step k. Returns kRunning, kFinished once
   // solver.end is reached (that step is still exchanged), or why the run stopped (message()); an
   // exchange failure gives kIntegratorFailed and exchange_status() says which. No exception, no
   // allocation on the normal path.
-  RunStatus Step();
+  RunStatus step();
   // Tells the track the run is over (its next receive() returns kPeerClosed).
-  void Close();
+  void close();
 
   const std::string& message() const { return message_; }
-  core::coupling::Status exchange_status() const { return exchange_status_; }
+  core::coupling::Status exchangeStatus() const { return exchange_status_; }
   double time() const { return sim_->time(); }
-  std::uint64_t steps_exchanged() const { return coupling_->next_step(); }  // exchanges done so far
-  double track_step() const { return h_; }                                  // h [s]
+  std::uint64_t stepsExchanged() const { return coupling_->nextStep(); }  // exchanges done so far
+  double trackStep() const { return h_; }                                  // h [s]
   // Largest internal CVODE step seen after any AdvanceTo (last step of each call) [s].
-  double max_internal_step() const { return max_internal_step_; }
+  double maxInternalStep() const { return max_internal_step_; }
 
   // The wheel states sent last (stamped by the coupling).
-  const core::coupling::WheelStateFrame& sent_states() const { return coupling_->states(); }
+  const core::coupling::WheelStateFrame& sentStates() const { return coupling_->states(); }
   const core::coupling::VehicleCoupling& coupling() const { return *coupling_; }
   // The vehicle: outputs (wheelsets(), wheels(), bodies()), model, counters. Its wheels() carry the
   // extrapolated wrenches at time().
@@ -71,11 +71,11 @@ class CosimVehicle {
   // Wheel-centre states of state vector y into frame.wheels[0 .. n_wheels): load point position and
   // velocity, wheelset orientation and angular velocity (world), arc length of the centre's projection
   // (warm-started from the previous call). No allocation.
-  void FillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, core::coupling::WheelStateFrame& frame);
+  void fillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, core::coupling::WheelStateFrame& frame);
 
  private:
   class CouplingSource;
-  RunStatus Exchange();
+  RunStatus exchange();
 
   double h_ = 0.0;
   std::unique_ptr<core::coupling::VehicleCoupling> coupling_;

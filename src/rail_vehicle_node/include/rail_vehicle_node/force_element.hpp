@@ -22,32 +22,32 @@ class ForceElement {
   virtual ~ForceElement() = default;
 
   const std::string& name() const { return name_; }
-  int body_i() const { return body_i_; }
-  int body_j() const { return body_j_; }
+  int bodyI() const { return body_i_; }
+  int bodyJ() const { return body_j_; }
 
   // Adds this element's forces to g (6n) from data.bodies (already evaluated). No allocation.
-  virtual void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const = 0;
+  virtual void addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const = 0;
 
   // Stored elastic energy [J] (0 for purely dissipative elements).
-  virtual double PotentialEnergy(const VehicleData& data) const = 0;
+  virtual double potentialEnergy(const VehicleData& data) const = 0;
 
   // Groups of bodies (ground left out) such that the forces on a group's bodies depend on the states of
   // that group only; appended to `groups` (building time, for the Jacobian's sparsity). Default: one group
   // {body_i, body_j}.
-  virtual void CouplingGroups(std::vector<std::vector<int>>& groups) const;
+  virtual void couplingGroups(std::vector<std::vector<int>>& groups) const;
   // Work state kept between evaluations (warm starts, memories), saved before and restored after the
   // perturbed evaluations of a difference-quotient Jacobian so that it leaves the run unchanged. No
   // allocation. Default: none.
-  virtual void SaveWorkState() const {}
-  virtual void RestoreWorkState() const {}
+  virtual void saveWorkState() const {}
+  virtual void restoreWorkState() const {}
 
   // Adds force f (world) acting at the world point p to body b (nothing for the ground).
-  static void ApplyForceAt(const VehicleData& data, int body, const Vector3& f_in_world, const Vector3& p_in_world,
+  static void applyForceAt(const VehicleData& data, int body, const Vector3& f_in_world, const Vector3& p_in_world,
                            Eigen::Ref<Eigen::VectorXd> g);
   // Adds a pure moment n (world) to body b (nothing for the ground).
-  static void ApplyMoment(const VehicleData& data, int body, const Vector3& n_in_world, Eigen::Ref<Eigen::VectorXd> g);
+  static void applyMoment(const VehicleData& data, int body, const Vector3& n_in_world, Eigen::Ref<Eigen::VectorXd> g);
   // World position and velocity of the body point s (body frame); for the ground s is the world point.
-  static void PointState(const VehicleData& data, int body, const Vector3& s_in_body, Vector3& p_in_world,
+  static void pointState(const VehicleData& data, int body, const Vector3& s_in_body, Vector3& p_in_world,
                          Vector3& v_in_world);
 
  private:
@@ -75,10 +75,10 @@ class Bushing : public ForceElement {
   // at the reference configuration, so the relative rotation starts at zero).
   Bushing(std::string name, int body_i, int body_j, const Vector3& s_in_i, const Vector3& s_in_j,
           const Matrix3& R_bushing_to_i, const Matrix3& R_bushing_to_j, const Parameters& parameters);
-  void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
-  double PotentialEnergy(const VehicleData& data) const override;
+  void addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
+  double potentialEnergy(const VehicleData& data) const override;
   // Deflection d [m] and local force on body j [N] (for tests and output).
-  void EvaluateLocal(const VehicleData& data, Vector3& deflection, Vector3& force_on_j_local) const;
+  void evaluateLocal(const VehicleData& data, Vector3& deflection, Vector3& force_on_j_local) const;
   const Parameters& parameters() const { return parameters_; }
 
  private:
@@ -94,8 +94,8 @@ class PointToPointSpringDamper : public ForceElement {
  public:
   PointToPointSpringDamper(std::string name, int body_i, int body_j, const Vector3& s_in_i, const Vector3& s_in_j,
                            double stiffness, double damping, double free_length, double preload);
-  void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
-  double PotentialEnergy(const VehicleData& data) const override;
+  void addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
+  double potentialEnergy(const VehicleData& data) const override;
 
  private:
   Vector3 s_in_i_, s_in_j_;
@@ -110,14 +110,14 @@ class BumpStop : public ForceElement {
  public:
   BumpStop(std::string name, int body_i, int body_j, const Vector3& s_in_i, const Vector3& s_in_j,
            const Vector3& axis_in_i, std::vector<double> deflections, std::vector<double> forces);
-  void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
-  double PotentialEnergy(const VehicleData& data) const override;
+  void addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
+  double potentialEnergy(const VehicleData& data) const override;
   // Restoring force magnitude [N] at |deflection| x [m].
-  double ForceAt(double x) const;
+  double forceAt(double x) const;
   double clearance() const { return deflections_.front(); }
 
  private:
-  double Deflection(const VehicleData& data, Vector3& axis_in_world, Vector3& p_j) const;
+  double deflection(const VehicleData& data, Vector3& axis_in_world, Vector3& p_j) const;
   Vector3 s_in_i_, s_in_j_, axis_in_i_;
   std::vector<double> deflections_, forces_;
 };

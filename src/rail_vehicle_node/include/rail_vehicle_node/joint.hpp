@@ -24,25 +24,25 @@ class Joint {
   virtual ~Joint() = default;
 
   const std::string& name() const { return name_; }
-  int body_i() const { return body_i_; }
-  int body_j() const { return body_j_; }  // may be kGround
+  int bodyI() const { return body_i_; }
+  int bodyJ() const { return body_j_; }  // may be kGround
 
   // Number of scalar constraint equations.
   virtual int size() const = 0;
 
   // Writes Phi (size()), this joint's rows of Phi_v (size() x 6n; only the body_i / body_j blocks are
   // written, the rest must stay zero) and gamma (size()), from data.bodies (already evaluated).
-  virtual void Evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi,
+  virtual void evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi,
                         Eigen::Ref<Eigen::MatrixXd> phi_v_rows, Eigen::Ref<Eigen::VectorXd> gamma) const = 0;
 
  protected:
   // Building blocks, each writing `rows` equations starting at `row`.
   // Spherical (3 rows): r_i + A_i s_i - r_j - A_j s_j = 0.
-  void SphericalRows(const VehicleData& data, const Vector3& s_in_i, const Vector3& s_in_j, int row,
+  void sphericalRows(const VehicleData& data, const Vector3& s_in_i, const Vector3& s_in_j, int row,
                      Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> phi_v_rows,
                      Eigen::Ref<Eigen::VectorXd> gamma) const;
   // Dot-1 (1 row): (A_i a_i) . (A_j a_j) = 0.
-  void PerpendicularRow(const VehicleData& data, const Vector3& a_in_i, const Vector3& a_in_j, int row,
+  void perpendicularRow(const VehicleData& data, const Vector3& a_in_i, const Vector3& a_in_j, int row,
                         Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> phi_v_rows,
                         Eigen::Ref<Eigen::VectorXd> gamma) const;
 
@@ -58,7 +58,7 @@ class SphericalJoint : public Joint {
   // s_in_i, s_in_j: the joint point in each body frame, from the centre of mass [m].
   SphericalJoint(std::string name, int body_i, int body_j, const Vector3& s_in_i, const Vector3& s_in_j);
   int size() const override { return 3; }
-  void Evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> phi_v_rows,
+  void evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> phi_v_rows,
                 Eigen::Ref<Eigen::VectorXd> gamma) const override;
 
  private:
@@ -72,7 +72,7 @@ class RevoluteJoint : public Joint {
   RevoluteJoint(std::string name, int body_i, int body_j, const Vector3& s_in_i, const Vector3& s_in_j,
                 const Vector3& axis_in_i, const Vector3& axis_in_j);
   int size() const override { return 5; }
-  void Evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> phi_v_rows,
+  void evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> phi_v_rows,
                 Eigen::Ref<Eigen::VectorXd> gamma) const override;
 
  private:
@@ -88,7 +88,7 @@ class FixedJoint : public Joint {
   FixedJoint(std::string name, int body_i, int body_j, const Vector3& s_in_i, const Vector3& s_in_j,
              const Matrix3& R_joint_to_i, const Matrix3& R_joint_to_j);
   int size() const override { return 6; }
-  void Evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> phi_v_rows,
+  void evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi, Eigen::Ref<Eigen::MatrixXd> phi_v_rows,
                 Eigen::Ref<Eigen::VectorXd> gamma) const override;
 
  private:

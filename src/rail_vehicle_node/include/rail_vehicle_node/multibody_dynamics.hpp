@@ -14,32 +14,32 @@
 namespace rail::vehicle {
 
 // Body kinematics (positions, rotations, velocities) from y into data.bodies.
-void ComputeKinematics(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y, VehicleData& data);
+void computeKinematics(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y, VehicleData& data);
 
 // g: gravity, gyroscopic terms -omega' x J' omega', force elements and external wrenches (after kinematics).
-void ComputeAppliedForces(const VehicleModel& model, VehicleData& data);
+void computeAppliedForces(const VehicleModel& model, VehicleData& data);
 
 // Phi, Phi_v and gamma of all joints (after kinematics).
-void ComputeConstraints(const VehicleModel& model, VehicleData& data);
+void computeConstraints(const VehicleModel& model, VehicleData& data);
 
 // Solves [M Phi_v^T; Phi_v 0][x; mu] = [top; bottom] with the model's KktSolver, using data.phi_v.
 // top/bottom must not alias the solver's scratch (data.kkt_*, data.w, data.s*, data.tmp6n).
-void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::Ref<const Eigen::VectorXd>& top,
+void solveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::Ref<const Eigen::VectorXd>& top,
                     const Eigen::Ref<const Eigen::VectorXd>& bottom, Eigen::Ref<Eigen::VectorXd> x,
                     Eigen::Ref<Eigen::VectorXd> mu);
 
 // Right-hand side y_dot = f(t, y): q_dot from v (p_dot = 1/2 p (x) (0, omega')), v_dot and lambda from the
 // Baumgarte-stabilised augmented system. Leaves data.v_dot, data.lambda, data.phi, ... filled in.
-void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void computeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                         Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data);
 
 // Each force element's contribution to g at the current kinematics, one column of element_g (6n x
 // elements) per element (for the Jacobian's partial evaluations, vehicle_jacobian.hpp).
-void ComputeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g);
+void computeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g);
 
 // ComputeDerivatives with the force elements whose live[e] is 0 taken from element_g's column e instead of
 // evaluated (the others are evaluated at y as usual).
-void ComputeDerivativesPartial(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void computeDerivativesPartial(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data, const std::vector<char>& live,
                                const Eigen::Ref<const Eigen::MatrixXd>& element_g);
 
@@ -49,7 +49,7 @@ struct ConstraintViolation {
   double velocity = 0.0;      // max |Phi_v v| [m/s, or 1/s]
   double euler_norm = 0.0;    // max |‖p‖ - 1| over the bodies
 };
-ConstraintViolation EvaluateViolation(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+ConstraintViolation evaluateViolation(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
                                       VehicleData& data);
 
 // Projects y onto the constraint manifold: Euler parameters normalised, positions corrected by mass-weighted
@@ -57,17 +57,17 @@ ConstraintViolation EvaluateViolation(const VehicleModel& model, const Eigen::Re
 // rotation updated as p <- p (x) exp(dtheta'/2)) until max |Phi| <= tolerance, then velocities by the
 // kinetic-energy-metric projection (same system with -Phi_v v). Returns the number of position
 // iterations; throws std::runtime_error if the tolerance is not met in max_iterations.
-int ProjectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, VehicleData& data, double tolerance,
+int projectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, VehicleData& data, double tolerance,
                  int max_iterations);
 
 // Energies and momenta (after ComputeKinematics).
-double KineticEnergy(const VehicleModel& model, const VehicleData& data);        // [J]
-double PotentialEnergy(const VehicleModel& model, const VehicleData& data);      // gravity + elements [J]
-Vector3 LinearMomentum(const VehicleModel& model, const VehicleData& data);      // world [kg m/s]
-Vector3 AngularMomentum(const VehicleModel& model, const VehicleData& data);     // about the world origin
+double kineticEnergy(const VehicleModel& model, const VehicleData& data);        // [J]
+double potentialEnergy(const VehicleModel& model, const VehicleData& data);      // gravity + elements [J]
+Vector3 linearMomentum(const VehicleModel& model, const VehicleData& data);      // world [kg m/s]
+Vector3 angularMomentum(const VehicleModel& model, const VehicleData& data);     // about the world origin
 
 // World position and velocity of load point k (after ComputeKinematics), e.g. a wheel centre.
-void LoadPointState(const VehicleModel& model, const VehicleData& data, int k, Vector3& p_in_world,
+void loadPointState(const VehicleModel& model, const VehicleData& data, int k, Vector3& p_in_world,
                     Vector3& v_in_world);
 
 }  // namespace rail::vehicle

@@ -15,7 +15,7 @@ using Vector4 = Eigen::Vector4d;
 using Matrix3 = Eigen::Matrix3d;
 
 // Skew-symmetric matrix a~ such that a~ * b = a x b.
-inline Matrix3 Skew(const Vector3& a) {
+inline Matrix3 skew(const Vector3& a) {
   Matrix3 s;
   s << 0.0, -a.z(), a.y(),
        a.z(), 0.0, -a.x(),
@@ -24,15 +24,15 @@ inline Matrix3 Skew(const Vector3& a) {
 }
 
 // Rotation matrix A (body to world) of Euler parameters p; p is normalised first.
-inline Matrix3 RotationFromEulerParameters(const Vector4& p_raw) {
+inline Matrix3 rotationFromEulerParameters(const Vector4& p_raw) {
   const Vector4 p = p_raw / p_raw.norm();
   const double e0 = p[0];
   const Vector3 e = p.tail<3>();
-  return (e0 * e0 - e.squaredNorm()) * Matrix3::Identity() + 2.0 * e * e.transpose() + 2.0 * e0 * Skew(e);
+  return (e0 * e0 - e.squaredNorm()) * Matrix3::Identity() + 2.0 * e * e.transpose() + 2.0 * e0 * skew(e);
 }
 
 // Quaternion product a (x) b, scalar first.
-inline Vector4 QuaternionProduct(const Vector4& a, const Vector4& b) {
+inline Vector4 quaternionProduct(const Vector4& a, const Vector4& b) {
   Vector4 c;
   c[0] = a[0] * b[0] - a.tail<3>().dot(b.tail<3>());
   c.tail<3>() = a[0] * b.tail<3>() + b[0] * a.tail<3>() + a.tail<3>().cross(b.tail<3>());
@@ -40,7 +40,7 @@ inline Vector4 QuaternionProduct(const Vector4& a, const Vector4& b) {
 }
 
 // Euler parameters of a rotation by the vector theta (axis * angle, rad).
-inline Vector4 EulerParametersFromRotationVector(const Vector3& theta) {
+inline Vector4 eulerParametersFromRotationVector(const Vector3& theta) {
   const double angle = theta.norm();
   Vector4 p;
   if (angle < 1e-12) {
@@ -54,7 +54,7 @@ inline Vector4 EulerParametersFromRotationVector(const Vector3& theta) {
 }
 
 // Euler parameters of a rotation matrix (body to world).
-inline Vector4 EulerParametersFromRotation(const Matrix3& A) {
+inline Vector4 eulerParametersFromRotation(const Matrix3& A) {
   // Shepperd's method: pick the largest of the four squared components for stability.
   const double t = A.trace();
   Vector4 p;
@@ -76,8 +76,8 @@ inline Vector4 EulerParametersFromRotation(const Matrix3& A) {
 }
 
 // Rotation vector (axis * angle, rad, |angle| <= pi) of a rotation matrix.
-inline Vector3 RotationVectorFromRotation(const Matrix3& R) {
-  const Vector4 p = EulerParametersFromRotation(R);  // p[0] >= 0
+inline Vector3 rotationVectorFromRotation(const Matrix3& R) {
+  const Vector4 p = eulerParametersFromRotation(R);  // p[0] >= 0
   const double s = p.tail<3>().norm();
   if (s < 1e-12) return 2.0 * p.tail<3>();
   const double angle = 2.0 * std::atan2(s, p[0]);

@@ -82,20 +82,20 @@ class VehicleIntegrator {
   VehicleIntegrator& operator=(const VehicleIntegrator&) = delete;
 
   // Integrates to t (> time()); throws std::runtime_error naming CVODE's failure.
-  void AdvanceTo(double t);
+  void advanceTo(double t);
 
   // State at t within the last internal step [t_n - h_u, t_n] (CVodeGetDky, order 0). Also valid at time().
-  void InterpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const;
+  void interpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const;
   // Interval over which InterpolateAt is valid; after a projection it shrinks to [time(), time()].
-  void LastStepInterval(double& t_begin, double& t_end) const;
+  void lastStepInterval(double& t_begin, double& t_end) const;
 
   // Restarts from a state set by the caller (e.g. after changing the external wrenches abruptly).
-  void Reset(const Eigen::VectorXd& y, double t);
+  void reset(const Eigen::VectorXd& y, double t);
 
   double time() const;                               // time reached by the last AdvanceTo [s]
   Eigen::Map<const Eigen::VectorXd> state() const;   // state at time()
-  IntegratorCounters Counters() const;
-  ConstraintViolation Violation();                   // of state()
+  IntegratorCounters counters() const;
+  ConstraintViolation violation();                   // of state()
 
  private:
   struct Impl;

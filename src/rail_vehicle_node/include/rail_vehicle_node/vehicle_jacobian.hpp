@@ -34,17 +34,17 @@ class JacobianPattern {
   int size() const { return n_; }                  // state size 13 n
   int nonzeros() const { return static_cast<int>(row_index_.size()); }
   // Compressed sparse columns: rows of column j are row_index()[col_start()[j] .. col_start()[j + 1]).
-  const std::vector<int>& col_start() const { return col_start_; }
-  const std::vector<int>& row_index() const { return row_index_; }
-  int n_body_colours() const { return n_body_colours_; }
-  int n_colours() const { return 13 * n_body_colours_; }
-  const std::vector<int>& body_colour() const { return body_colour_; }
+  const std::vector<int>& colStart() const { return col_start_; }
+  const std::vector<int>& rowIndex() const { return row_index_; }
+  int nBodyColours() const { return n_body_colours_; }
+  int nColours() const { return 13 * n_body_colours_; }
+  const std::vector<int>& bodyColour() const { return body_colour_; }
   // Bodies of body colour c.
-  const std::vector<int>& colour_bodies(int c) const { return colour_bodies_[static_cast<std::size_t>(c)]; }
+  const std::vector<int>& colourBodies(int c) const { return colour_bodies_[static_cast<std::size_t>(c)]; }
   // Force elements re-evaluated when body colour c is perturbed (1) or kept (0), per element.
-  const std::vector<char>& live_elements(int c) const { return live_elements_[static_cast<std::size_t>(c)]; }
+  const std::vector<char>& liveElements(int c) const { return live_elements_[static_cast<std::size_t>(c)]; }
   // State column of local coordinate l (0..12: r, p, r_dot, omega') of body b.
-  int Column(const VehicleModel& model, int b, int l) const;
+  int column(const VehicleModel& model, int b, int l) const;
 
  private:
   int n_ = 0;
@@ -68,7 +68,7 @@ struct JacobianWork {
 // weight = CVODE's error weights, 1/(rtol |y| + atol)). Leaves data and the elements' work states as they
 // were before the call. cost: each evaluation timed as kVehicleJacobian (null: no timing).
 // Returns the number of right-hand-side evaluations (partial ones included).
-int EvaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, double t,
+int evaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, double t,
                      const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& weight,
                      double min_increment, VehicleData& data, JacobianWork& work, core::CostClock* cost = nullptr);
 

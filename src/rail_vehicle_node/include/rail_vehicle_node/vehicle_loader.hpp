@@ -33,9 +33,9 @@ class VehicleFileError : public std::runtime_error {
 
 // Adds the file's bodies, load points, joints and force elements to a model that is still being built
 // (so the caller may add more before Finalize()).
-void LoadVehicleInto(const std::string& path, VehicleModel& model);
+void loadVehicleInto(const std::string& path, VehicleModel& model);
 
 // Loads the file into a new, finalised model.
-VehicleModel LoadVehicleModel(const std::string& path);
+VehicleModel loadVehicleModel(const std::string& path);
 
 }  // namespace rail::vehicle

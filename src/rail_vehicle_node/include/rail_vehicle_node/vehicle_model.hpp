@@ -62,79 +62,79 @@ class VehicleModel {
   VehicleModel& operator=(VehicleModel&&) = default;
 
   // ---- Building (before Finalize) ----
-  int AddBody(const RigidBody& body);  // returns the body index
-  int AddLoadPoint(const std::string& name, int body, const Vector3& s_in_body);
-  void AddJoint(std::unique_ptr<Joint> joint);
-  int AddMeasurementPointAtWorld(const std::string& name, int body, const Vector3& p_in_world);
-  void AddForceElement(std::unique_ptr<ForceElement> element);
+  int addBody(const RigidBody& body);  // returns the body index
+  int addLoadPoint(const std::string& name, int body, const Vector3& s_in_body);
+  void addJoint(std::unique_ptr<Joint> joint);
+  int addMeasurementPointAtWorld(const std::string& name, int body, const Vector3& p_in_world);
+  void addForceElement(std::unique_ptr<ForceElement> element);
 
   // Convenience builders from world-frame data at the reference configuration.
-  int AddLoadPointAtWorld(const std::string& name, int body, const Vector3& p_in_world);
-  void AddSphericalJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world);
-  void AddRevoluteJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+  int addLoadPointAtWorld(const std::string& name, int body, const Vector3& p_in_world);
+  void addSphericalJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world);
+  void addRevoluteJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
                           const Vector3& axis_in_world);
-  void AddFixedJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world);
+  void addFixedJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world);
   // Bushing at one world point; R_bushing_to_world gives its local axes at the reference configuration.
-  void AddBushingAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+  void addBushingAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
                     const Matrix3& R_bushing_to_world, const Bushing::Parameters& parameters);
   // Point-to-point element; free_length < 0 takes the reference distance.
-  void AddPointToPointAt(const std::string& name, int body_i, int body_j, const Vector3& p_i_in_world,
+  void addPointToPointAt(const std::string& name, int body_i, int body_j, const Vector3& p_i_in_world,
                          const Vector3& p_j_in_world, double stiffness, double damping, double free_length,
                          double preload);
-  void AddBumpStopAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+  void addBumpStopAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
                      const Vector3& axis_in_world, std::vector<double> deflections, std::vector<double> forces);
 
-  void SetGravity(const Vector3& gravity_in_world);        // [m/s^2], default (0, 0, -9.81)
-  void SetBaumgarte(double alpha, double beta);           // [1/s], default 10, 10
-  void SetKktSolver(KktSolver solver);                    // default kRangeSpace
+  void setGravity(const Vector3& gravity_in_world);        // [m/s^2], default (0, 0, -9.81)
+  void setBaumgarte(double alpha, double beta);           // [1/s], default 10, 10
+  void setKktSolver(KktSolver solver);                    // default kRangeSpace
 
   // Checks the model and fixes its sizes; no change is accepted afterwards.
-  void Finalize();
+  void finalize();
   bool finalized() const { return finalized_; }
 
   // ---- Reading ----
-  int n_bodies() const { return static_cast<int>(bodies_.size()); }
-  int n_constraints() const { return n_constraints_; }
-  int n_positions() const { return 7 * n_bodies(); }
-  int n_velocities() const { return 6 * n_bodies(); }
-  int state_size() const { return 13 * n_bodies(); }
+  int nBodies() const { return static_cast<int>(bodies_.size()); }
+  int nConstraints() const { return n_constraints_; }
+  int nPositions() const { return 7 * nBodies(); }
+  int nVelocities() const { return 6 * nBodies(); }
+  int stateSize() const { return 13 * nBodies(); }
   const std::vector<RigidBody>& bodies() const { return bodies_; }
-  const std::vector<LoadPoint>& load_points() const { return load_points_; }
-  const std::vector<MeasurementPoint>& measurement_points() const { return measurement_points_; }
+  const std::vector<LoadPoint>& loadPoints() const { return load_points_; }
+  const std::vector<MeasurementPoint>& measurementPoints() const { return measurement_points_; }
   const std::vector<std::unique_ptr<Joint>>& joints() const { return joints_; }
-  const std::vector<std::unique_ptr<ForceElement>>& force_elements() const { return forces_; }
-  const std::vector<int>& joint_rows() const { return joint_rows_; }  // first constraint row per joint
-  const std::vector<ConstraintCluster>& constraint_clusters() const { return clusters_; }
+  const std::vector<std::unique_ptr<ForceElement>>& forceElements() const { return forces_; }
+  const std::vector<int>& jointRows() const { return joint_rows_; }  // first constraint row per joint
+  const std::vector<ConstraintCluster>& constraintClusters() const { return clusters_; }
   // Cluster index of each body, -1 for a body without joints.
-  const std::vector<int>& cluster_of_body() const { return cluster_of_body_; }
+  const std::vector<int>& clusterOfBody() const { return cluster_of_body_; }
   const Vector3& gravity() const { return gravity_; }
-  double baumgarte_alpha() const { return alpha_; }
-  double baumgarte_beta() const { return beta_; }
-  KktSolver kkt_solver() const { return kkt_solver_; }
-  const Matrix3& inverse_inertia(int body) const { return inverse_inertia_[static_cast<std::size_t>(body)]; }
-  double TotalMass() const;
+  double baumgarteAlpha() const { return alpha_; }
+  double baumgarteBeta() const { return beta_; }
+  KktSolver kktSolver() const { return kkt_solver_; }
+  const Matrix3& inverseInertia(int body) const { return inverse_inertia_[static_cast<std::size_t>(body)]; }
+  double totalMass() const;
 
   // Index lookups by name (building/setup time only; throw std::runtime_error naming the missing name).
   // BodyIndex("ground") is kGround unless a body has that name.
-  int BodyIndex(const std::string& name) const;
-  int LoadPointIndex(const std::string& name) const;
+  int bodyIndex(const std::string& name) const;
+  int loadPointIndex(const std::string& name) const;
 
   // State vector offsets of body b.
-  static int PositionOffset(int b) { return 7 * b; }
-  static int EulerOffset(int b) { return 7 * b + 3; }
-  int VelocityOffset(int b) const { return 7 * n_bodies() + 6 * b; }
-  int AngularVelocityOffset(int b) const { return 7 * n_bodies() + 6 * b + 3; }
+  static int positionOffset(int b) { return 7 * b; }
+  static int eulerOffset(int b) { return 7 * b + 3; }
+  int velocityOffset(int b) const { return 7 * nBodies() + 6 * b; }
+  int angularVelocityOffset(int b) const { return 7 * nBodies() + 6 * b + 3; }
 
   // State at the reference configuration, at rest.
-  Eigen::VectorXd ReferenceState() const;
+  Eigen::VectorXd referenceState() const;
 
   // A point given in the world at the reference configuration, in the body frame (ground: unchanged).
-  Vector3 WorldToBodyAtReference(int body, const Vector3& p_in_world) const;
-  Matrix3 ReferenceRotation(int body) const;  // body -> world at the reference (ground: identity)
+  Vector3 worldToBodyAtReference(int body, const Vector3& p_in_world) const;
+  Matrix3 referenceRotation(int body) const;  // body -> world at the reference (ground: identity)
 
  private:
-  void RequireBuilding(const char* what) const;
-  void RequireBody(int body, bool ground_allowed, const std::string& what) const;
+  void requireBuilding(const char* what) const;
+  void requireBody(int body, bool ground_allowed, const std::string& what) const;
 
   std::vector<RigidBody> bodies_;
   std::vector<LoadPoint> load_points_;

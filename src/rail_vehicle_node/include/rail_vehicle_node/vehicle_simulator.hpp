@@ -37,21 +37,21 @@ class WheelWrenchSource {
   // Wrench on wheel `wheel` (2 * wheelset + side) at time t [s]: force [N] and moment about the wheel
   // centre (the axle point in the taping-line plane, the contact's wheel centre) [N m], both in the world
   // frame. No allocation, no exception.
-  virtual void WheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept = 0;
+  virtual void wheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept = 0;
 };
 
 // rail_contact's defaults, whose wheel surfaces continue 5 mm across the tread/flange split
 // (DetectionOptions::split_overlap): a flange-root contact crossing the split stays a converged point.
 // Without it the root contact of a flanging wheel falls back to the search's grid estimate and back every
 // few evaluations, and the integrator's step collapses to ~1e-7 s (doc/simulator.md).
-contact::WheelContactOptions DefaultVehicleContactOptions();
+contact::WheelContactOptions defaultVehicleContactOptions();
 
 // What the scene does not say (constant after building).
 struct SimulatorSettings {
   // Contact data the scene has no key for: materials, Polach parameters, detection settings. The scene's
   // effects (flange_contact, spin_creepage, creep_law) and contact section (friction mu0, restitution e,
   // impact-velocity floor) override those fields.
-  contact::WheelContactOptions contact = DefaultVehicleContactOptions();
+  contact::WheelContactOptions contact = defaultVehicleContactOptions();
   // Derailment: a wheel centre more than this above its settled height relative to the track plane [m];
   // 0 = the wheel profile's flange height.
   double derailment_lift = 0.0;
@@ -130,22 +130,22 @@ enum class RunStatus { kRunning, kFinished, kDerailed, kNonFinite, kLeftTrack, k
 // along the track at `speed`: r_dot = speed t(s_b) + omega_track x (r - c(s_b)),
 // omega = speed * axial(dR/ds R^T) (+ speed / rolling_radius about the axle for wheelsets).
 // Throws std::runtime_error if a body falls outside the track.
-Eigen::VectorXd PlaceOnTrack(const VehicleModel& model, const contact::TrackGeometry& track,
+Eigen::VectorXd placeOnTrack(const VehicleModel& model, const contact::TrackGeometry& track,
                              const std::vector<int>& wheelset_bodies, double start_arc_length, double speed,
                              double lift, const std::vector<double>& rolling_radius);
 
 // Arc length of the point of the centre line closest to p (Newton from s_guess, clamped to the track);
 // tp receives the centre line at that s. No allocation.
-double ProjectOnTrack(const contact::TrackGeometry& track, const Vector3& p_in_world, double s_guess,
+double projectOnTrack(const contact::TrackGeometry& track, const Vector3& p_in_world, double s_guess,
                       contact::TrackPoint& tp) noexcept;
 
 class VehicleSimulator {
  public:
   // Builds a model from the scene's vehicle data file.
   explicit VehicleSimulator(const core::Scene& scene, const SimulatorSettings& settings = {});
-  // Builds the model with `build` instead (tests): it adds bodies, load points (two wheel centres per
+  // Builds the model with `build_model` instead (tests): it adds bodies, load points (two wheel centres per
   // wheelset body, nothing else), joints and force elements to an unfinalised model.
-  VehicleSimulator(const core::Scene& scene, const std::function<void(VehicleModel&)>& build,
+  VehicleSimulator(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
                    const SimulatorSettings& settings = {});
   ~VehicleSimulator();
   VehicleSimulator(const VehicleSimulator&) = delete;
@@ -153,19 +153,19 @@ class VehicleSimulator {
 
   // Integrates to t (> time()); returns kRunning, kFinished once solver.end is reached, or why the run
   // stopped (message() says which wheel, where and when). No exception on the normal path.
-  RunStatus AdvanceTo(double t);
+  RunStatus advanceTo(double t);
   const std::string& message() const { return message_; }
 
   double time() const;
-  double start_time() const { return 0.0; }
+  double startTime() const { return 0.0; }
   // Leading wheelset's arc length [m] (from the last UpdateOutputs or AdvanceTo).
-  double leading_arc_length() const { return leading_s_; }
+  double leadingArcLength() const { return leading_s_; }
   // Simulated time at which the run ends: solver.end.time, or an estimate from the arc length at speed.
-  double end_time_estimate() const;
+  double endTimeEstimate() const;
   bool finished() const;
 
   // Evaluates kinematics and contact at the current state and fills the output buffers below.
-  void UpdateOutputs();
+  void updateOutputs();
   const std::vector<WheelOutput>& wheels() const { return wheel_out_; }
   const std::vector<contact::WheelContactResult>& contacts() const { return contact_data_->result; }
   const std::vector<WheelsetTrackOutput>& wheelsets() const { return wheelset_out_; }
@@ -177,36 +177,36 @@ class VehicleSimulator {
   const EnergyOutput& energy() const { return energy_out_; }
 
   // Replaces the state (e.g. a test's initial lateral offset); re-initialises the integrator.
-  void ResetState(const Eigen::VectorXd& y);
+  void resetState(const Eigen::VectorXd& y);
   Eigen::Map<const Eigen::VectorXd> state() const { return integrator_->state(); }
   // Dense output of the last internal step (VehicleIntegrator::InterpolateAt / LastStepInterval).
-  void InterpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const { integrator_->InterpolateAt(t, y_out); }
-  void LastStepInterval(double& t_begin, double& t_end) const { integrator_->LastStepInterval(t_begin, t_end); }
+  void interpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const { integrator_->interpolateAt(t, y_out); }
+  void lastStepInterval(double& t_begin, double& t_end) const { integrator_->lastStepInterval(t_begin, t_end); }
   // Whether the wheel wrenches come from SimulatorSettings::wheel_wrench_source.
-  bool external_wheel_wrenches() const { return external_active_; }
+  bool externalWheelWrenches() const { return external_active_; }
 
   const VehicleModel& model() const { return model_; }
   VehicleData& data() { return *data_; }
   const contact::TrackGeometry& track() const { return *track_; }
-  const WheelRailContactModel& contact_model() const { return *contact_model_; }
-  const WheelRailContactData& contact_data() const { return *contact_data_; }
-  const std::vector<int>& wheelset_bodies() const { return wheelset_bodies_; }
-  IntegratorCounters Counters() const { return integrator_->Counters(); }
+  const WheelRailContactModel& contactModel() const { return *contact_model_; }
+  const WheelRailContactData& contactData() const { return *contact_data_; }
+  const std::vector<int>& wheelsetBodies() const { return wheelset_bodies_; }
+  IntegratorCounters counters() const { return integrator_->counters(); }
   IntegrationMethod method() const { return method_; }
   // The integrator's maximum step [s] (0 = none): SimulatorSettings::standalone_max_step when the vehicle
   // runs alone, the scene's solver.vehicle_max_step in co-simulation.
-  double max_step() const { return max_step_; }
+  double maxStep() const { return max_step_; }
   // Settled lowering of the vehicle onto the rails (static vertical solve) [m], < 0 downward.
-  double settle_lift() const { return lift_; }
+  double settleLift() const { return lift_; }
   // Total vertical load the rails carry at rest [N] and the sum of the wheel loads after settling [N].
-  double static_load() const { return static_load_; }
-  double settled_wheel_load_sum() const { return settled_load_sum_; }
+  double staticLoad() const { return static_load_; }
+  double settledWheelLoadSum() const { return settled_load_sum_; }
 
  private:
-  void Build(const core::Scene& scene, const std::function<void(VehicleModel&)>& build,
+  void build(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
              const SimulatorSettings& settings);
-  double SumWheelLoads(const Eigen::VectorXd& y);
-  RunStatus Check();
+  double sumWheelLoads(const Eigen::VectorXd& y);
+  RunStatus check();
 
   core::Scene scene_;
   SimulatorSettings settings_;
@@ -255,6 +255,6 @@ class VehicleSimulator {
 // scene on the flexible track at an 8e-5 s track step, 1.5 s: BDF (the former choice above a 5e-5 s cap)
 // 32.3 s of loop wall, its difference-quotient Jacobians 121 875 right-hand sides; Adams 20.8 s.
 constexpr double kStiffCreepSpeed = 2.0;  // [m/s]
-IntegrationMethod ChooseMethod(const core::Solver& solver, double speed = 1e9, bool external_wrenches = false);
+IntegrationMethod chooseMethod(const core::Solver& solver, double speed = 1e9, bool external_wrenches = false);
 
 }  // namespace rail::vehicle

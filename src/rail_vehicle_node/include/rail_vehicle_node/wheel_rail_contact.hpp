@@ -43,9 +43,9 @@ class WheelRailContactModel {
                         std::vector<WheelDefinition> wheels);
 
   const contact::TrackGeometry& track() const { return *track_; }
-  const contact::WheelContactModel& wheel_model() const { return wheel_model_; }
+  const contact::WheelContactModel& wheelModel() const { return wheel_model_; }
   const std::vector<WheelDefinition>& wheels() const { return wheels_; }
-  int n_wheels() const { return static_cast<int>(wheels_.size()); }
+  int nWheels() const { return static_cast<int>(wheels_.size()); }
 
  private:
   const contact::TrackGeometry* track_;
@@ -68,7 +68,7 @@ struct WheelRailContactData {
   std::vector<Vector3> saved_force_in_world, saved_moment_in_world;
   // Calls f(member, its saved copy) for each member above: the one list that saving and restoring share.
   template <class F>
-  void ForEachSaved(F&& f) {
+  void forEachSaved(F&& f) {
     f(work, saved_work);
     f(result, saved_result);
     f(s_hint, saved_s_hint);
@@ -82,7 +82,7 @@ struct WheelRailContactData {
 
 // Evaluates wheel k from data.bodies (kinematics already computed) and stores the result, the wrench at
 // the load point and the updated s_hint in contact_data. No allocation, no exception.
-void EvaluateWheel(const WheelRailContactModel& model, const VehicleData& data, int k,
+void evaluateWheel(const WheelRailContactModel& model, const VehicleData& data, int k,
                    WheelRailContactData& contact_data) noexcept;
 
 // The contact of all wheels as a force element of the vehicle model: AddForces evaluates every wheel and
@@ -90,13 +90,13 @@ void EvaluateWheel(const WheelRailContactModel& model, const VehicleData& data, 
 class WheelRailContactElement : public ForceElement {
  public:
   WheelRailContactElement(const WheelRailContactModel* model, WheelRailContactData* contact_data);
-  void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
-  double PotentialEnergy(const VehicleData& data) const override;  // not tracked: 0
+  void addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override;
+  double potentialEnergy(const VehicleData& data) const override;  // not tracked: 0
   // Each wheel's wrench depends on its own wheelset's state only: one group per wheelset body.
-  void CouplingGroups(std::vector<std::vector<int>>& groups) const override;
+  void couplingGroups(std::vector<std::vector<int>>& groups) const override;
   // Warm starts, impact memories, hints and the last results.
-  void SaveWorkState() const override;
-  void RestoreWorkState() const override;
+  void saveWorkState() const override;
+  void restoreWorkState() const override;
 
  private:
   const WheelRailContactModel* model_;

@@ -36,7 +36,7 @@ struct Candidate {
   double max_step = 0.0, rtol = 0.0, atol = 0.0;
 };
 
-std::vector<Sample> Run(const core::Scene& base, const Candidate& c, double& wall_per_s) {
+std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double& wall_per_s) {
   core::Scene scene = base;
   scene.effects.track_model = core::TrackModel::kRigid;
   scene.solver.vehicle_method = c.method == "bdf" ? core::VehicleMethod::kBdf
@@ -50,7 +50,7 @@ std::vector<Sample> Run(const core::Scene& base, const Candidate& c, double& wal
   const auto t0 = std::chrono::steady_clock::now();
   vehicle::RunStatus status = vehicle::RunStatus::kRunning;
   for (int i = 1; status == vehicle::RunStatus::kRunning; ++i) {
-    status = sim.AdvanceTo(1e-3 * i);
+    status = sim.advanceTo(1e-3 * i);
     const vehicle::WheelsetTrackOutput& w = sim.wheelsets().front();
     Sample x;
     x.t = sim.time();
@@ -64,7 +64,7 @@ std::vector<Sample> Run(const core::Scene& base, const Candidate& c, double& wal
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   wall_per_s = wall / sim.time();
-  const vehicle::IntegratorCounters k = sim.Counters();
+  const vehicle::IntegratorCounters k = sim.counters();
   std::printf("%s max_step %g rtol %g atol %g (%s): %.2f s simulated, %.1f s wall, %.3f s per simulated s; steps %ld, "
               "RHS %ld + %ld for %ld Jacobians; %s %s\n",
               c.method.c_str(), c.max_step, scene.solver.vehicle_rtol, scene.solver.vehicle_atol,
@@ -75,7 +75,7 @@ std::vector<Sample> Run(const core::Scene& base, const Candidate& c, double& wal
   return out;
 }
 
-void Write(const std::string& path, const std::vector<Sample>& v) {
+void write(const std::string& path, const std::vector<Sample>& v) {
   std::ofstream f(path);
   f.precision(17);
   f << "t,s,lateral,vertical,attack,flange_left,flange_right\n";
@@ -85,7 +85,7 @@ void Write(const std::string& path, const std::vector<Sample>& v) {
   }
 }
 
-bool Read(const std::string& path, std::vector<Sample>& v) {
+bool read(const std::string& path, std::vector<Sample>& v) {
   std::ifstream f(path);
   if (!f) return false;
   std::string line;
@@ -107,7 +107,7 @@ struct Bursts {
 };
 
 // Flange-force bursts of the wheel with the larger total in [t0, t1].
-Bursts FlangeBursts(const std::vector<Sample>& v, double t0, double t1) {
+Bursts flangeBursts(const std::vector<Sample>& v, double t0, double t1) {
   double left = 0.0, right = 0.0;
   for (const Sample& x : v) {
     if (x.t >= t0 && x.t <= t1) left += x.flange_left, right += x.flange_right;
@@ -156,12 +156,12 @@ int main(int argc, char** argv) {
     std::fputs(kUsage, stderr);
     return 2;
   }
-  const core::Scene scene = core::load_scene_file(argv[1]);
+  const core::Scene scene = core::loadSceneFile(argv[1]);
   std::vector<Sample> ref;
-  if (!Read(argv[2], ref)) {
+  if (!read(argv[2], ref)) {
     double wall = 0.0;
-    ref = Run(scene, Candidate{"adams", 5e-6, 0.0, 0.0}, wall);
-    Write(argv[2], ref);
+    ref = simulate(scene, Candidate{"adams", 5e-6, 0.0, 0.0}, wall);
+    write(argv[2], ref);
   }
   std::vector<Candidate> candidates;
   for (int i = 3; i + 3 < argc; i += 4) {
@@ -176,7 +176,7 @@ int main(int argc, char** argv) {
   const Window transitions[] = {{"entry transition", 100.0, 220.0}, {"exit transition", 380.0, 485.0}};
   for (const Candidate& c : candidates) {
     double wall = 0.0;
-    const std::vector<Sample> run = Run(scene, c, wall);
+    const std::vector<Sample> run = simulate(scene, c, wall);
     const std::size_t n = std::min(run.size(), ref.size());
     std::printf("| window | max |d lateral| [m] | max |d vertical| [m] | max |d attack| [deg] |\n|---|---|---|---|\n");
     for (const Window& w : steady) {
@@ -196,7 +196,7 @@ int main(int argc, char** argv) {
       for (const Sample& x : ref) {
         if (x.s >= w.s0 && x.s <= w.s1) t0 = std::min(t0, x.t), t1 = std::max(t1, x.t);
       }
-      const Bursts a = FlangeBursts(run, t0, t1), b = FlangeBursts(ref, t0, t1);
+      const Bursts a = flangeBursts(run, t0, t1), b = flangeBursts(ref, t0, t1);
       const auto rel = [](double x, double y) { return y != 0.0 ? 100.0 * (x - y) / y : 0.0; };
       std::printf("| %s (t %.2f-%.2f s) | %d (%d) | %.1f (%.1f) | %.1f (%.1f) | %.1f (%.1f) | %+.1f %% / %+.1f %% / "
                   "%+.1f %% / %+.1f %% |\n", w.name, t0, t1, a.count, b.count, a.peak * 1e-3, b.peak * 1e-3,

@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
     std::fputs(kUsage, stderr);
     return 2;
   }
-  core::Scene scene = core::load_scene_file(argv[1]);
+  core::Scene scene = core::loadSceneFile(argv[1]);
   scene.effects.track_model = core::TrackModel::kRigid;
   const double duration = std::atof(argv[2]);
   if (argc > 3) {
@@ -65,25 +65,25 @@ int main(int argc, char** argv) {
     vehicle::VehicleSimulator sim(scene, settings);
     const auto t1 = std::chrono::steady_clock::now();
     vehicle::RunStatus status = vehicle::RunStatus::kRunning;
-    for (int i = 1; status == vehicle::RunStatus::kRunning; ++i) status = sim.AdvanceTo(std::min(duration, 1e-3 * i));
+    for (int i = 1; status == vehicle::RunStatus::kRunning; ++i) status = sim.advanceTo(std::min(duration, 1e-3 * i));
     const auto t2 = std::chrono::steady_clock::now();
     const double build = std::chrono::duration<double>(t1 - t0).count();
     const double wall = std::chrono::duration<double>(t2 - t1).count();
     walls.push_back(wall / sim.time());
     all_finished = all_finished && status == vehicle::RunStatus::kFinished;
-    const vehicle::IntegratorCounters c = sim.Counters();
+    const vehicle::IntegratorCounters c = sim.counters();
     std::printf("%s: %s, max_step %g, jacobian %s, linear solver %s, flange %d, spin %d: %.3f s simulated in %.2f s "
                 "wall (%.3f s per simulated s, real-time factor %.2f; build %.2f s); steps %ld, RHS %ld + %ld for %ld "
                 "Jacobians, error-test failures %ld, nonlinear failures %ld, projections %ld, Adams fallbacks %ld, contact "
                 "evaluations %lld; "
                 "cost clock %s; status %s %s\n",
-                scene.name.c_str(), sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.max_step(),
+                scene.name.c_str(), sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.maxStep(),
                 settings.jacobian == vehicle::JacobianKind::kColoured ? "coloured" : "dense-dq",
                 settings.linear_solver == vehicle::LinearSolverKind::kSparseKlu ? "klu" : "dense",
                 scene.effects.flange_contact, scene.effects.spin_creepage, sim.time(), wall, wall / sim.time(),
                 sim.time() / wall, build, c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
                 c.error_test_failures, c.nonlinear_convergence_failures, c.projections, c.adams_fallbacks,
-                sim.contact_data().evaluations,
+                sim.contactData().evaluations,
                 with_cost ? "on" : "off", status == vehicle::RunStatus::kFinished ? "finished" : "stopped",
                 sim.message().c_str());
     std::fflush(stdout);

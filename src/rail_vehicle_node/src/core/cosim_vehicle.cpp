@@ -16,8 +16,8 @@ namespace cc = rail::core::coupling;
 class CosimVehicle::CouplingSource : public WheelWrenchSource {
  public:
   explicit CouplingSource(const cc::VehicleCoupling& coupling) : coupling_(coupling) {}
-  void WheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept override {
-    coupling_.wrench_at(t, wheel, force_in_world, moment_in_world);
+  void wheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept override {
+    coupling_.wrenchAt(t, wheel, force_in_world, moment_in_world);
   }
 
  private:
@@ -27,7 +27,7 @@ class CosimVehicle::CouplingSource : public WheelWrenchSource {
 namespace {
 
 // Checks what the co-simulation needs from the scene before anything is built.
-const core::Scene& CheckCosimScene(const core::Scene& scene) {
+const core::Scene& checkCosimScene(const core::Scene& scene) {
   std::ostringstream os;
   if (!scene.has_vehicle) {
     os << scene.file << ": the scene has no vehicle";
@@ -49,37 +49,37 @@ const core::Scene& CheckCosimScene(const core::Scene& scene) {
 }  // namespace
 
 CosimVehicle::CosimVehicle(const core::Scene& scene, cc::FrameTransport& transport, const SimulatorSettings& settings)
-    : h_(CheckCosimScene(scene).solver.track_step) {
-  coupling_ = std::make_unique<cc::VehicleCoupling>(cc::coupling_config(scene), transport);
+    : h_(checkCosimScene(scene).solver.track_step) {
+  coupling_ = std::make_unique<cc::VehicleCoupling>(cc::couplingConfig(scene), transport);
   source_ = std::make_unique<CouplingSource>(*coupling_);
   SimulatorSettings s = settings;
   s.wheel_wrench_source = source_.get();
   sim_ = std::make_unique<VehicleSimulator>(scene, s);
-  const int n_wheels = sim_->contact_model().n_wheels();
-  if (n_wheels != scene.wheel_count() || coupling_->states().capacity() < n_wheels) {
+  const int n_wheels = sim_->contactModel().nWheels();
+  if (n_wheels != scene.wheelCount() || coupling_->states().capacity() < n_wheels) {
     std::ostringstream os;
     os << scene.file << ": the vehicle has " << n_wheels << " wheels, the scene's frames carry "
-       << scene.wheel_count();
+       << scene.wheelCount();
     throw std::runtime_error(os.str());
   }
   data_ = std::make_unique<VehicleData>(sim_->model());
-  y_interp_ = Eigen::VectorXd::Zero(sim_->model().state_size());
+  y_interp_ = Eigen::VectorXd::Zero(sim_->model().stateSize());
   wheel_s_.assign(static_cast<std::size_t>(n_wheels), 0.0);
   for (std::size_t i = 0; i < wheel_s_.size(); ++i) wheel_s_[i] = sim_->wheels()[i].arc_length;
 }
 
 CosimVehicle::~CosimVehicle() = default;
 
-void CosimVehicle::ResetState(const Eigen::VectorXd& y) {
+void CosimVehicle::resetState(const Eigen::VectorXd& y) {
   if (started_) throw std::runtime_error("cosim vehicle: ResetState after Start()");
-  sim_->ResetState(y);
+  sim_->resetState(y);
   for (std::size_t i = 0; i < wheel_s_.size(); ++i) wheel_s_[i] = sim_->wheels()[i].arc_length;
 }
 
-void CosimVehicle::FillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, cc::WheelStateFrame& frame) {
+void CosimVehicle::fillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, cc::WheelStateFrame& frame) {
   const VehicleModel& model = sim_->model();
-  ComputeKinematics(model, y, *data_);
-  const auto& wheels = sim_->contact_model().wheels();
+  computeKinematics(model, y, *data_);
+  const auto& wheels = sim_->contactModel().wheels();
   contact::TrackPoint tp;
   for (std::size_t i = 0; i < wheels.size(); ++i) {
     const WheelDefinition& wd = wheels[i];
@@ -93,12 +93,12 @@ void CosimVehicle::FillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, c
     w.q_wheelset_to_world = Eigen::Quaterniond(b.A).normalized();
     w.v_wheel_in_world = b.r_dot + b.omega_world.cross(arm);
     w.omega_wheelset_in_world = b.omega_world;
-    wheel_s_[i] = ProjectOnTrack(sim_->track(), w.p_wheel_in_world, wheel_s_[i], tp);
+    wheel_s_[i] = projectOnTrack(sim_->track(), w.p_wheel_in_world, wheel_s_[i], tp);
     w.arc_length = wheel_s_[i];
   }
 }
 
-RunStatus CosimVehicle::Exchange() {
+RunStatus CosimVehicle::exchange() {
   const cc::Result r = coupling_->exchange();
   exchange_status_ = r.status;
   if (!r.ok()) {
@@ -108,44 +108,44 @@ RunStatus CosimVehicle::Exchange() {
   return RunStatus::kRunning;
 }
 
-RunStatus CosimVehicle::Start() {
+RunStatus CosimVehicle::start() {
   if (started_) {
     message_ = "cosim vehicle: Start() called twice";
     return RunStatus::kIntegratorFailed;
   }
   started_ = true;
-  FillWheelStates(sim_->state(), coupling_->states());
-  const RunStatus s = Exchange();
-  if (s == RunStatus::kRunning) sim_->UpdateOutputs();  // outputs with the step-0 wrenches
+  fillWheelStates(sim_->state(), coupling_->states());
+  const RunStatus s = exchange();
+  if (s == RunStatus::kRunning) sim_->updateOutputs();  // outputs with the step-0 wrenches
   return s;
 }
 
-RunStatus CosimVehicle::Step() {
+RunStatus CosimVehicle::step() {
   if (!started_) {
     message_ = "cosim vehicle: Step() before Start()";
     return RunStatus::kIntegratorFailed;
   }
-  const double t_next = coupling_->next_exchange_time();
+  const double t_next = coupling_->nextExchangeTime();
   // CV_NORMAL: CVODE may take its last internal step beyond t_next (by less than one step <= h) using the
   // extrapolation of W_{k-2}, W_{k-1}; the state at t_next is interpolated from that step, and the part
   // beyond is kept (see doc/cosim_vehicle.md).
-  const RunStatus run = sim_->AdvanceTo(t_next);
+  const RunStatus run = sim_->advanceTo(t_next);
   double t0 = 0.0, t1 = 0.0;
-  sim_->LastStepInterval(t0, t1);
-  max_internal_step_ = std::max(max_internal_step_, std::max(t1 - t0, sim_->Counters().last_step));
+  sim_->lastStepInterval(t0, t1);
+  max_internal_step_ = std::max(max_internal_step_, std::max(t1 - t0, sim_->counters().last_step));
   if (run != RunStatus::kRunning && run != RunStatus::kFinished) {
     message_ = sim_->message();
     return run;
   }
   // The integrator's time is t_next (CV_NORMAL returns the interpolated state at the output time); the dense
   // output at t_next is that same state, and stays valid after a projection re-initialised there.
-  sim_->InterpolateAt(t_next, y_interp_);
-  FillWheelStates(y_interp_, coupling_->states());
-  const RunStatus ex = Exchange();
+  sim_->interpolateAt(t_next, y_interp_);
+  fillWheelStates(y_interp_, coupling_->states());
+  const RunStatus ex = exchange();
   if (ex != RunStatus::kRunning) return ex;
   return run;
 }
 
-void CosimVehicle::Close() { coupling_->close(); }
+void CosimVehicle::close() { coupling_->close(); }
 
 }  // namespace rail::vehicle

@@ -9,7 +9,7 @@
 
 namespace rail::vehicle {
 
-void ForceElement::ApplyForceAt(const VehicleData& data, int body, const Vector3& f_in_world,
+void ForceElement::applyForceAt(const VehicleData& data, int body, const Vector3& f_in_world,
                                 const Vector3& p_in_world, Eigen::Ref<Eigen::VectorXd> g) {
   if (body == kGround) return;
   const BodyKinematics& b = data.bodies[static_cast<std::size_t>(body)];
@@ -17,21 +17,21 @@ void ForceElement::ApplyForceAt(const VehicleData& data, int body, const Vector3
   g.segment<3>(6 * body + 3) += b.A.transpose() * (p_in_world - b.r).cross(f_in_world);
 }
 
-void ForceElement::ApplyMoment(const VehicleData& data, int body, const Vector3& n_in_world,
+void ForceElement::applyMoment(const VehicleData& data, int body, const Vector3& n_in_world,
                                Eigen::Ref<Eigen::VectorXd> g) {
   if (body == kGround) return;
   const BodyKinematics& b = data.bodies[static_cast<std::size_t>(body)];
   g.segment<3>(6 * body + 3) += b.A.transpose() * n_in_world;
 }
 
-void ForceElement::CouplingGroups(std::vector<std::vector<int>>& groups) const {
+void ForceElement::couplingGroups(std::vector<std::vector<int>>& groups) const {
   std::vector<int> group;
   if (body_i_ != kGround) group.push_back(body_i_);
   if (body_j_ != kGround && body_j_ != body_i_) group.push_back(body_j_);
   if (!group.empty()) groups.push_back(group);
 }
 
-void ForceElement::PointState(const VehicleData& data, int body, const Vector3& s_in_body, Vector3& p_in_world,
+void ForceElement::pointState(const VehicleData& data, int body, const Vector3& s_in_body, Vector3& p_in_world,
                               Vector3& v_in_world) {
   if (body == kGround) {
     p_in_world = s_in_body;
@@ -69,13 +69,13 @@ Bushing::Bushing(std::string name, int body_i, int body_j, const Vector3& s_in_i
                     (parameters.rotational_damping.array() > 0.0).any();
 }
 
-void Bushing::EvaluateLocal(const VehicleData& data, Vector3& deflection, Vector3& force_on_j_local) const {
+void Bushing::evaluateLocal(const VehicleData& data, Vector3& deflection, Vector3& force_on_j_local) const {
   Vector3 p_i, v_i, p_j, v_j;
-  PointState(data, body_i(), s_in_i_, p_i, v_i);
-  PointState(data, body_j(), s_in_j_, p_j, v_j);
-  const Matrix3 A_i = body_i() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(body_i())].A;
+  pointState(data, bodyI(), s_in_i_, p_i, v_i);
+  pointState(data, bodyJ(), s_in_j_, p_j, v_j);
+  const Matrix3 A_i = bodyI() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(bodyI())].A;
   const Vector3 omega_i =
-      body_i() == kGround ? Vector3::Zero() : data.bodies[static_cast<std::size_t>(body_i())].omega_world;
+      bodyI() == kGround ? Vector3::Zero() : data.bodies[static_cast<std::size_t>(bodyI())].omega_world;
   const Matrix3 R_bushing_to_world = A_i * R_bushing_to_i_;
   const Vector3 delta = p_j - p_i;
   deflection = R_bushing_to_world.transpose() * delta - parameters_.free_offset;
@@ -85,44 +85,44 @@ void Bushing::EvaluateLocal(const VehicleData& data, Vector3& deflection, Vector
                      parameters_.damping.cwiseProduct(deflection_rate);
 }
 
-void Bushing::AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const {
+void Bushing::addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const {
   Vector3 deflection, f_local;
-  EvaluateLocal(data, deflection, f_local);
-  const Matrix3 A_i = body_i() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(body_i())].A;
+  evaluateLocal(data, deflection, f_local);
+  const Matrix3 A_i = bodyI() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(bodyI())].A;
   const Matrix3 R_bushing_to_world = A_i * R_bushing_to_i_;
   Vector3 p_j, v_j;
-  PointState(data, body_j(), s_in_j_, p_j, v_j);
+  pointState(data, bodyJ(), s_in_j_, p_j, v_j);
   const Vector3 f_world = R_bushing_to_world * f_local;
-  ApplyForceAt(data, body_j(), f_world, p_j, g);
-  ApplyForceAt(data, body_i(), -f_world, p_j, g);
+  applyForceAt(data, bodyJ(), f_world, p_j, g);
+  applyForceAt(data, bodyI(), -f_world, p_j, g);
 
   if (has_rotational_) {
-    const Matrix3 A_j = body_j() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(body_j())].A;
+    const Matrix3 A_j = bodyJ() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(bodyJ())].A;
     const Vector3 omega_i =
-        body_i() == kGround ? Vector3::Zero() : data.bodies[static_cast<std::size_t>(body_i())].omega_world;
+        bodyI() == kGround ? Vector3::Zero() : data.bodies[static_cast<std::size_t>(bodyI())].omega_world;
     const Vector3 omega_j =
-        body_j() == kGround ? Vector3::Zero() : data.bodies[static_cast<std::size_t>(body_j())].omega_world;
+        bodyJ() == kGround ? Vector3::Zero() : data.bodies[static_cast<std::size_t>(bodyJ())].omega_world;
     const Matrix3 R_rel = R_bushing_to_world.transpose() * (A_j * R_bushing_to_j_);
-    const Vector3 theta = RotationVectorFromRotation(R_rel);
+    const Vector3 theta = rotationVectorFromRotation(R_rel);
     const Vector3 omega_rel = R_bushing_to_world.transpose() * (omega_j - omega_i);
     const Vector3 torque_local = -parameters_.rotational_stiffness.cwiseProduct(theta) -
                                  parameters_.rotational_damping.cwiseProduct(omega_rel);
     const Vector3 torque_world = R_bushing_to_world * torque_local;
-    ApplyMoment(data, body_j(), torque_world, g);
-    ApplyMoment(data, body_i(), -torque_world, g);
+    applyMoment(data, bodyJ(), torque_world, g);
+    applyMoment(data, bodyI(), -torque_world, g);
   }
 }
 
-double Bushing::PotentialEnergy(const VehicleData& data) const {
+double Bushing::potentialEnergy(const VehicleData& data) const {
   Vector3 deflection, f_local;
-  EvaluateLocal(data, deflection, f_local);
+  evaluateLocal(data, deflection, f_local);
   double energy = 0.5 * deflection.dot(parameters_.stiffness.cwiseProduct(deflection)) -
                   parameters_.preload.dot(deflection);
   if (has_rotational_) {
-    const Matrix3 A_i = body_i() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(body_i())].A;
-    const Matrix3 A_j = body_j() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(body_j())].A;
+    const Matrix3 A_i = bodyI() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(bodyI())].A;
+    const Matrix3 A_j = bodyJ() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(bodyJ())].A;
     const Vector3 theta =
-        RotationVectorFromRotation((A_i * R_bushing_to_i_).transpose() * (A_j * R_bushing_to_j_));
+        rotationVectorFromRotation((A_i * R_bushing_to_i_).transpose() * (A_j * R_bushing_to_j_));
     energy += 0.5 * theta.dot(parameters_.rotational_stiffness.cwiseProduct(theta));
   }
   return energy;
@@ -149,24 +149,24 @@ PointToPointSpringDamper::PointToPointSpringDamper(std::string name, int body_i,
   }
 }
 
-void PointToPointSpringDamper::AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const {
+void PointToPointSpringDamper::addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const {
   Vector3 p_i, v_i, p_j, v_j;
-  PointState(data, body_i(), s_in_i_, p_i, v_i);
-  PointState(data, body_j(), s_in_j_, p_j, v_j);
+  pointState(data, bodyI(), s_in_i_, p_i, v_i);
+  pointState(data, bodyJ(), s_in_j_, p_j, v_j);
   const Vector3 delta = p_j - p_i;
   const double length = delta.norm();
   if (length < 1e-12) return;  // direction undefined; the element carries no force at zero length
   const Vector3 u = delta / length;
   const double length_rate = u.dot(v_j - v_i);
   const double tension = k_ * (length - free_length_) + c_ * length_rate + preload_;
-  ApplyForceAt(data, body_i(), tension * u, p_i, g);
-  ApplyForceAt(data, body_j(), -tension * u, p_j, g);
+  applyForceAt(data, bodyI(), tension * u, p_i, g);
+  applyForceAt(data, bodyJ(), -tension * u, p_j, g);
 }
 
-double PointToPointSpringDamper::PotentialEnergy(const VehicleData& data) const {
+double PointToPointSpringDamper::potentialEnergy(const VehicleData& data) const {
   Vector3 p_i, v_i, p_j, v_j;
-  PointState(data, body_i(), s_in_i_, p_i, v_i);
-  PointState(data, body_j(), s_in_j_, p_j, v_j);
+  pointState(data, bodyI(), s_in_i_, p_i, v_i);
+  pointState(data, bodyJ(), s_in_j_, p_j, v_j);
   const double length = (p_j - p_i).norm();
   return 0.5 * k_ * (length - free_length_) * (length - free_length_) + preload_ * length;
 }
@@ -203,7 +203,7 @@ BumpStop::BumpStop(std::string name, int body_i, int body_j, const Vector3& s_in
   }
 }
 
-double BumpStop::ForceAt(double x) const {
+double BumpStop::forceAt(double x) const {
   if (x <= deflections_.front()) return 0.0;
   const std::size_t n = deflections_.size();
   std::size_t k = 1;
@@ -212,28 +212,28 @@ double BumpStop::ForceAt(double x) const {
   return forces_[k - 1] + slope * (x - deflections_[k - 1]);
 }
 
-double BumpStop::Deflection(const VehicleData& data, Vector3& axis_in_world, Vector3& p_j) const {
+double BumpStop::deflection(const VehicleData& data, Vector3& axis_in_world, Vector3& p_j) const {
   Vector3 p_i, v_i, v_j;
-  PointState(data, body_i(), s_in_i_, p_i, v_i);
-  PointState(data, body_j(), s_in_j_, p_j, v_j);
+  pointState(data, bodyI(), s_in_i_, p_i, v_i);
+  pointState(data, bodyJ(), s_in_j_, p_j, v_j);
   axis_in_world =
-      body_i() == kGround ? axis_in_i_ : Vector3(data.bodies[static_cast<std::size_t>(body_i())].A * axis_in_i_);
+      bodyI() == kGround ? axis_in_i_ : Vector3(data.bodies[static_cast<std::size_t>(bodyI())].A * axis_in_i_);
   return axis_in_world.dot(p_j - p_i);
 }
 
-void BumpStop::AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const {
+void BumpStop::addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const {
   Vector3 axis, p_j;
-  const double d = Deflection(data, axis, p_j);
-  const double magnitude = ForceAt(std::abs(d));
+  const double d = deflection(data, axis, p_j);
+  const double magnitude = forceAt(std::abs(d));
   if (magnitude == 0.0) return;
   const Vector3 f_on_j = -(d > 0.0 ? magnitude : -magnitude) * axis;
-  ApplyForceAt(data, body_j(), f_on_j, p_j, g);
-  ApplyForceAt(data, body_i(), -f_on_j, p_j, g);
+  applyForceAt(data, bodyJ(), f_on_j, p_j, g);
+  applyForceAt(data, bodyI(), -f_on_j, p_j, g);
 }
 
-double BumpStop::PotentialEnergy(const VehicleData& data) const {
+double BumpStop::potentialEnergy(const VehicleData& data) const {
   Vector3 axis, p_j;
-  const double x = std::abs(Deflection(data, axis, p_j));
+  const double x = std::abs(deflection(data, axis, p_j));
   if (x <= deflections_.front()) return 0.0;
   // Exact integral of the piecewise-linear force from the clearance to x.
   double energy = 0.0;
@@ -242,7 +242,7 @@ double BumpStop::PotentialEnergy(const VehicleData& data) const {
     const double a = deflections_[k - 1];
     const double b = (k == n - 1) ? x : std::min(x, deflections_[k]);
     if (b <= a) break;
-    energy += 0.5 * (ForceAt(a) + ForceAt(b)) * (b - a);
+    energy += 0.5 * (forceAt(a) + forceAt(b)) * (b - a);
   }
   return energy;
 }

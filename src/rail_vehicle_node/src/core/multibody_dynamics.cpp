@@ -7,14 +7,14 @@
 
 namespace rail::vehicle {
 
-void ComputeKinematics(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y, VehicleData& data) {
-  const int n = model.n_bodies();
+void computeKinematics(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y, VehicleData& data) {
+  const int n = model.nBodies();
   for (int b = 0; b < n; ++b) {
     BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
-    k.r = y.segment<3>(VehicleModel::PositionOffset(b));
-    k.A = RotationFromEulerParameters(y.segment<4>(VehicleModel::EulerOffset(b)));
-    k.r_dot = y.segment<3>(model.VelocityOffset(b));
-    k.omega_body = y.segment<3>(model.AngularVelocityOffset(b));
+    k.r = y.segment<3>(VehicleModel::positionOffset(b));
+    k.A = rotationFromEulerParameters(y.segment<4>(VehicleModel::eulerOffset(b)));
+    k.r_dot = y.segment<3>(model.velocityOffset(b));
+    k.omega_body = y.segment<3>(model.angularVelocityOffset(b));
     k.omega_world = k.A * k.omega_body;
   }
 }
@@ -22,8 +22,8 @@ void ComputeKinematics(const VehicleModel& model, const Eigen::Ref<const Eigen::
 namespace {
 
 // Gravity, gyroscopic terms and the external wrenches at the load points.
-void ComputeBodyForces(const VehicleModel& model, VehicleData& data) {
-  const int n = model.n_bodies();
+void computeBodyForces(const VehicleModel& model, VehicleData& data) {
+  const int n = model.nBodies();
   const auto& bodies = model.bodies();
   for (int b = 0; b < n; ++b) {
     const RigidBody& body = bodies[static_cast<std::size_t>(b)];
@@ -31,38 +31,38 @@ void ComputeBodyForces(const VehicleModel& model, VehicleData& data) {
     data.g.segment<3>(6 * b) = body.mass * model.gravity();
     data.g.segment<3>(6 * b + 3) = -k.omega_body.cross(body.inertia_in_body * k.omega_body);
   }
-  const auto& points = model.load_points();
+  const auto& points = model.loadPoints();
   for (std::size_t p = 0; p < points.size(); ++p) {
     const LoadPoint& lp = points[p];
     const BodyKinematics& k = data.bodies[static_cast<std::size_t>(lp.body)];
     const Vector3 p_in_world = k.r + k.A * lp.s_in_body;
-    ForceElement::ApplyForceAt(data, lp.body, data.external[p].force_in_world, p_in_world, data.g);
-    ForceElement::ApplyMoment(data, lp.body, data.external[p].moment_in_world, data.g);
+    ForceElement::applyForceAt(data, lp.body, data.external[p].force_in_world, p_in_world, data.g);
+    ForceElement::applyMoment(data, lp.body, data.external[p].moment_in_world, data.g);
   }
 }
 
 }  // namespace
 
-void ComputeAppliedForces(const VehicleModel& model, VehicleData& data) {
-  ComputeBodyForces(model, data);
-  for (const auto& element : model.force_elements()) element->AddForces(data, data.g);
+void computeAppliedForces(const VehicleModel& model, VehicleData& data) {
+  computeBodyForces(model, data);
+  for (const auto& element : model.forceElements()) element->addForces(data, data.g);
 }
 
-void ComputeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g) {
-  const auto& elements = model.force_elements();
+void computeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g) {
+  const auto& elements = model.forceElements();
   for (std::size_t e = 0; e < elements.size(); ++e) {
     element_g.col(static_cast<Eigen::Index>(e)).setZero();
-    elements[e]->AddForces(data, element_g.col(static_cast<Eigen::Index>(e)));
+    elements[e]->addForces(data, element_g.col(static_cast<Eigen::Index>(e)));
   }
 }
 
-void ComputeConstraints(const VehicleModel& model, VehicleData& data) {
+void computeConstraints(const VehicleModel& model, VehicleData& data) {
   const auto& joints = model.joints();
-  const auto& rows = model.joint_rows();
+  const auto& rows = model.jointRows();
   for (std::size_t j = 0; j < joints.size(); ++j) {
     const int row = rows[j];
     const int size = joints[j]->size();
-    joints[j]->Evaluate(data, data.phi.segment(row, size), data.phi_v.middleRows(row, size),
+    joints[j]->evaluate(data, data.phi.segment(row, size), data.phi_v.middleRows(row, size),
                         data.gamma.segment(row, size));
   }
 }
@@ -70,11 +70,11 @@ void ComputeConstraints(const VehicleModel& model, VehicleData& data) {
 namespace {
 
 // phi_dot = Phi_v v from the joints' own blocks (a joint's rows are zero outside its two bodies' columns).
-void ConstraintVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& v, VehicleData& data) {
+void constraintVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& v, VehicleData& data) {
   const auto& joints = model.joints();
-  const auto& rows = model.joint_rows();
+  const auto& rows = model.jointRows();
   for (std::size_t j = 0; j < joints.size(); ++j) {
-    const int bi = joints[j]->body_i(), bj = joints[j]->body_j();
+    const int bi = joints[j]->bodyI(), bj = joints[j]->bodyJ();
     for (int r = rows[j]; r < rows[j] + joints[j]->size(); ++r) {
       double sum = 0.0;
       if (bi != kGround) sum += data.phi_v.block<1, 6>(r, 6 * bi).dot(v.segment<6>(6 * bi).transpose());
@@ -85,27 +85,27 @@ void ConstraintVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen:
 }
 
 // x = M^-1 rhs with M = diag(m I, J') per body.
-void ApplyInverseMass(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& rhs,
+void applyInverseMass(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& rhs,
                       Eigen::Ref<Eigen::VectorXd> x) {
   const auto& bodies = model.bodies();
-  for (int b = 0; b < model.n_bodies(); ++b) {
+  for (int b = 0; b < model.nBodies(); ++b) {
     x.segment<3>(6 * b) = rhs.segment<3>(6 * b) / bodies[static_cast<std::size_t>(b)].mass;
-    x.segment<3>(6 * b + 3) = model.inverse_inertia(b) * rhs.segment<3>(6 * b + 3);
+    x.segment<3>(6 * b + 3) = model.inverseInertia(b) * rhs.segment<3>(6 * b + 3);
   }
 }
 
 }  // namespace
 
-void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::Ref<const Eigen::VectorXd>& top,
+void solveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::Ref<const Eigen::VectorXd>& top,
                     const Eigen::Ref<const Eigen::VectorXd>& bottom, Eigen::Ref<Eigen::VectorXd> x,
                     Eigen::Ref<Eigen::VectorXd> mu) {
-  const int nv = model.n_velocities();
-  const int m = model.n_constraints();
+  const int nv = model.nVelocities();
+  const int m = model.nConstraints();
   if (m == 0) {
-    ApplyInverseMass(model, top, x);
+    applyInverseMass(model, top, x);
     return;
   }
-  if (model.kkt_solver() == KktSolver::kAugmentedLu) {
+  if (model.kktSolver() == KktSolver::kAugmentedLu) {
     data.kkt.bottomLeftCorner(m, nv) = data.phi_v;
     data.kkt.topRightCorner(nv, m) = data.phi_v.transpose();
     data.kkt_lu.compute(data.kkt);
@@ -119,7 +119,7 @@ void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
   // Range space, one joint cluster at a time (S is block diagonal over them): for cluster K,
   // (Phi_K M_K^-1 Phi_K^T) mu_K = Phi_K M_K^-1 top_K - bottom_K; x = M^-1 (top - Phi_v^T mu).
   const auto& bodies = model.bodies();
-  const auto& clusters = model.constraint_clusters();
+  const auto& clusters = model.constraintClusters();
   data.tmp6n = top;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     const ConstraintCluster& cluster = clusters[c];
@@ -132,7 +132,7 @@ void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
         cw.phi_v.block<1, 6>(i, col) = data.phi_v.block<1, 6>(cluster.rows[static_cast<std::size_t>(i)], 6 * b);
       }
       cw.w.middleCols<3>(col) = cw.phi_v.middleCols<3>(col) / bodies[static_cast<std::size_t>(b)].mass;
-      cw.w.middleCols<3>(col + 3).noalias() = cw.phi_v.middleCols<3>(col + 3) * model.inverse_inertia(b);
+      cw.w.middleCols<3>(col + 3).noalias() = cw.phi_v.middleCols<3>(col + 3) * model.inverseInertia(b);
       cw.top.segment<6>(col) = top.segment<6>(6 * b);
     }
     // Blocks of ~10 x 18: coefficient-wise (lazy) products, not the general matrix-product kernel.
@@ -147,95 +147,95 @@ void SolveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
       data.tmp6n.segment<6>(6 * cluster.bodies[k]) = cw.top.segment<6>(6 * static_cast<int>(k));
     }
   }
-  ApplyInverseMass(model, data.tmp6n, x);
+  applyInverseMass(model, data.tmp6n, x);
 }
 
 namespace {
 
 // q_dot from v (p_dot = 1/2 p (x) (0, omega')), after the kinematics.
-void PositionDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+void positionDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
                          Eigen::Ref<Eigen::VectorXd> y_dot, const VehicleData& data) {
-  const int n = model.n_bodies();
+  const int n = model.nBodies();
   for (int b = 0; b < n; ++b) {
     const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
-    y_dot.segment<3>(VehicleModel::PositionOffset(b)) = k.r_dot;
+    y_dot.segment<3>(VehicleModel::positionOffset(b)) = k.r_dot;
     // p_dot = 1/2 p (x) (0, omega'), with the raw (unnormalised) p so that d|p|^2/dt = 0 exactly.
-    const Vector4 p = y.segment<4>(VehicleModel::EulerOffset(b));
+    const Vector4 p = y.segment<4>(VehicleModel::eulerOffset(b));
     Vector4 p_dot;
     p_dot[0] = -0.5 * p.tail<3>().dot(k.omega_body);
     p_dot.tail<3>() = 0.5 * (p[0] * k.omega_body + p.tail<3>().cross(k.omega_body));
-    y_dot.segment<4>(VehicleModel::EulerOffset(b)) = p_dot;
+    y_dot.segment<4>(VehicleModel::eulerOffset(b)) = p_dot;
   }
 }
 
 // v_dot and lambda from the Baumgarte-stabilised augmented system, after data.g.
-void VelocityDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+void velocityDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
                          Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
-  const int m = model.n_constraints();
+  const int m = model.nConstraints();
   if (m > 0) {
-    ComputeConstraints(model, data);
-    ConstraintVelocity(model, y.tail(model.n_velocities()), data);
-    const double alpha = model.baumgarte_alpha();
-    const double beta = model.baumgarte_beta();
+    computeConstraints(model, data);
+    constraintVelocity(model, y.tail(model.nVelocities()), data);
+    const double alpha = model.baumgarteAlpha();
+    const double beta = model.baumgarteBeta();
     data.rhs_c = data.gamma - 2.0 * alpha * data.phi_dot - (beta * beta) * data.phi;
   }
-  SolveAugmented(model, data, data.g, data.rhs_c, data.v_dot, data.lambda);
-  y_dot.tail(model.n_velocities()) = data.v_dot;
+  solveAugmented(model, data, data.g, data.rhs_c, data.v_dot, data.lambda);
+  y_dot.tail(model.nVelocities()) = data.v_dot;
 }
 
 }  // namespace
 
-void ComputeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void computeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                         Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
   data.time = t;
-  ComputeKinematics(model, y, data);
-  PositionDerivatives(model, y, y_dot, data);
-  ComputeAppliedForces(model, data);
-  VelocityDerivatives(model, y, y_dot, data);
+  computeKinematics(model, y, data);
+  positionDerivatives(model, y, y_dot, data);
+  computeAppliedForces(model, data);
+  velocityDerivatives(model, y, y_dot, data);
 }
 
-void ComputeDerivativesPartial(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
+void computeDerivativesPartial(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data, const std::vector<char>& live,
                                const Eigen::Ref<const Eigen::MatrixXd>& element_g) {
   data.time = t;
-  ComputeKinematics(model, y, data);
-  PositionDerivatives(model, y, y_dot, data);
-  ComputeBodyForces(model, data);
-  const auto& elements = model.force_elements();
+  computeKinematics(model, y, data);
+  positionDerivatives(model, y, y_dot, data);
+  computeBodyForces(model, data);
+  const auto& elements = model.forceElements();
   for (std::size_t e = 0; e < elements.size(); ++e) {
     if (live[e] != 0) {
-      elements[e]->AddForces(data, data.g);
+      elements[e]->addForces(data, data.g);
     } else {
       data.g += element_g.col(static_cast<Eigen::Index>(e));
     }
   }
-  VelocityDerivatives(model, y, y_dot, data);
+  velocityDerivatives(model, y, y_dot, data);
 }
 
-ConstraintViolation EvaluateViolation(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
+ConstraintViolation evaluateViolation(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
                                       VehicleData& data) {
   ConstraintViolation v;
-  for (int b = 0; b < model.n_bodies(); ++b) {
-    v.euler_norm = std::max(v.euler_norm, std::abs(y.segment<4>(VehicleModel::EulerOffset(b)).norm() - 1.0));
+  for (int b = 0; b < model.nBodies(); ++b) {
+    v.euler_norm = std::max(v.euler_norm, std::abs(y.segment<4>(VehicleModel::eulerOffset(b)).norm() - 1.0));
   }
-  if (model.n_constraints() == 0) return v;
-  ComputeKinematics(model, y, data);
-  ComputeConstraints(model, data);
-  ConstraintVelocity(model, y.tail(model.n_velocities()), data);
+  if (model.nConstraints() == 0) return v;
+  computeKinematics(model, y, data);
+  computeConstraints(model, data);
+  constraintVelocity(model, y.tail(model.nVelocities()), data);
   v.position = data.phi.lpNorm<Eigen::Infinity>();
   v.velocity = data.phi_dot.lpNorm<Eigen::Infinity>();
   return v;
 }
 
-int ProjectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, VehicleData& data, double tolerance,
+int projectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, VehicleData& data, double tolerance,
                  int max_iterations) {
-  const int n = model.n_bodies();
-  for (int b = 0; b < n; ++b) y.segment<4>(VehicleModel::EulerOffset(b)).normalize();
-  if (model.n_constraints() == 0) return 0;
+  const int n = model.nBodies();
+  for (int b = 0; b < n; ++b) y.segment<4>(VehicleModel::eulerOffset(b)).normalize();
+  if (model.nConstraints() == 0) return 0;
   int iterations = 0;
   for (;;) {
-    ComputeKinematics(model, y, data);
-    ComputeConstraints(model, data);
+    computeKinematics(model, y, data);
+    computeConstraints(model, data);
     const double violation = data.phi.lpNorm<Eigen::Infinity>();
     if (violation <= tolerance) break;
     if (iterations >= max_iterations || !std::isfinite(violation)) {
@@ -245,26 +245,26 @@ int ProjectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, Vehic
       throw std::runtime_error(os.str());
     }
     data.rhs_c = -data.phi;
-    SolveAugmented(model, data, data.zero6n, data.rhs_c, data.dx, data.lambda);
+    solveAugmented(model, data, data.zero6n, data.rhs_c, data.dx, data.lambda);
     for (int b = 0; b < n; ++b) {
-      y.segment<3>(VehicleModel::PositionOffset(b)) += data.dx.segment<3>(6 * b);
-      const Vector4 p = y.segment<4>(VehicleModel::EulerOffset(b));
-      y.segment<4>(VehicleModel::EulerOffset(b)) =
-          QuaternionProduct(p, EulerParametersFromRotationVector(data.dx.segment<3>(6 * b + 3))).normalized();
+      y.segment<3>(VehicleModel::positionOffset(b)) += data.dx.segment<3>(6 * b);
+      const Vector4 p = y.segment<4>(VehicleModel::eulerOffset(b));
+      y.segment<4>(VehicleModel::eulerOffset(b)) =
+          quaternionProduct(p, eulerParametersFromRotationVector(data.dx.segment<3>(6 * b + 3))).normalized();
     }
     ++iterations;
   }
   // Velocities: v <- v + dv with [M Phi_v^T; Phi_v 0][dv; mu] = [0; -Phi_v v] (kinetic-energy metric).
-  ConstraintVelocity(model, y.tail(model.n_velocities()), data);
+  constraintVelocity(model, y.tail(model.nVelocities()), data);
   data.rhs_c = -data.phi_dot;
-  SolveAugmented(model, data, data.zero6n, data.rhs_c, data.dx, data.lambda);
-  y.tail(model.n_velocities()) += data.dx;
+  solveAugmented(model, data, data.zero6n, data.rhs_c, data.dx, data.lambda);
+  y.tail(model.nVelocities()) += data.dx;
   return iterations;
 }
 
-double KineticEnergy(const VehicleModel& model, const VehicleData& data) {
+double kineticEnergy(const VehicleModel& model, const VehicleData& data) {
   double energy = 0.0;
-  for (int b = 0; b < model.n_bodies(); ++b) {
+  for (int b = 0; b < model.nBodies(); ++b) {
     const RigidBody& body = model.bodies()[static_cast<std::size_t>(b)];
     const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
     energy += 0.5 * body.mass * k.r_dot.squaredNorm() + 0.5 * k.omega_body.dot(body.inertia_in_body * k.omega_body);
@@ -272,27 +272,27 @@ double KineticEnergy(const VehicleModel& model, const VehicleData& data) {
   return energy;
 }
 
-double PotentialEnergy(const VehicleModel& model, const VehicleData& data) {
+double potentialEnergy(const VehicleModel& model, const VehicleData& data) {
   double energy = 0.0;
-  for (int b = 0; b < model.n_bodies(); ++b) {
+  for (int b = 0; b < model.nBodies(); ++b) {
     energy -= model.bodies()[static_cast<std::size_t>(b)].mass *
               model.gravity().dot(data.bodies[static_cast<std::size_t>(b)].r);
   }
-  for (const auto& element : model.force_elements()) energy += element->PotentialEnergy(data);
+  for (const auto& element : model.forceElements()) energy += element->potentialEnergy(data);
   return energy;
 }
 
-Vector3 LinearMomentum(const VehicleModel& model, const VehicleData& data) {
+Vector3 linearMomentum(const VehicleModel& model, const VehicleData& data) {
   Vector3 l = Vector3::Zero();
-  for (int b = 0; b < model.n_bodies(); ++b) {
+  for (int b = 0; b < model.nBodies(); ++b) {
     l += model.bodies()[static_cast<std::size_t>(b)].mass * data.bodies[static_cast<std::size_t>(b)].r_dot;
   }
   return l;
 }
 
-Vector3 AngularMomentum(const VehicleModel& model, const VehicleData& data) {
+Vector3 angularMomentum(const VehicleModel& model, const VehicleData& data) {
   Vector3 h = Vector3::Zero();
-  for (int b = 0; b < model.n_bodies(); ++b) {
+  for (int b = 0; b < model.nBodies(); ++b) {
     const RigidBody& body = model.bodies()[static_cast<std::size_t>(b)];
     const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
     h += k.r.cross(body.mass * k.r_dot) + k.A * (body.inertia_in_body * k.omega_body);
@@ -300,10 +300,10 @@ Vector3 AngularMomentum(const VehicleModel& model, const VehicleData& data) {
   return h;
 }
 
-void LoadPointState(const VehicleModel& model, const VehicleData& data, int k, Vector3& p_in_world,
+void loadPointState(const VehicleModel& model, const VehicleData& data, int k, Vector3& p_in_world,
                     Vector3& v_in_world) {
-  const LoadPoint& lp = model.load_points()[static_cast<std::size_t>(k)];
-  ForceElement::PointState(data, lp.body, lp.s_in_body, p_in_world, v_in_world);
+  const LoadPoint& lp = model.loadPoints()[static_cast<std::size_t>(k)];
+  ForceElement::pointState(data, lp.body, lp.s_in_body, p_in_world, v_in_world);
 }
 
 }  // namespace rail::vehicle

@@ -8,15 +8,15 @@ namespace rail::vehicle {
 
 VehicleData::VehicleData(const VehicleModel& model)
     // Factorisations sized in place (a copy of a fresh LDLT would read its uninitialised status field).
-    : kkt_lu(model.n_velocities() + model.n_constraints()), s_ldlt(model.n_constraints()) {
+    : kkt_lu(model.nVelocities() + model.nConstraints()), s_ldlt(model.nConstraints()) {
   if (!model.finalized()) throw std::runtime_error("vehicle data: the model must be finalised first");
-  n_bodies = model.n_bodies();
-  n_velocities = model.n_velocities();
-  n_constraints = model.n_constraints();
+  n_bodies = model.nBodies();
+  n_velocities = model.nVelocities();
+  n_constraints = model.nConstraints();
   const int nv = n_velocities;
   const int m = n_constraints;
   bodies.assign(static_cast<std::size_t>(n_bodies), BodyKinematics{});
-  external.assign(model.load_points().size(), ExternalWrench{});
+  external.assign(model.loadPoints().size(), ExternalWrench{});
   g = Eigen::VectorXd::Zero(nv);
   phi = Eigen::VectorXd::Zero(m);
   phi_v = Eigen::MatrixXd::Zero(m, nv);
@@ -40,8 +40,8 @@ VehicleData::VehicleData(const VehicleModel& model)
   s = Eigen::MatrixXd::Zero(m, m);
   s_rhs = Eigen::VectorXd::Zero(m);
   tmp6n = Eigen::VectorXd::Zero(nv);
-  clusters.reserve(model.constraint_clusters().size());
-  for (const ConstraintCluster& c : model.constraint_clusters()) {
+  clusters.reserve(model.constraintClusters().size());
+  for (const ConstraintCluster& c : model.constraintClusters()) {
     clusters.emplace_back(static_cast<int>(c.rows.size()), static_cast<int>(c.bodies.size()));
   }
 

@@ -66,38 +66,38 @@ struct VehicleIntegrator::Impl {
     if (context != nullptr) SUNContext_Free(&context);
   }
 
-  Eigen::Map<Eigen::VectorXd> StateMap() const {
-    return Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), model.state_size());
+  Eigen::Map<Eigen::VectorXd> stateMap() const {
+    return Eigen::Map<Eigen::VectorXd>(N_VGetArrayPointer(y), model.stateSize());
   }
 
-  [[noreturn]] void Fail(const char* call, int flag) const {
+  [[noreturn]] void fail(const char* call, int flag) const {
     std::ostringstream os;
     os << "vehicle integrator: " << call << " failed with flag " << flag << " at t = " << t;
     if (last_error[0] != '\0') os << ": " << last_error.data();
     throw std::runtime_error(os.str());
   }
 
-  void Check(int flag, const char* call) const {
-    if (flag < 0) Fail(call, flag);
+  void check(int flag, const char* call) const {
+    if (flag < 0) fail(call, flag);
   }
 
-  static int Rhs(realtype t, N_Vector y, N_Vector y_dot, void* user_data) {
+  static int rhs(realtype t, N_Vector y, N_Vector y_dot, void* user_data) {
     auto* self = static_cast<Impl*>(user_data);
-    const int n = self->model.state_size();
+    const int n = self->model.stateSize();
     const Eigen::Map<const Eigen::VectorXd> y_map(N_VGetArrayPointer(y), n);
     Eigen::Map<Eigen::VectorXd> y_dot_map(N_VGetArrayPointer(y_dot), n);
     core::CostClock::Scope timing(self->settings.cost, self->in_jacobian ? core::CostClock::kVehicleJacobian
                                                                          : core::CostClock::kVehicleRhs);
     try {
-      ComputeDerivatives(self->model, t, y_map, y_dot_map, self->data);
+      computeDerivatives(self->model, t, y_map, y_dot_map, self->data);
     } catch (...) {
       return -1;  // unrecoverable: CVODE stops and AdvanceTo reports it
     }
     return y_dot_map.allFinite() ? 0 : 1;  // non-finite: recoverable, CVODE retries with a smaller step
   }
 
-  static int Jacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector tmp1,
-                      N_Vector tmp2, N_Vector tmp3) {
+  static int timedDqJacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector tmp1,
+                             N_Vector tmp2, N_Vector tmp3) {
     auto* self = static_cast<Impl*>(user_data);
     self->in_jacobian = true;
     const int flag = cvLsDQJac(t, y, fy, J, self->cvode, tmp1, tmp2, tmp3);
@@ -107,10 +107,10 @@ struct VehicleIntegrator::Impl {
 
   // The coloured difference quotient (vehicle_jacobian.hpp) into the sparse (KLU) or dense matrix J, with
   // CVODE's increments: max(sqrt(eps) |y_j|, 1000 |h| eps n ||f||_wrms / w_j).
-  static int ColouredJacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector /*tmp1*/,
+  static int colouredJacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector /*tmp1*/,
                               N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
     auto* self = static_cast<Impl*>(user_data);
-    const int n = self->model.state_size();
+    const int n = self->model.stateSize();
     if (CVodeGetErrWeights(self->cvode, self->error_weights) != CV_SUCCESS) return -1;
     realtype h = 0.0;
     CVodeGetCurrentStep(self->cvode, &h);
@@ -121,13 +121,13 @@ struct VehicleIntegrator::Impl {
     const Eigen::Map<const Eigen::VectorXd> w_map(N_VGetArrayPointer(self->error_weights), n);
     JacobianWork& work = *self->jacobian_work;
     try {
-      self->coloured_jacobian_rhs += EvaluateJacobian(self->model, *self->pattern, t, y_map, w_map, min_increment,
+      self->coloured_jacobian_rhs += evaluateJacobian(self->model, *self->pattern, t, y_map, w_map, min_increment,
                                                       self->data, work, self->settings.cost);
     } catch (...) {
       return -1;
     }
-    const auto& col_start = self->pattern->col_start();
-    const auto& row_index = self->pattern->row_index();
+    const auto& col_start = self->pattern->colStart();
+    const auto& row_index = self->pattern->rowIndex();
     bool finite = true;
     if (SUNMatGetID(J) == SUNMATRIX_SPARSE) {
       sunindextype* pointers = SUNSparseMatrix_IndexPointers(J);
@@ -152,13 +152,13 @@ struct VehicleIntegrator::Impl {
     return finite ? 0 : 1;  // non-finite: recoverable
   }
 
-  static void ErrorHandler(int /*error_code*/, const char* module, const char* function, char* msg, void* user) {
+  static void errorHandler(int /*error_code*/, const char* module, const char* function, char* msg, void* user) {
     auto* self = static_cast<Impl*>(user);
     std::snprintf(self->last_error.data(), self->last_error.size(), "%s %s: %s", module, function, msg);
   }
 
-  void AccumulateCounters() {
-    const IntegratorCounters now = CurrentCounters();
+  void accumulateCounters() {
+    const IntegratorCounters now = currentCounters();
     base.steps += now.steps;
     base.rhs_evals += now.rhs_evals;
     base.rhs_evals_jacobian += now.rhs_evals_jacobian;
@@ -169,7 +169,7 @@ struct VehicleIntegrator::Impl {
   }
 
   // Counters of CVODE since the last (re-)initialisation.
-  IntegratorCounters CurrentCounters() const {
+  IntegratorCounters currentCounters() const {
     IntegratorCounters c;
     long v = 0;
     if (CVodeGetNumSteps(cvode, &v) == CV_SUCCESS) c.steps = v;
@@ -189,36 +189,36 @@ struct VehicleIntegrator::Impl {
   }
 
   // Projects the state when a threshold is exceeded; returns true if it did (CVODE then re-initialised).
-  bool ProjectIfNeeded() {
-    Eigen::Map<Eigen::VectorXd> state = StateMap();
-    const ConstraintViolation v = EvaluateViolation(model, state, data);
+  bool projectIfNeeded() {
+    Eigen::Map<Eigen::VectorXd> state = stateMap();
+    const ConstraintViolation v = evaluateViolation(model, state, data);
     if (v.position <= settings.projection_position_threshold && v.velocity <= settings.projection_velocity_threshold &&
         v.euler_norm <= settings.projection_euler_threshold) {
       return false;
     }
-    ProjectState(model, state, data, settings.projection_tolerance, settings.projection_max_iterations);
+    projectState(model, state, data, settings.projection_tolerance, settings.projection_max_iterations);
     ++base.projections;
     return true;
   }
 
   // Integrates from (t, y) to t_out with Adams (fixed point; same tolerances, fallback_max_step) into y, adds its work
   // to the counters and re-initialises BDF at t_out. Allocates the Adams instance at its first use.
-  void FallBackToAdams(double t_out) {
+  void fallBackToAdams(double t_out) {
     if (adams == nullptr) {
       adams = CVodeCreate(CV_ADAMS, context);
       adams_solver = adams != nullptr ? SUNNonlinSol_FixedPoint(y, 0, context) : nullptr;
       if (adams_solver == nullptr) throw std::runtime_error("vehicle integrator: Adams fallback creation failed");
-      Check(CVodeSetErrHandlerFn(adams, &Impl::ErrorHandler, this), "CVodeSetErrHandlerFn");
-      Check(CVodeInit(adams, &Impl::Rhs, t, y), "CVodeInit");
-      Check(CVodeSetUserData(adams, this), "CVodeSetUserData");
-      Check(CVodeSStolerances(adams, settings.rtol, settings.atol), "CVodeSStolerances");
-      Check(CVodeSetMaxOrd(adams, 12), "CVodeSetMaxOrd");
-      Check(CVodeSetMaxNumSteps(adams, settings.max_steps_per_call), "CVodeSetMaxNumSteps");
+      check(CVodeSetErrHandlerFn(adams, &Impl::errorHandler, this), "CVodeSetErrHandlerFn");
+      check(CVodeInit(adams, &Impl::rhs, t, y), "CVodeInit");
+      check(CVodeSetUserData(adams, this), "CVodeSetUserData");
+      check(CVodeSStolerances(adams, settings.rtol, settings.atol), "CVodeSStolerances");
+      check(CVodeSetMaxOrd(adams, 12), "CVodeSetMaxOrd");
+      check(CVodeSetMaxNumSteps(adams, settings.max_steps_per_call), "CVodeSetMaxNumSteps");
       const double cap = settings.fallback_max_step > 0.0 ? settings.fallback_max_step : settings.max_step;
-      if (cap > 0.0) Check(CVodeSetMaxStep(adams, cap), "CVodeSetMaxStep");
-      Check(CVodeSetNonlinearSolver(adams, adams_solver), "CVodeSetNonlinearSolver");
+      if (cap > 0.0) check(CVodeSetMaxStep(adams, cap), "CVodeSetMaxStep");
+      check(CVodeSetNonlinearSolver(adams, adams_solver), "CVodeSetNonlinearSolver");
     } else {
-      Check(CVodeReInit(adams, t, y), "CVodeReInit");
+      check(CVodeReInit(adams, t, y), "CVodeReInit");
     }
     last_error[0] = '\0';
     realtype t_reached = t;
@@ -231,13 +231,13 @@ struct VehicleIntegrator::Impl {
     if (CVodeGetNumNonlinSolvConvFails(adams, &v) == CV_SUCCESS) base.nonlinear_convergence_failures += v;
     ++base.adams_fallbacks;
     t = t_reached;
-    if (flag < 0) Fail("CVode (Adams fallback)", flag);
-    ReInit();
+    if (flag < 0) fail("CVode (Adams fallback)", flag);
+    reInit();
   }
 
-  void ReInit() {
-    AccumulateCounters();
-    Check(CVodeReInit(cvode, t, y), "CVodeReInit");
+  void reInit() {
+    accumulateCounters();
+    check(CVodeReInit(cvode, t, y), "CVodeReInit");
     stepped_since_init = false;
     ls_counters_stale = true;
   }
@@ -249,8 +249,8 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
   Impl& s = *impl_;
   std::ostringstream os;
   if (!model.finalized()) throw std::runtime_error("vehicle integrator: the model must be finalised first");
-  if (y0.size() != model.state_size()) {
-    os << "vehicle integrator: initial state has " << y0.size() << " entries, the model needs " << model.state_size();
+  if (y0.size() != model.stateSize()) {
+    os << "vehicle integrator: initial state has " << y0.size() << " entries, the model needs " << model.stateSize();
     throw std::runtime_error(os.str());
   }
   if (!(settings.rtol > 0.0) || !(settings.atol > 0.0)) {
@@ -268,24 +268,24 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
     throw std::runtime_error(os.str());
   }
   s.t = t0;
-  s.Check(SUNContext_Create(nullptr, &s.context), "SUNContext_Create");
-  const sunindextype n = model.state_size();
+  s.check(SUNContext_Create(nullptr, &s.context), "SUNContext_Create");
+  const sunindextype n = model.stateSize();
   s.y = N_VNew_Serial(n, s.context);
   s.dky = N_VNew_Serial(n, s.context);
   if (s.y == nullptr || s.dky == nullptr) throw std::runtime_error("vehicle integrator: N_VNew_Serial failed");
-  s.StateMap() = y0;
+  s.stateMap() = y0;
   s.cvode = CVodeCreate(settings.method == IntegrationMethod::kBdf ? CV_BDF : CV_ADAMS, s.context);
   if (s.cvode == nullptr) throw std::runtime_error("vehicle integrator: CVodeCreate failed");
-  s.Check(CVodeSetErrHandlerFn(s.cvode, &Impl::ErrorHandler, &s), "CVodeSetErrHandlerFn");
+  s.check(CVodeSetErrHandlerFn(s.cvode, &Impl::errorHandler, &s), "CVodeSetErrHandlerFn");
   // A caller-supplied initial state may violate the constraints: project before the first step.
-  s.ProjectIfNeeded();
-  s.Check(CVodeInit(s.cvode, &Impl::Rhs, t0, s.y), "CVodeInit");
-  s.Check(CVodeSetUserData(s.cvode, &s), "CVodeSetUserData");
-  s.Check(CVodeSStolerances(s.cvode, settings.rtol, settings.atol), "CVodeSStolerances");
-  s.Check(CVodeSetMaxOrd(s.cvode, settings.max_order), "CVodeSetMaxOrd");
-  s.Check(CVodeSetMaxNumSteps(s.cvode, settings.max_steps_per_call), "CVodeSetMaxNumSteps");
-  if (settings.max_step > 0.0) s.Check(CVodeSetMaxStep(s.cvode, settings.max_step), "CVodeSetMaxStep");
-  if (settings.initial_step > 0.0) s.Check(CVodeSetInitStep(s.cvode, settings.initial_step), "CVodeSetInitStep");
+  s.projectIfNeeded();
+  s.check(CVodeInit(s.cvode, &Impl::rhs, t0, s.y), "CVodeInit");
+  s.check(CVodeSetUserData(s.cvode, &s), "CVodeSetUserData");
+  s.check(CVodeSStolerances(s.cvode, settings.rtol, settings.atol), "CVodeSStolerances");
+  s.check(CVodeSetMaxOrd(s.cvode, settings.max_order), "CVodeSetMaxOrd");
+  s.check(CVodeSetMaxNumSteps(s.cvode, settings.max_steps_per_call), "CVodeSetMaxNumSteps");
+  if (settings.max_step > 0.0) s.check(CVodeSetMaxStep(s.cvode, settings.max_step), "CVodeSetMaxStep");
+  if (settings.initial_step > 0.0) s.check(CVodeSetInitStep(s.cvode, settings.initial_step), "CVodeSetInitStep");
   if (settings.method == IntegrationMethod::kBdf && settings.jacobian == JacobianKind::kColoured) {
     s.pattern = std::make_unique<JacobianPattern>(model);
     s.jacobian_work = std::make_unique<JacobianWork>(model, *s.pattern);
@@ -300,8 +300,8 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
     if (s.error_weights == nullptr || s.jacobian == nullptr || s.linear_solver == nullptr) {
       throw std::runtime_error("vehicle integrator: matrix / linear solver creation failed");
     }
-    s.Check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
-    s.Check(CVodeSetJacFn(s.cvode, &Impl::ColouredJacobian), "CVodeSetJacFn");
+    s.check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
+    s.check(CVodeSetJacFn(s.cvode, &Impl::colouredJacobian), "CVodeSetJacFn");
   } else if (settings.method == IntegrationMethod::kBdf) {
     s.jacobian = SUNDenseMatrix(n, n, s.context);
     s.linear_solver = SUNLinSol_Dense(s.y, s.jacobian, s.context);
@@ -309,18 +309,18 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
       throw std::runtime_error("vehicle integrator: dense matrix / linear solver creation failed");
     }
     // No Jacobian function: CVODE uses its difference-quotient approximation.
-    s.Check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
-    if (settings.cost != nullptr) s.Check(CVodeSetJacFn(s.cvode, &Impl::Jacobian), "CVodeSetJacFn");
+    s.check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
+    if (settings.cost != nullptr) s.check(CVodeSetJacFn(s.cvode, &Impl::timedDqJacobian), "CVodeSetJacFn");
   } else {
     s.nonlinear_solver = SUNNonlinSol_FixedPoint(s.y, 0, s.context);
     if (s.nonlinear_solver == nullptr) throw std::runtime_error("vehicle integrator: fixed-point solver creation failed");
-    s.Check(CVodeSetNonlinearSolver(s.cvode, s.nonlinear_solver), "CVodeSetNonlinearSolver");
+    s.check(CVodeSetNonlinearSolver(s.cvode, s.nonlinear_solver), "CVodeSetNonlinearSolver");
   }
 }
 
 VehicleIntegrator::~VehicleIntegrator() = default;
 
-void VehicleIntegrator::AdvanceTo(double t) {
+void VehicleIntegrator::advanceTo(double t) {
   Impl& s = *impl_;
   if (!(t > s.t)) {
     std::ostringstream os;
@@ -334,17 +334,17 @@ void VehicleIntegrator::AdvanceTo(double t) {
   if (bdf_failed && s.settings.method == IntegrationMethod::kBdf && s.settings.adams_fallback) {
     // y holds the last successful step at t_reached: Adams takes the rest of the interval, BDF restarts at t.
     s.t = t_reached;
-    s.FallBackToAdams(t);
+    s.fallBackToAdams(t);
   } else {
-    if (flag < 0) s.Fail("CVode", flag);
+    if (flag < 0) s.fail("CVode", flag);
     s.ls_counters_stale = false;
     s.t = t_reached;
     s.stepped_since_init = true;
   }
-  if (s.ProjectIfNeeded()) s.ReInit();
+  if (s.projectIfNeeded()) s.reInit();
 }
 
-void VehicleIntegrator::InterpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const {
+void VehicleIntegrator::interpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const {
   const Impl& s = *impl_;
   if (!s.stepped_since_init) {
     if (std::abs(t - s.t) > 1e-12 * std::max(1.0, std::abs(s.t))) {
@@ -352,21 +352,21 @@ void VehicleIntegrator::InterpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_ou
       os << "vehicle integrator: InterpolateAt(" << t << "): no step since (re)initialisation at " << s.t;
       throw std::runtime_error(os.str());
     }
-    y_out = s.StateMap();
+    y_out = s.stateMap();
     return;
   }
   const int flag = CVodeGetDky(s.cvode, t, 0, s.dky);
   if (flag < 0) {
     double t0 = 0.0, t1 = 0.0;
-    LastStepInterval(t0, t1);
+    lastStepInterval(t0, t1);
     std::ostringstream os;
     os << "vehicle integrator: InterpolateAt(" << t << ") outside the last step [" << t0 << ", " << t1 << "]";
     throw std::runtime_error(os.str());
   }
-  y_out = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(s.dky), s.model.state_size());
+  y_out = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(s.dky), s.model.stateSize());
 }
 
-void VehicleIntegrator::LastStepInterval(double& t_begin, double& t_end) const {
+void VehicleIntegrator::lastStepInterval(double& t_begin, double& t_end) const {
   const Impl& s = *impl_;
   if (!s.stepped_since_init) {
     t_begin = t_end = s.t;
@@ -379,27 +379,27 @@ void VehicleIntegrator::LastStepInterval(double& t_begin, double& t_end) const {
   t_begin = t_current - h_last;
 }
 
-void VehicleIntegrator::Reset(const Eigen::VectorXd& y, double t) {
+void VehicleIntegrator::reset(const Eigen::VectorXd& y, double t) {
   Impl& s = *impl_;
-  if (y.size() != s.model.state_size()) {
+  if (y.size() != s.model.stateSize()) {
     throw std::runtime_error("vehicle integrator: Reset with a state of " + std::to_string(y.size()) +
-                             " entries, the model needs " + std::to_string(s.model.state_size()));
+                             " entries, the model needs " + std::to_string(s.model.stateSize()));
   }
-  s.StateMap() = y;
+  s.stateMap() = y;
   s.t = t;
-  s.ProjectIfNeeded();
-  s.ReInit();
+  s.projectIfNeeded();
+  s.reInit();
 }
 
 double VehicleIntegrator::time() const { return impl_->t; }
 
 Eigen::Map<const Eigen::VectorXd> VehicleIntegrator::state() const {
-  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(impl_->y), impl_->model.state_size());
+  return Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(impl_->y), impl_->model.stateSize());
 }
 
-IntegratorCounters VehicleIntegrator::Counters() const {
+IntegratorCounters VehicleIntegrator::counters() const {
   const Impl& s = *impl_;
-  const IntegratorCounters now = s.CurrentCounters();
+  const IntegratorCounters now = s.currentCounters();
   IntegratorCounters c = s.base;
   c.steps += now.steps;
   c.rhs_evals += now.rhs_evals;
@@ -415,8 +415,8 @@ IntegratorCounters VehicleIntegrator::Counters() const {
   return c;
 }
 
-ConstraintViolation VehicleIntegrator::Violation() {
-  return EvaluateViolation(impl_->model, impl_->StateMap(), impl_->data);
+ConstraintViolation VehicleIntegrator::violation() {
+  return evaluateViolation(impl_->model, impl_->stateMap(), impl_->data);
 }
 
 }  // namespace rail::vehicle

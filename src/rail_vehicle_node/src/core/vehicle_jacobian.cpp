@@ -9,29 +9,29 @@
 
 namespace rail::vehicle {
 
-int JacobianPattern::Column(const VehicleModel& model, int b, int l) const {
-  return l < 7 ? VehicleModel::PositionOffset(b) + l : model.VelocityOffset(b) + (l - 7);
+int JacobianPattern::column(const VehicleModel& model, int b, int l) const {
+  return l < 7 ? VehicleModel::positionOffset(b) + l : model.velocityOffset(b) + (l - 7);
 }
 
 JacobianPattern::JacobianPattern(const VehicleModel& model) {
-  const int n_b = model.n_bodies();
-  n_ = model.state_size();
+  const int n_b = model.nBodies();
+  n_ = model.stateSize();
   // Bodies coupled by the range-space solve: the body's joint cluster, or the body alone.
   std::vector<std::vector<int>> cluster_of(static_cast<std::size_t>(n_b));
   for (int b = 0; b < n_b; ++b) {
-    const int c = model.cluster_of_body()[static_cast<std::size_t>(b)];
-    cluster_of[static_cast<std::size_t>(b)] = c < 0 ? std::vector<int>{b} : model.constraint_clusters()[static_cast<std::size_t>(c)].bodies;
+    const int c = model.clusterOfBody()[static_cast<std::size_t>(b)];
+    cluster_of[static_cast<std::size_t>(b)] = c < 0 ? std::vector<int>{b} : model.constraintClusters()[static_cast<std::size_t>(c)].bodies;
   }
   // Row bodies of each body's columns, and the bodies each force element touches.
   std::vector<std::set<int>> rows_of(static_cast<std::size_t>(n_b));
   for (int b = 0; b < n_b; ++b) {
     for (int c : cluster_of[static_cast<std::size_t>(b)]) rows_of[static_cast<std::size_t>(b)].insert(c);
   }
-  const auto& elements = model.force_elements();
+  const auto& elements = model.forceElements();
   std::vector<std::set<int>> touches(elements.size());
   for (std::size_t e = 0; e < elements.size(); ++e) {
     std::vector<std::vector<int>> groups;
-    elements[e]->CouplingGroups(groups);
+    elements[e]->couplingGroups(groups);
     for (const auto& group : groups) {
       for (int b : group) {
         touches[e].insert(b);
@@ -74,17 +74,17 @@ JacobianPattern::JacobianPattern(const VehicleModel& model) {
   std::vector<std::set<int>> column_rows(static_cast<std::size_t>(n_));
   for (int b = 0; b < n_b; ++b) {
     for (int l = 0; l < 13; ++l) {
-      std::set<int>& rows = column_rows[static_cast<std::size_t>(Column(model, b, l))];
-      rows.insert(Column(model, b, l));
+      std::set<int>& rows = column_rows[static_cast<std::size_t>(column(model, b, l))];
+      rows.insert(column(model, b, l));
       for (int r : rows_of[static_cast<std::size_t>(b)]) {
-        for (int i = 0; i < 6; ++i) rows.insert(model.VelocityOffset(r) + i);
+        for (int i = 0; i < 6; ++i) rows.insert(model.velocityOffset(r) + i);
       }
       if (l >= 3 && l < 7) {
-        for (int i = 0; i < 4; ++i) rows.insert(VehicleModel::EulerOffset(b) + i);
+        for (int i = 0; i < 4; ++i) rows.insert(VehicleModel::eulerOffset(b) + i);
       } else if (l >= 7 && l < 10) {
-        rows.insert(VehicleModel::PositionOffset(b) + (l - 7));
+        rows.insert(VehicleModel::positionOffset(b) + (l - 7));
       } else if (l >= 10) {
-        for (int i = 0; i < 4; ++i) rows.insert(VehicleModel::EulerOffset(b) + i);
+        for (int i = 0; i < 4; ++i) rows.insert(VehicleModel::eulerOffset(b) + i);
       }
     }
   }
@@ -97,29 +97,29 @@ JacobianPattern::JacobianPattern(const VehicleModel& model) {
 }
 
 JacobianWork::JacobianWork(const VehicleModel& model, const JacobianPattern& pattern)
-    : y_perturbed(Eigen::VectorXd::Zero(model.state_size())),
-      f0(Eigen::VectorXd::Zero(model.state_size())),
-      f(Eigen::VectorXd::Zero(model.state_size())),
-      increment(Eigen::VectorXd::Zero(model.state_size())),
-      element_g(Eigen::MatrixXd::Zero(model.n_velocities(), static_cast<Eigen::Index>(model.force_elements().size()))),
-      all_live(model.force_elements().size(), 1),
-      none_live(model.force_elements().size(), 0),
+    : y_perturbed(Eigen::VectorXd::Zero(model.stateSize())),
+      f0(Eigen::VectorXd::Zero(model.stateSize())),
+      f(Eigen::VectorXd::Zero(model.stateSize())),
+      increment(Eigen::VectorXd::Zero(model.stateSize())),
+      element_g(Eigen::MatrixXd::Zero(model.nVelocities(), static_cast<Eigen::Index>(model.forceElements().size()))),
+      all_live(model.forceElements().size(), 1),
+      none_live(model.forceElements().size(), 0),
       values(static_cast<std::size_t>(pattern.nonzeros()), 0.0) {}
 
-int EvaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, double t,
+int evaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, double t,
                      const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& weight,
                      double min_increment, VehicleData& data, JacobianWork& work, core::CostClock* cost) {
-  const auto& elements = model.force_elements();
-  for (const auto& e : elements) e->SaveWorkState();
+  const auto& elements = model.forceElements();
+  for (const auto& e : elements) e->saveWorkState();
   int evaluations = 0;
   {
     // Each element's contribution at y, then f(y) from them (the same sums as the perturbed evaluations).
     core::CostClock::Scope timing(cost, core::CostClock::kVehicleJacobian);
     data.time = t;
-    ComputeKinematics(model, y, data);
-    ComputeElementForces(model, data, work.element_g);
-    for (const auto& e : elements) e->RestoreWorkState();
-    ComputeDerivativesPartial(model, t, y, work.f0, data, work.none_live, work.element_g);
+    computeKinematics(model, y, data);
+    computeElementForces(model, data, work.element_g);
+    for (const auto& e : elements) e->restoreWorkState();
+    computeDerivativesPartial(model, t, y, work.f0, data, work.none_live, work.element_g);
     ++evaluations;
   }
   const double srur = std::sqrt(std::numeric_limits<double>::epsilon());
@@ -130,26 +130,26 @@ int EvaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, 
   }
   Eigen::VectorXd& yp = work.y_perturbed;
   yp = y;
-  const auto& col_start = pattern.col_start();
-  const auto& row_index = pattern.row_index();
-  for (int c = 0; c < pattern.n_body_colours(); ++c) {
-    const std::vector<int>& bodies = pattern.colour_bodies(c);
-    const std::vector<char>& live = pattern.live_elements(c);
+  const auto& col_start = pattern.colStart();
+  const auto& row_index = pattern.rowIndex();
+  for (int c = 0; c < pattern.nBodyColours(); ++c) {
+    const std::vector<int>& bodies = pattern.colourBodies(c);
+    const std::vector<char>& live = pattern.liveElements(c);
     for (int l = 0; l < 13; ++l) {
       for (int b : bodies) {
-        const int j = pattern.Column(model, b, l);
+        const int j = pattern.column(model, b, l);
         yp[j] = y[j] + work.increment[j];
       }
       {
         core::CostClock::Scope timing(cost, core::CostClock::kVehicleJacobian);
-        ComputeDerivativesPartial(model, t, yp, work.f, data, live, work.element_g);
+        computeDerivativesPartial(model, t, yp, work.f, data, live, work.element_g);
         ++evaluations;
       }
       for (std::size_t e = 0; e < elements.size(); ++e) {
-        if (live[e] != 0) elements[e]->RestoreWorkState();
+        if (live[e] != 0) elements[e]->restoreWorkState();
       }
       for (int b : bodies) {
-        const int j = pattern.Column(model, b, l);
+        const int j = pattern.column(model, b, l);
         const double inverse = 1.0 / work.increment[j];
         for (int k = col_start[static_cast<std::size_t>(j)]; k < col_start[static_cast<std::size_t>(j + 1)]; ++k) {
           const int i = row_index[static_cast<std::size_t>(k)];

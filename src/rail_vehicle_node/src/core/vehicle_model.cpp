@@ -7,18 +7,18 @@
 
 namespace rail::vehicle {
 
-void VehicleModel::RequireBuilding(const char* what) const {
+void VehicleModel::requireBuilding(const char* what) const {
   if (finalized_) throw std::runtime_error(std::string("vehicle model: ") + what + " after Finalize()");
 }
 
-void VehicleModel::RequireBody(int body, bool ground_allowed, const std::string& what) const {
-  if ((ground_allowed && body == kGround) || (body >= 0 && body < n_bodies())) return;
+void VehicleModel::requireBody(int body, bool ground_allowed, const std::string& what) const {
+  if ((ground_allowed && body == kGround) || (body >= 0 && body < nBodies())) return;
   throw std::runtime_error("vehicle model: " + what + ": body index " + std::to_string(body) + " out of range (" +
-                           std::to_string(n_bodies()) + " bodies)");
+                           std::to_string(nBodies()) + " bodies)");
 }
 
-int VehicleModel::AddBody(const RigidBody& body) {
-  RequireBuilding("AddBody");
+int VehicleModel::addBody(const RigidBody& body) {
+  requireBuilding("AddBody");
   std::ostringstream os;
   if (!(body.mass > 0.0) || !std::isfinite(body.mass)) {
     os << "vehicle model: body " << body.name << ": mass must be > 0, got " << body.mass;
@@ -46,12 +46,12 @@ int VehicleModel::AddBody(const RigidBody& body) {
   stored.p_reference.normalize();
   bodies_.push_back(stored);
   inverse_inertia_.push_back(J.inverse());
-  return n_bodies() - 1;
+  return nBodies() - 1;
 }
 
-int VehicleModel::AddLoadPoint(const std::string& name, int body, const Vector3& s_in_body) {
-  RequireBuilding("AddLoadPoint");
-  RequireBody(body, false, "load point " + name);
+int VehicleModel::addLoadPoint(const std::string& name, int body, const Vector3& s_in_body) {
+  requireBuilding("AddLoadPoint");
+  requireBody(body, false, "load point " + name);
   for (const auto& p : load_points_) {
     if (p.name == name) throw std::runtime_error("vehicle model: load point name " + name + " defined twice");
   }
@@ -59,116 +59,116 @@ int VehicleModel::AddLoadPoint(const std::string& name, int body, const Vector3&
   return static_cast<int>(load_points_.size()) - 1;
 }
 
-void VehicleModel::AddJoint(std::unique_ptr<Joint> joint) {
-  RequireBuilding("AddJoint");
-  RequireBody(joint->body_i(), false, "joint " + joint->name() + " body_i");
-  RequireBody(joint->body_j(), true, "joint " + joint->name() + " body_j");
-  if (joint->body_i() == joint->body_j()) {
+void VehicleModel::addJoint(std::unique_ptr<Joint> joint) {
+  requireBuilding("AddJoint");
+  requireBody(joint->bodyI(), false, "joint " + joint->name() + " body_i");
+  requireBody(joint->bodyJ(), true, "joint " + joint->name() + " body_j");
+  if (joint->bodyI() == joint->bodyJ()) {
     throw std::runtime_error("vehicle model: joint " + joint->name() + " connects a body to itself");
   }
   joints_.push_back(std::move(joint));
 }
 
-void VehicleModel::AddForceElement(std::unique_ptr<ForceElement> element) {
-  RequireBuilding("AddForceElement");
-  RequireBody(element->body_i(), true, "force element " + element->name() + " body_i");
-  RequireBody(element->body_j(), true, "force element " + element->name() + " body_j");
+void VehicleModel::addForceElement(std::unique_ptr<ForceElement> element) {
+  requireBuilding("AddForceElement");
+  requireBody(element->bodyI(), true, "force element " + element->name() + " body_i");
+  requireBody(element->bodyJ(), true, "force element " + element->name() + " body_j");
   forces_.push_back(std::move(element));
 }
 
-Matrix3 VehicleModel::ReferenceRotation(int body) const {
+Matrix3 VehicleModel::referenceRotation(int body) const {
   if (body == kGround) return Matrix3::Identity();
-  RequireBody(body, false, "reference rotation");
-  return RotationFromEulerParameters(bodies_[static_cast<std::size_t>(body)].p_reference);
+  requireBody(body, false, "reference rotation");
+  return rotationFromEulerParameters(bodies_[static_cast<std::size_t>(body)].p_reference);
 }
 
-Vector3 VehicleModel::WorldToBodyAtReference(int body, const Vector3& p_in_world) const {
+Vector3 VehicleModel::worldToBodyAtReference(int body, const Vector3& p_in_world) const {
   if (body == kGround) return p_in_world;
-  RequireBody(body, false, "world to body");
-  return ReferenceRotation(body).transpose() * (p_in_world - bodies_[static_cast<std::size_t>(body)].r_reference);
+  requireBody(body, false, "world to body");
+  return referenceRotation(body).transpose() * (p_in_world - bodies_[static_cast<std::size_t>(body)].r_reference);
 }
 
-int VehicleModel::AddMeasurementPointAtWorld(const std::string& name, int body, const Vector3& p_in_world) {
-  RequireBuilding("AddMeasurementPointAtWorld");
-  RequireBody(body, false, "measurement point " + name);
+int VehicleModel::addMeasurementPointAtWorld(const std::string& name, int body, const Vector3& p_in_world) {
+  requireBuilding("AddMeasurementPointAtWorld");
+  requireBody(body, false, "measurement point " + name);
   for (const auto& p : measurement_points_) {
     if (p.name == name) throw std::runtime_error("measurement point '" + name + "' defined twice");
   }
-  measurement_points_.push_back(MeasurementPoint{name, body, WorldToBodyAtReference(body, p_in_world), p_in_world});
+  measurement_points_.push_back(MeasurementPoint{name, body, worldToBodyAtReference(body, p_in_world), p_in_world});
   return static_cast<int>(measurement_points_.size()) - 1;
 }
 
-int VehicleModel::AddLoadPointAtWorld(const std::string& name, int body, const Vector3& p_in_world) {
-  RequireBody(body, false, "load point " + name);
-  return AddLoadPoint(name, body, WorldToBodyAtReference(body, p_in_world));
+int VehicleModel::addLoadPointAtWorld(const std::string& name, int body, const Vector3& p_in_world) {
+  requireBody(body, false, "load point " + name);
+  return addLoadPoint(name, body, worldToBodyAtReference(body, p_in_world));
 }
 
-void VehicleModel::AddSphericalJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world) {
-  RequireBody(body_i, false, "joint " + name + " body_i");
-  RequireBody(body_j, true, "joint " + name + " body_j");
-  AddJoint(std::make_unique<SphericalJoint>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
-                                            WorldToBodyAtReference(body_j, p_in_world)));
+void VehicleModel::addSphericalJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world) {
+  requireBody(body_i, false, "joint " + name + " body_i");
+  requireBody(body_j, true, "joint " + name + " body_j");
+  addJoint(std::make_unique<SphericalJoint>(name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world),
+                                            worldToBodyAtReference(body_j, p_in_world)));
 }
 
-void VehicleModel::AddRevoluteJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+void VehicleModel::addRevoluteJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
                                       const Vector3& axis_in_world) {
-  RequireBody(body_i, false, "joint " + name + " body_i");
-  RequireBody(body_j, true, "joint " + name + " body_j");
-  AddJoint(std::make_unique<RevoluteJoint>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
-                                           WorldToBodyAtReference(body_j, p_in_world),
-                                           ReferenceRotation(body_i).transpose() * axis_in_world,
-                                           ReferenceRotation(body_j).transpose() * axis_in_world));
+  requireBody(body_i, false, "joint " + name + " body_i");
+  requireBody(body_j, true, "joint " + name + " body_j");
+  addJoint(std::make_unique<RevoluteJoint>(name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world),
+                                           worldToBodyAtReference(body_j, p_in_world),
+                                           referenceRotation(body_i).transpose() * axis_in_world,
+                                           referenceRotation(body_j).transpose() * axis_in_world));
 }
 
-void VehicleModel::AddFixedJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world) {
-  RequireBody(body_i, false, "joint " + name + " body_i");
-  RequireBody(body_j, true, "joint " + name + " body_j");
-  AddJoint(std::make_unique<FixedJoint>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
-                                        WorldToBodyAtReference(body_j, p_in_world),
-                                        ReferenceRotation(body_i).transpose(), ReferenceRotation(body_j).transpose()));
+void VehicleModel::addFixedJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world) {
+  requireBody(body_i, false, "joint " + name + " body_i");
+  requireBody(body_j, true, "joint " + name + " body_j");
+  addJoint(std::make_unique<FixedJoint>(name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world),
+                                        worldToBodyAtReference(body_j, p_in_world),
+                                        referenceRotation(body_i).transpose(), referenceRotation(body_j).transpose()));
 }
 
-void VehicleModel::AddBushingAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+void VehicleModel::addBushingAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
                                 const Matrix3& R_bushing_to_world, const Bushing::Parameters& parameters) {
-  RequireBody(body_i, true, "bushing " + name + " body_i");
-  RequireBody(body_j, true, "bushing " + name + " body_j");
-  AddForceElement(std::make_unique<Bushing>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
-                                            WorldToBodyAtReference(body_j, p_in_world),
-                                            ReferenceRotation(body_i).transpose() * R_bushing_to_world,
-                                            ReferenceRotation(body_j).transpose() * R_bushing_to_world, parameters));
+  requireBody(body_i, true, "bushing " + name + " body_i");
+  requireBody(body_j, true, "bushing " + name + " body_j");
+  addForceElement(std::make_unique<Bushing>(name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world),
+                                            worldToBodyAtReference(body_j, p_in_world),
+                                            referenceRotation(body_i).transpose() * R_bushing_to_world,
+                                            referenceRotation(body_j).transpose() * R_bushing_to_world, parameters));
 }
 
-void VehicleModel::AddPointToPointAt(const std::string& name, int body_i, int body_j, const Vector3& p_i_in_world,
+void VehicleModel::addPointToPointAt(const std::string& name, int body_i, int body_j, const Vector3& p_i_in_world,
                                      const Vector3& p_j_in_world, double stiffness, double damping,
                                      double free_length, double preload) {
-  RequireBody(body_i, true, "point-to-point " + name + " body_i");
-  RequireBody(body_j, true, "point-to-point " + name + " body_j");
+  requireBody(body_i, true, "point-to-point " + name + " body_i");
+  requireBody(body_j, true, "point-to-point " + name + " body_j");
   const double length = free_length < 0.0 ? (p_j_in_world - p_i_in_world).norm() : free_length;
-  AddForceElement(std::make_unique<PointToPointSpringDamper>(name, body_i, body_j,
-                                                             WorldToBodyAtReference(body_i, p_i_in_world),
-                                                             WorldToBodyAtReference(body_j, p_j_in_world), stiffness,
+  addForceElement(std::make_unique<PointToPointSpringDamper>(name, body_i, body_j,
+                                                             worldToBodyAtReference(body_i, p_i_in_world),
+                                                             worldToBodyAtReference(body_j, p_j_in_world), stiffness,
                                                              damping, length, preload));
 }
 
-void VehicleModel::AddBumpStopAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
+void VehicleModel::addBumpStopAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
                                  const Vector3& axis_in_world, std::vector<double> deflections,
                                  std::vector<double> forces) {
-  RequireBody(body_i, true, "bump stop " + name + " body_i");
-  RequireBody(body_j, true, "bump stop " + name + " body_j");
-  AddForceElement(std::make_unique<BumpStop>(name, body_i, body_j, WorldToBodyAtReference(body_i, p_in_world),
-                                             WorldToBodyAtReference(body_j, p_in_world),
-                                             ReferenceRotation(body_i).transpose() * axis_in_world,
+  requireBody(body_i, true, "bump stop " + name + " body_i");
+  requireBody(body_j, true, "bump stop " + name + " body_j");
+  addForceElement(std::make_unique<BumpStop>(name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world),
+                                             worldToBodyAtReference(body_j, p_in_world),
+                                             referenceRotation(body_i).transpose() * axis_in_world,
                                              std::move(deflections), std::move(forces)));
 }
 
-void VehicleModel::SetGravity(const Vector3& gravity_in_world) {
-  RequireBuilding("SetGravity");
+void VehicleModel::setGravity(const Vector3& gravity_in_world) {
+  requireBuilding("SetGravity");
   if (!gravity_in_world.allFinite()) throw std::runtime_error("vehicle model: gravity not finite");
   gravity_ = gravity_in_world;
 }
 
-void VehicleModel::SetBaumgarte(double alpha, double beta) {
-  RequireBuilding("SetBaumgarte");
+void VehicleModel::setBaumgarte(double alpha, double beta) {
+  requireBuilding("SetBaumgarte");
   if (!(alpha >= 0.0) || !(beta >= 0.0) || !std::isfinite(alpha) || !std::isfinite(beta)) {
     std::ostringstream os;
     os << "vehicle model: Baumgarte alpha and beta must be finite and >= 0, got " << alpha << ", " << beta;
@@ -178,13 +178,13 @@ void VehicleModel::SetBaumgarte(double alpha, double beta) {
   beta_ = beta;
 }
 
-void VehicleModel::SetKktSolver(KktSolver solver) {
-  RequireBuilding("SetKktSolver");
+void VehicleModel::setKktSolver(KktSolver solver) {
+  requireBuilding("SetKktSolver");
   kkt_solver_ = solver;
 }
 
-void VehicleModel::Finalize() {
-  RequireBuilding("Finalize");
+void VehicleModel::finalize() {
+  requireBuilding("Finalize");
   if (bodies_.empty()) throw std::runtime_error("vehicle model: no bodies");
   joint_rows_.clear();
   n_constraints_ = 0;
@@ -193,7 +193,7 @@ void VehicleModel::Finalize() {
     n_constraints_ += j->size();
   }
   // Joint clusters: connected components of the bodies over the joints (union-find).
-  const int n = n_bodies();
+  const int n = nBodies();
   std::vector<int> parent(static_cast<std::size_t>(n));
   for (int b = 0; b < n; ++b) parent[static_cast<std::size_t>(b)] = b;
   const auto root = [&parent](int b) {
@@ -201,13 +201,13 @@ void VehicleModel::Finalize() {
     return b;
   };
   for (const auto& j : joints_) {
-    if (j->body_i() != kGround && j->body_j() != kGround) parent[static_cast<std::size_t>(root(j->body_i()))] = root(j->body_j());
+    if (j->bodyI() != kGround && j->bodyJ() != kGround) parent[static_cast<std::size_t>(root(j->bodyI()))] = root(j->bodyJ());
   }
   clusters_.clear();
   cluster_of_body_.assign(static_cast<std::size_t>(n), -1);
   std::vector<int> cluster_of_root(static_cast<std::size_t>(n), -1);
   for (std::size_t k = 0; k < joints_.size(); ++k) {
-    const int b = joints_[k]->body_i() != kGround ? joints_[k]->body_i() : joints_[k]->body_j();
+    const int b = joints_[k]->bodyI() != kGround ? joints_[k]->bodyI() : joints_[k]->bodyJ();
     if (b == kGround) continue;
     int& c = cluster_of_root[static_cast<std::size_t>(root(b))];
     if (c < 0) {
@@ -225,13 +225,13 @@ void VehicleModel::Finalize() {
   finalized_ = true;
 }
 
-double VehicleModel::TotalMass() const {
+double VehicleModel::totalMass() const {
   double m = 0.0;
   for (const auto& b : bodies_) m += b.mass;
   return m;
 }
 
-int VehicleModel::BodyIndex(const std::string& name) const {
+int VehicleModel::bodyIndex(const std::string& name) const {
   for (std::size_t k = 0; k < bodies_.size(); ++k) {
     if (bodies_[k].name == name) return static_cast<int>(k);
   }
@@ -239,18 +239,18 @@ int VehicleModel::BodyIndex(const std::string& name) const {
   throw std::runtime_error("vehicle model: no body named " + name);
 }
 
-int VehicleModel::LoadPointIndex(const std::string& name) const {
+int VehicleModel::loadPointIndex(const std::string& name) const {
   for (std::size_t k = 0; k < load_points_.size(); ++k) {
     if (load_points_[k].name == name) return static_cast<int>(k);
   }
   throw std::runtime_error("vehicle model: no load point named " + name);
 }
 
-Eigen::VectorXd VehicleModel::ReferenceState() const {
-  Eigen::VectorXd y = Eigen::VectorXd::Zero(state_size());
-  for (int b = 0; b < n_bodies(); ++b) {
-    y.segment<3>(PositionOffset(b)) = bodies_[static_cast<std::size_t>(b)].r_reference;
-    y.segment<4>(EulerOffset(b)) = bodies_[static_cast<std::size_t>(b)].p_reference;
+Eigen::VectorXd VehicleModel::referenceState() const {
+  Eigen::VectorXd y = Eigen::VectorXd::Zero(stateSize());
+  for (int b = 0; b < nBodies(); ++b) {
+    y.segment<3>(positionOffset(b)) = bodies_[static_cast<std::size_t>(b)].r_reference;
+    y.segment<4>(eulerOffset(b)) = bodies_[static_cast<std::size_t>(b)].p_reference;
   }
   return y;
 }

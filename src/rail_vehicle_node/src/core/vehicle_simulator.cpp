@@ -18,11 +18,11 @@ namespace rc = rail::contact;
 namespace {
 
 // Axial vector of a (numerically) skew-symmetric matrix W: W x = w x x.
-Vector3 Axial(const Matrix3& W) {
+Vector3 axial(const Matrix3& W) {
   return 0.5 * Vector3(W(2, 1) - W(1, 2), W(0, 2) - W(2, 0), W(1, 0) - W(0, 1));
 }
 
-const char* SideName(rc::RailSide side) { return side == rc::RailSide::kLeft ? "left" : "right"; }
+const char* sideName(rc::RailSide side) { return side == rc::RailSide::kLeft ? "left" : "right"; }
 
 // The wheel-centre wrenches of a WheelWrenchSource at the right-hand side's time (data.time), applied at
 // each wheel's centre as the co-simulation frames define it (the axle point in the taping-line plane, the
@@ -34,18 +34,18 @@ class ExternalWheelWrenchElement : public ForceElement {
         model_(model),
         source_(source),
         active_(active) {}
-  void AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override {
+  void addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const override {
     if (!*active_) return;
     Vector3 f, n;
-    for (int k = 0; k < model_->n_wheels(); ++k) {
+    for (int k = 0; k < model_->nWheels(); ++k) {
       const WheelDefinition& w = model_->wheels()[static_cast<std::size_t>(k)];
       const BodyKinematics& b = data.bodies[static_cast<std::size_t>(w.body)];
-      source_->WheelWrenchAt(data.time, k, f, n);
-      ApplyForceAt(data, w.body, f, b.r + b.A * w.s_taping_in_body, g);
-      ApplyMoment(data, w.body, n, g);
+      source_->wheelWrenchAt(data.time, k, f, n);
+      applyForceAt(data, w.body, f, b.r + b.A * w.s_taping_in_body, g);
+      applyMoment(data, w.body, n, g);
     }
   }
-  double PotentialEnergy(const VehicleData& /*data*/) const override { return 0.0; }
+  double potentialEnergy(const VehicleData& /*data*/) const override { return 0.0; }
 
  private:
   const WheelRailContactModel* model_;
@@ -55,12 +55,12 @@ class ExternalWheelWrenchElement : public ForceElement {
 
 }  // namespace
 
-contact::WheelContactOptions DefaultVehicleContactOptions() {
+contact::WheelContactOptions defaultVehicleContactOptions() {
   // rail_contact's defaults include the 5 mm split overlap (the track node uses the same).
   return contact::WheelContactOptions{};
 }
 
-IntegrationMethod ChooseMethod(const core::Solver& solver, double speed, bool external_wrenches) {
+IntegrationMethod chooseMethod(const core::Solver& solver, double speed, bool external_wrenches) {
   switch (solver.vehicle_method) {
     case core::VehicleMethod::kBdf: return IntegrationMethod::kBdf;
     case core::VehicleMethod::kAdams: return IntegrationMethod::kAdams;
@@ -72,7 +72,7 @@ IntegrationMethod ChooseMethod(const core::Solver& solver, double speed, bool ex
                                                                             : IntegrationMethod::kBdf;
 }
 
-double ProjectOnTrack(const rc::TrackGeometry& track, const Vector3& p_in_world, double s_guess,
+double projectOnTrack(const rc::TrackGeometry& track, const Vector3& p_in_world, double s_guess,
                       rc::TrackPoint& tp) noexcept {
   const double lo = track.sStart(), hi = track.sEnd();
   double s = std::isfinite(s_guess) ? std::clamp(s_guess, lo, hi) : lo;
@@ -91,10 +91,10 @@ double ProjectOnTrack(const rc::TrackGeometry& track, const Vector3& p_in_world,
   return s;
 }
 
-Eigen::VectorXd PlaceOnTrack(const VehicleModel& model, const rc::TrackGeometry& track,
+Eigen::VectorXd placeOnTrack(const VehicleModel& model, const rc::TrackGeometry& track,
                              const std::vector<int>& wheelset_bodies, double start_arc_length, double speed,
                              double lift, const std::vector<double>& rolling_radius) {
-  const int n = model.n_bodies();
+  const int n = model.nBodies();
   const auto& bodies = model.bodies();
   const double x_lead = bodies[static_cast<std::size_t>(wheelset_bodies.front())].r_reference.x();
   auto station = [&](double x) { return start_arc_length - (x_lead - x); };
@@ -117,8 +117,8 @@ Eigen::VectorXd PlaceOnTrack(const VehicleModel& model, const rc::TrackGeometry&
     neighbours[static_cast<std::size_t>(i)].push_back(j);
     neighbours[static_cast<std::size_t>(j)].push_back(i);
   };
-  for (const auto& j : model.joints()) link(j->body_i(), j->body_j());
-  for (const auto& f : model.force_elements()) link(f->body_i(), f->body_j());
+  for (const auto& j : model.joints()) link(j->bodyI(), j->bodyJ());
+  for (const auto& f : model.forceElements()) link(f->bodyI(), f->bodyJ());
   std::vector<int> level(static_cast<std::size_t>(n), -1);
   std::vector<int> queue;
   for (int w : wheelset_bodies) level[static_cast<std::size_t>(w)] = 0, queue.push_back(w);
@@ -200,40 +200,40 @@ Eigen::VectorXd PlaceOnTrack(const VehicleModel& model, const rc::TrackGeometry&
             frame[static_cast<std::size_t>(m)].col(0);
   }
 
-  Eigen::VectorXd y = model.ReferenceState();
+  Eigen::VectorXd y = model.referenceState();
   for (int b = 0; b < n; ++b) {
     const RigidBody& body = bodies[static_cast<std::size_t>(b)];
     const Matrix3& R = frame[static_cast<std::size_t>(b)];
     const Vector3 p = origin[static_cast<std::size_t>(b)] + R * Vector3(0.0, body.r_reference.y(), body.r_reference.z() + lift);
-    const Matrix3 A = R * RotationFromEulerParameters(body.p_reference);
+    const Matrix3 A = R * rotationFromEulerParameters(body.p_reference);
     // Velocity field of the track frame moving at `speed` along the track, taken at the body's station.
     track.centre(s_of[static_cast<std::size_t>(b)], tp);
-    const Vector3 omega_track = speed * Axial(tp.dR_ds * tp.R_track_to_world.transpose());
+    const Vector3 omega_track = speed * axial(tp.dR_ds * tp.R_track_to_world.transpose());
     Vector3 omega = omega_track;
     for (std::size_t w = 0; w < wheelset_bodies.size(); ++w) {
       if (wheelset_bodies[w] == b) omega += speed / rolling_radius[w] * A.col(1);
     }
-    y.segment<3>(VehicleModel::PositionOffset(b)) = p;
-    y.segment<4>(VehicleModel::EulerOffset(b)) = EulerParametersFromRotation(A);
-    y.segment<3>(model.VelocityOffset(b)) =
+    y.segment<3>(VehicleModel::positionOffset(b)) = p;
+    y.segment<4>(VehicleModel::eulerOffset(b)) = eulerParametersFromRotation(A);
+    y.segment<3>(model.velocityOffset(b)) =
         speed * tp.dp_ds.normalized() + omega_track.cross(p - tp.p_center_in_world);
-    y.segment<3>(model.AngularVelocityOffset(b)) = A.transpose() * omega;
+    y.segment<3>(model.angularVelocityOffset(b)) = A.transpose() * omega;
   }
   return y;
 }
 
 VehicleSimulator::VehicleSimulator(const core::Scene& scene, const SimulatorSettings& settings) {
-  Build(scene, nullptr, settings);
+  build(scene, nullptr, settings);
 }
 
-VehicleSimulator::VehicleSimulator(const core::Scene& scene, const std::function<void(VehicleModel&)>& build,
+VehicleSimulator::VehicleSimulator(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
                                    const SimulatorSettings& settings) {
-  Build(scene, build, settings);
+  build(scene, build_model, settings);
 }
 
 VehicleSimulator::~VehicleSimulator() = default;
 
-void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(VehicleModel&)>& build,
+void VehicleSimulator::build(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
                              const SimulatorSettings& settings) {
   if (!scene.has_vehicle) throw std::runtime_error(scene.file + ": the scene has no vehicle");
   scene_ = scene;
@@ -241,22 +241,22 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   const std::string& data_file = scene.vehicle.data.path;
 
   // Track, profiles.
-  track_ = std::make_unique<rc::TrackGeometry>(core::build_track_geometry(scene));
-  wheel_profile_ = core::wheel_profile(scene);
-  rail_profile_ = core::rail_profile_curve(scene);
+  track_ = std::make_unique<rc::TrackGeometry>(core::buildTrackGeometry(scene));
+  wheel_profile_ = core::wheelProfile(scene);
+  rail_profile_ = core::railProfileCurve(scene);
 
   // Vehicle.
-  if (build) {
-    build(model_);
+  if (build_model) {
+    build_model(model_);
   } else {
-    LoadVehicleInto(data_file, model_);
+    loadVehicleInto(data_file, model_);
   }
-  const std::string source = build ? std::string("vehicle model") : data_file;
+  const std::string source = build_model ? std::string("vehicle model") : data_file;
 
   // Wheels: every load point is a wheel centre; a wheelset body carries two (y > 0 left, y < 0 right).
   std::map<int, std::vector<int>> points_of_body;
-  for (std::size_t k = 0; k < model_.load_points().size(); ++k) {
-    points_of_body[model_.load_points()[k].body].push_back(static_cast<int>(k));
+  for (std::size_t k = 0; k < model_.loadPoints().size(); ++k) {
+    points_of_body[model_.loadPoints()[k].body].push_back(static_cast<int>(k));
   }
   for (const auto& [body, points] : points_of_body) {
     const std::string& name = model_.bodies()[static_cast<std::size_t>(body)].name;
@@ -264,8 +264,8 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
       throw std::runtime_error(source + ": load_points: body " + name + " carries " + std::to_string(points.size()) +
                                " wheel centres, a wheelset needs 2");
     }
-    const double y0 = model_.load_points()[static_cast<std::size_t>(points[0])].s_in_body.y();
-    const double y1 = model_.load_points()[static_cast<std::size_t>(points[1])].s_in_body.y();
+    const double y0 = model_.loadPoints()[static_cast<std::size_t>(points[0])].s_in_body.y();
+    const double y1 = model_.loadPoints()[static_cast<std::size_t>(points[1])].s_in_body.y();
     if (!(y0 * y1 < 0.0)) {
       throw std::runtime_error(source + ": load_points: the wheel centres of " + name +
                                " must lie on either side of its centre (y > 0 left, y < 0 right)");
@@ -292,10 +292,10 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
       d.side = side == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight;
       d.body = body;
       for (int p : points) {
-        const double y = model_.load_points()[static_cast<std::size_t>(p)].s_in_body.y();
+        const double y = model_.loadPoints()[static_cast<std::size_t>(p)].s_in_body.y();
         if ((side == 0) == (y > 0.0)) d.load_point = p;
       }
-      d.s_load_point_in_body = model_.load_points()[static_cast<std::size_t>(d.load_point)].s_in_body;
+      d.s_load_point_in_body = model_.loadPoints()[static_cast<std::size_t>(d.load_point)].s_in_body;
       d.s_taping_in_body = Vector3(d.s_load_point_in_body.x(), side == 0 ? taping_y : -taping_y,
                                    d.s_load_point_in_body.z());
       wheels.push_back(d);
@@ -303,18 +303,18 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   }
 
   // Contact: the scene's effects and contact section over the caller's numerical settings.
-  const rc::WheelContactOptions options = core::contact_options(scene, settings.contact);
+  const rc::WheelContactOptions options = core::contactOptions(scene, settings.contact);
   nominal_height_ = scene.vehicle.nominal_radius;
   contact_model_ = std::make_unique<WheelRailContactModel>(
       *track_, wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
       rc::railSectionCentre(rail_profile_), options, std::move(wheels));
   contact_data_ = std::make_unique<WheelRailContactData>(*contact_model_);
-  model_.AddForceElement(std::make_unique<WheelRailContactElement>(contact_model_.get(), contact_data_.get()));
+  model_.addForceElement(std::make_unique<WheelRailContactElement>(contact_model_.get(), contact_data_.get()));
   if (settings.wheel_wrench_source != nullptr) {
-    model_.AddForceElement(std::make_unique<ExternalWheelWrenchElement>(
+    model_.addForceElement(std::make_unique<ExternalWheelWrenchElement>(
         contact_model_.get(), settings.wheel_wrench_source, &external_active_));
   }
-  model_.Finalize();
+  model_.finalize();
   data_ = std::make_unique<VehicleData>(model_);
   derailment_lift_ = settings.derailment_lift > 0.0 ? settings.derailment_lift : rc::flangeHeight(wheel_profile_);
 
@@ -323,16 +323,16 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   rolling_radius_.assign(static_cast<std::size_t>(n_ws), scene.vehicle.nominal_radius);
   const double s0 = scene.vehicle.start_arc_length;
   const double speed = scene.vehicle.speed;
-  Eigen::VectorXd y = PlaceOnTrack(model_, *track_, wheelset_bodies_, s0, speed, 0.0, rolling_radius_);
+  Eigen::VectorXd y = placeOnTrack(model_, *track_, wheelset_bodies_, s0, speed, 0.0, rolling_radius_);
   contact_data_->enabled = false;
-  ComputeKinematics(model_, y, *data_);
-  ComputeAppliedForces(model_, *data_);
+  computeKinematics(model_, y, *data_);
+  computeAppliedForces(model_, *data_);
   contact_data_->enabled = true;
   double fz = 0.0;
-  for (int b = 0; b < model_.n_bodies(); ++b) fz += data_->g[6 * b + 2];
+  for (int b = 0; b < model_.nBodies(); ++b) fz += data_->g[6 * b + 2];
   static_load_ = -fz;
   const double x_lead = model_.bodies()[static_cast<std::size_t>(wheelset_bodies_.front())].r_reference.x();
-  for (int k = 0; k < contact_model_->n_wheels(); ++k) {
+  for (int k = 0; k < contact_model_->nWheels(); ++k) {
     const auto& w = contact_model_->wheels()[static_cast<std::size_t>(k)];
     contact_data_->s_hint[static_cast<std::size_t>(k)] =
         s0 - (x_lead - model_.bodies()[static_cast<std::size_t>(w.body)].r_reference.x());
@@ -342,8 +342,8 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   // static load. A uniform lowering leaves every suspension force unchanged, so when the data file's
   // preloads balance its reference pose (paper_coach.yaml does) each wheel then carries its static share.
   auto residual = [&](double lift) {
-    y = PlaceOnTrack(model_, *track_, wheelset_bodies_, s0, speed, lift, rolling_radius_);
-    return SumWheelLoads(y) - static_load_;
+    y = placeOnTrack(model_, *track_, wheelset_bodies_, s0, speed, lift, rolling_radius_);
+    return sumWheelLoads(y) - static_load_;
   };
   double hi = 0.0, f_hi = residual(hi);
   double lo = -0.5e-3, f_lo = residual(lo);
@@ -412,7 +412,7 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   is.linear_solver = settings.linear_solver;
   core::Solver solver = scene.solver;
   solver.vehicle_max_step = max_step_;
-  method_ = ChooseMethod(solver, scene.vehicle.speed, cosimulation);
+  method_ = chooseMethod(solver, scene.vehicle.speed, cosimulation);
   is.method = method_;
   is.max_order = method_ == IntegrationMethod::kBdf ? 5 : 12;
   for (auto& work : contact_data_->work) {
@@ -427,9 +427,9 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
   integrator_ = std::make_unique<VehicleIntegrator>(model_, *data_, y, 0.0, is);
 
   // Output buffers.
-  y_scratch_ = Eigen::VectorXd::Zero(model_.state_size());
-  ydot_scratch_ = Eigen::VectorXd::Zero(model_.state_size());
-  wheel_out_.assign(static_cast<std::size_t>(contact_model_->n_wheels()), WheelOutput());
+  y_scratch_ = Eigen::VectorXd::Zero(model_.stateSize());
+  ydot_scratch_ = Eigen::VectorXd::Zero(model_.stateSize());
+  wheel_out_.assign(static_cast<std::size_t>(contact_model_->nWheels()), WheelOutput());
   wheel_s_.assign(wheel_out_.size(), 0.0);
   for (std::size_t k = 0; k < wheel_out_.size(); ++k) wheel_s_[k] = contact_data_->s_hint[k];
   wheelset_out_.assign(static_cast<std::size_t>(n_ws), WheelsetTrackOutput());
@@ -439,28 +439,28 @@ void VehicleSimulator::Build(const core::Scene& scene, const std::function<void(
         s0 - (x_lead - model_.bodies()[static_cast<std::size_t>(wheelset_bodies_[static_cast<std::size_t>(w)])]
                            .r_reference.x());
   }
-  body_out_.assign(static_cast<std::size_t>(model_.n_bodies()), BodyPose());
-  measurement_out_.assign(model_.measurement_points().size(), MeasurementOutput());
+  body_out_.assign(static_cast<std::size_t>(model_.nBodies()), BodyPose());
+  measurement_out_.assign(model_.measurementPoints().size(), MeasurementOutput());
   measure_ = scene.effects.floor_acceleration_output;
   energy_ = scene.effects.energy_output;
   if (measure_ && measurement_out_.empty()) {
     throw std::runtime_error(scene.file + ": effects.floor_acceleration_output is on but the vehicle data file " +
                              scene.vehicle.data.path + " has no measurement_points");
   }
-  for (int b = 0; b < model_.n_bodies(); ++b) {
+  for (int b = 0; b < model_.nBodies(); ++b) {
     body_out_[static_cast<std::size_t>(b)].name = model_.bodies()[static_cast<std::size_t>(b)].name;
   }
-  UpdateOutputs();
+  updateOutputs();
   // Timing from here on (the build's evaluations are set-up).
   cost_ = settings.cost;
   contact_data_->cost = cost_ != nullptr ? &cost_->contact : nullptr;
 }
 
-double VehicleSimulator::SumWheelLoads(const Eigen::VectorXd& y) {
-  ComputeKinematics(model_, y, *data_);
+double VehicleSimulator::sumWheelLoads(const Eigen::VectorXd& y) {
+  computeKinematics(model_, y, *data_);
   double sum = 0.0;
-  for (int k = 0; k < contact_model_->n_wheels(); ++k) {
-    EvaluateWheel(*contact_model_, *data_, k, *contact_data_);
+  for (int k = 0; k < contact_model_->nWheels(); ++k) {
+    evaluateWheel(*contact_model_, *data_, k, *contact_data_);
     for (const auto& c : contact_data_->result[static_cast<std::size_t>(k)].contact) {
       if (c.active) sum += c.N * c.normal_in_world.z();
     }
@@ -470,7 +470,7 @@ double VehicleSimulator::SumWheelLoads(const Eigen::VectorXd& y) {
 
 double VehicleSimulator::time() const { return integrator_->time(); }
 
-double VehicleSimulator::end_time_estimate() const {
+double VehicleSimulator::endTimeEstimate() const {
   const core::End& end = scene_.solver.end;
   if (end.kind == core::EndKind::kTime) return end.value;
   return scene_.vehicle.speed > 0.0 ? (end.value - scene_.vehicle.start_arc_length) / scene_.vehicle.speed : 0.0;
@@ -482,23 +482,23 @@ bool VehicleSimulator::finished() const {
   return leading_s_ >= end.value;
 }
 
-void VehicleSimulator::ResetState(const Eigen::VectorXd& y) {
-  integrator_->Reset(y, integrator_->time());
-  UpdateOutputs();
+void VehicleSimulator::resetState(const Eigen::VectorXd& y) {
+  integrator_->reset(y, integrator_->time());
+  updateOutputs();
 }
 
-void VehicleSimulator::UpdateOutputs() {
+void VehicleSimulator::updateOutputs() {
   y_scratch_ = integrator_->state();
   // Kinematics and contact (through the force element) at the current state.
   {
     core::CostClock::Scope timing(cost_, core::CostClock::kVehicleRhs);
-    ComputeDerivatives(model_, integrator_->time(), y_scratch_, ydot_scratch_, *data_);
+    computeDerivatives(model_, integrator_->time(), y_scratch_, ydot_scratch_, *data_);
   }
   rc::TrackPoint tp;
   for (std::size_t w = 0; w < wheelset_out_.size(); ++w) {
     const int body = wheelset_bodies_[w];
     const BodyKinematics& k = data_->bodies[static_cast<std::size_t>(body)];
-    const double s = ProjectOnTrack(*track_, k.r, wheelset_s_[w], tp);
+    const double s = projectOnTrack(*track_, k.r, wheelset_s_[w], tp);
     wheelset_s_[w] = s;
     const Matrix3& R = tp.R_track_to_world;
     const Vector3 d = R.transpose() * (k.r - tp.p_center_in_world);
@@ -524,11 +524,11 @@ void VehicleSimulator::UpdateOutputs() {
     o.p_in_world = k.r + arm;
     o.v_in_world = k.r_dot + k.omega_world.cross(arm);
     o.omega_in_world = k.omega_world;
-    o.orientation = EulerParametersFromRotation(k.A);
-    wheel_s_[i] = ProjectOnTrack(*track_, o.p_in_world, wheel_s_[i], tp);
+    o.orientation = eulerParametersFromRotation(k.A);
+    wheel_s_[i] = projectOnTrack(*track_, o.p_in_world, wheel_s_[i], tp);
     o.arc_length = wheel_s_[i];
     if (external_active_) {
-      settings_.wheel_wrench_source->WheelWrenchAt(integrator_->time(), static_cast<int>(i), o.force_in_world,
+      settings_.wheel_wrench_source->wheelWrenchAt(integrator_->time(), static_cast<int>(i), o.force_in_world,
                                                    o.moment_in_world);
     } else {
       o.force_in_world = contact_data_->force_in_world[i];
@@ -538,13 +538,13 @@ void VehicleSimulator::UpdateOutputs() {
   for (std::size_t b = 0; b < body_out_.size(); ++b) {
     const BodyKinematics& k = data_->bodies[b];
     body_out_[b].p_in_world = k.r;
-    body_out_[b].orientation = EulerParametersFromRotation(k.A);
+    body_out_[b].orientation = eulerParametersFromRotation(k.A);
   }
   if (energy_) {
     core::CostClock::Scope timing(cost_, core::CostClock::kEnergyOutput);
     // From the bodies' kinematics evaluated above (multibody_dynamics.hpp).
-    energy_out_.kinetic = KineticEnergy(model_, *data_);
-    energy_out_.potential = PotentialEnergy(model_, *data_);
+    energy_out_.kinetic = kineticEnergy(model_, *data_);
+    energy_out_.potential = potentialEnergy(model_, *data_);
   }
   if (!measure_) return;
   core::CostClock::Scope timing(cost_, core::CostClock::kFloorAccelerations);
@@ -552,43 +552,43 @@ void VehicleSimulator::UpdateOutputs() {
   // A point s' of the body: a_P = r_ddot + A (omega_dot' x s' + omega' x (omega' x s')); the accelerometer
   // reads A^T (a_P - g).
   for (std::size_t m = 0; m < measurement_out_.size(); ++m) {
-    const MeasurementPoint& p = model_.measurement_points()[m];
+    const MeasurementPoint& p = model_.measurementPoints()[m];
     const BodyKinematics& k = data_->bodies[static_cast<std::size_t>(p.body)];
-    const Vector3 r_ddot = ydot_scratch_.segment<3>(model_.VelocityOffset(p.body));
-    const Vector3 omega_dot_body = ydot_scratch_.segment<3>(model_.AngularVelocityOffset(p.body));
+    const Vector3 r_ddot = ydot_scratch_.segment<3>(model_.velocityOffset(p.body));
+    const Vector3 omega_dot_body = ydot_scratch_.segment<3>(model_.angularVelocityOffset(p.body));
     const Vector3& w = k.omega_body;
     const Vector3 a_rel_body = omega_dot_body.cross(p.s_in_body) + w.cross(w.cross(p.s_in_body));
     measurement_out_[m].specific_force_in_body = k.A.transpose() * (r_ddot - model_.gravity()) + a_rel_body;
   }
 }
 
-RunStatus VehicleSimulator::AdvanceTo(double t) {
+RunStatus VehicleSimulator::advanceTo(double t) {
   try {
-    integrator_->AdvanceTo(t);
+    integrator_->advanceTo(t);
   } catch (const std::exception& e) {
     const bool finite = integrator_->state().allFinite();
-    UpdateOutputs();
+    updateOutputs();
     std::ostringstream os;
     os << "the vehicle integration failed at t = " << integrator_->time() << " s, leading wheelset at s = "
        << leading_s_ << " m: " << e.what();
     message_ = os.str();
     return finite ? RunStatus::kIntegratorFailed : RunStatus::kNonFinite;
   }
-  return Check();
+  return check();
 }
 
-RunStatus VehicleSimulator::Check() {
+RunStatus VehicleSimulator::check() {
   const double t = integrator_->time();
   if (!integrator_->state().allFinite()) {
     // Name the first wheel whose wheelset state is not finite.
     const auto y = integrator_->state();
     for (const WheelDefinition& w : contact_model_->wheels()) {
-      const bool ok = y.segment<7>(VehicleModel::PositionOffset(w.body)).allFinite() &&
-                      y.segment<6>(model_.VelocityOffset(w.body)).allFinite();
+      const bool ok = y.segment<7>(VehicleModel::positionOffset(w.body)).allFinite() &&
+                      y.segment<6>(model_.velocityOffset(w.body)).allFinite();
       if (!ok) {
         std::ostringstream os;
         os << "non-finite state at wheel " << 2 * w.wheelset + (w.side == rc::RailSide::kLeft ? 0 : 1)
-           << " (wheelset " << w.wheelset + 1 << ", " << SideName(w.side) << ") near s = "
+           << " (wheelset " << w.wheelset + 1 << ", " << sideName(w.side) << ") near s = "
            << wheel_s_[static_cast<std::size_t>(2 * w.wheelset)] << " m, t = " << t << " s";
         message_ = os.str();
         return RunStatus::kNonFinite;
@@ -599,7 +599,7 @@ RunStatus VehicleSimulator::Check() {
     message_ = os.str();
     return RunStatus::kNonFinite;
   }
-  UpdateOutputs();
+  updateOutputs();
   // Derailment: a wheelset far off the centre line, a wheel lifted by more than the flange height, or a
   // wheel whose contact search finds no rail at all.
   for (const WheelsetTrackOutput& o : wheelset_out_) {

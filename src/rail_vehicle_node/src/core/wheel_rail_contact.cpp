@@ -19,16 +19,16 @@ WheelRailContactModel::WheelRailContactModel(const contact::TrackGeometry& track
 }
 
 WheelRailContactData::WheelRailContactData(const WheelRailContactModel& model) {
-  const auto n = static_cast<std::size_t>(model.n_wheels());
+  const auto n = static_cast<std::size_t>(model.nWheels());
   work.assign(n, contact::WheelContactWork());
   result.assign(n, contact::WheelContactResult());
   s_hint.assign(n, 0.0);
   force_in_world.assign(n, Vector3::Zero());
   moment_in_world.assign(n, Vector3::Zero());
-  ForEachSaved([](auto& live, auto& saved) { saved = live; });  // sizes the copies once
+  forEachSaved([](auto& live, auto& saved) { saved = live; });  // sizes the copies once
 }
 
-void EvaluateWheel(const WheelRailContactModel& model, const VehicleData& data, int k,
+void evaluateWheel(const WheelRailContactModel& model, const VehicleData& data, int k,
                    WheelRailContactData& cd) noexcept {
   const auto i = static_cast<std::size_t>(k);
   const WheelDefinition& w = model.wheels()[i];
@@ -41,7 +41,7 @@ void EvaluateWheel(const WheelRailContactModel& model, const VehicleData& data, 
   state.omega_in_world = b.omega_world;
   state.s_hint = cd.s_hint[i];
   contact::WheelContactResult& out = cd.result[i];
-  model.wheel_model().evaluate(state, w.side, model.track(), contact::RigidRailDeformation(), cd.work[i], out,
+  model.wheelModel().evaluate(state, w.side, model.track(), contact::RigidRailDeformation(), cd.work[i], out,
                              cd.cost);
   ++cd.evaluations;
   // Keep the hint on the rail section of the last valid contact point (the wheel moves < 1 mm per step).
@@ -63,32 +63,32 @@ WheelRailContactElement::WheelRailContactElement(const WheelRailContactModel* mo
       model_(model),
       contact_data_(contact_data) {}
 
-void WheelRailContactElement::AddForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const {
+void WheelRailContactElement::addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) const {
   WheelRailContactData& cd = *contact_data_;
   if (!cd.enabled) return;
-  for (int k = 0; k < model_->n_wheels(); ++k) {
-    EvaluateWheel(*model_, data, k, cd);
+  for (int k = 0; k < model_->nWheels(); ++k) {
+    evaluateWheel(*model_, data, k, cd);
     const WheelDefinition& w = model_->wheels()[static_cast<std::size_t>(k)];
     const BodyKinematics& b = data.bodies[static_cast<std::size_t>(w.body)];
     const Vector3 p_load = b.r + b.A * w.s_load_point_in_body;
-    ApplyForceAt(data, w.body, cd.force_in_world[static_cast<std::size_t>(k)], p_load, g);
-    ApplyMoment(data, w.body, cd.moment_in_world[static_cast<std::size_t>(k)], g);
+    applyForceAt(data, w.body, cd.force_in_world[static_cast<std::size_t>(k)], p_load, g);
+    applyMoment(data, w.body, cd.moment_in_world[static_cast<std::size_t>(k)], g);
   }
 }
 
-double WheelRailContactElement::PotentialEnergy(const VehicleData& /*data*/) const { return 0.0; }
+double WheelRailContactElement::potentialEnergy(const VehicleData& /*data*/) const { return 0.0; }
 
-void WheelRailContactElement::CouplingGroups(std::vector<std::vector<int>>& groups) const {
+void WheelRailContactElement::couplingGroups(std::vector<std::vector<int>>& groups) const {
   for (const WheelDefinition& w : model_->wheels()) groups.push_back({w.body});
 }
 
 // Same-size vector assignments: element copies, no allocation.
-void WheelRailContactElement::SaveWorkState() const {
-  contact_data_->ForEachSaved([](auto& live, auto& saved) { saved = live; });
+void WheelRailContactElement::saveWorkState() const {
+  contact_data_->forEachSaved([](auto& live, auto& saved) { saved = live; });
 }
 
-void WheelRailContactElement::RestoreWorkState() const {
-  contact_data_->ForEachSaved([](auto& live, auto& saved) { live = saved; });
+void WheelRailContactElement::restoreWorkState() const {
+  contact_data_->forEachSaved([](auto& live, auto& saved) { live = saved; });
 }
 
 }  // namespace rail::vehicle

@@ -52,17 +52,17 @@ namespace rc = rail::contact;
 namespace {
 
 // The stop request of this process (rail_ros/node_scaffold.hpp): SIGINT, SIGTERM or a lost master.
-std::atomic<bool>& g_stop = rail::ros_glue::node_stop().requested;
-std::atomic<int>& g_signal = rail::ros_glue::node_stop().signal;
-const char* StopReason() { return rail::ros_glue::node_stop().reason(); }
+std::atomic<bool>& g_stop = rail::ros_glue::nodeStop().requested;
+std::atomic<int>& g_signal = rail::ros_glue::nodeStop().signal;
+const char* stopReason() { return rail::ros_glue::nodeStop().reason(); }
 
-bool Records(const Scene& scene, const char* topic) {
+bool records(const Scene& scene, const char* topic) {
   return std::find(scene.output.topics.begin(), scene.output.topics.end(), topic) != scene.output.topics.end();
 }
 
-void Fill(geometry_msgs::Vector3& out, const rv::Vector3& v) { out.x = v.x(), out.y = v.y(), out.z = v.z(); }
-void Fill(geometry_msgs::Point& out, const rv::Vector3& v) { out.x = v.x(), out.y = v.y(), out.z = v.z(); }
-void Fill(geometry_msgs::Quaternion& out, const rv::Vector4& p) { out.w = p[0], out.x = p[1], out.y = p[2], out.z = p[3]; }
+void fill(geometry_msgs::Vector3& out, const rv::Vector3& v) { out.x = v.x(), out.y = v.y(), out.z = v.z(); }
+void fill(geometry_msgs::Point& out, const rv::Vector3& v) { out.x = v.x(), out.y = v.y(), out.z = v.z(); }
+void fill(geometry_msgs::Quaternion& out, const rv::Vector4& p) { out.w = p[0], out.x = p[1], out.y = p[2], out.z = p[3]; }
 
 // Messages of one output instant, sized once and refilled in place.
 struct Outputs {
@@ -84,7 +84,7 @@ struct Outputs {
     contact_wrenches.wrenches.resize(n);
     contact_wrenches.scene_hash = scene.hash;
     kinematics.wheelsets.resize(sim.wheelsets().size());
-    const auto& points = sim.model().measurement_points();
+    const auto& points = sim.model().measurementPoints();
     floor.header.frame_id = "carbody";
     energy.header.frame_id = "world";
     floor.names.resize(points.size());
@@ -92,7 +92,7 @@ struct Outputs {
     floor.specific_force.resize(points.size());
     for (std::size_t m = 0; m < points.size(); ++m) {
       floor.names[m] = points[m].name;
-      Fill(floor.position[m], points[m].p_reference);
+      fill(floor.position[m], points[m].p_reference);
     }
     tf.transforms.resize(sim.bodies().size());
     for (auto& h : {&wheel_states.header, &contact_points.header, &contact_wrenches.header, &kinematics.header}) {
@@ -100,14 +100,14 @@ struct Outputs {
     }
     for (std::size_t b = 0; b < sim.bodies().size(); ++b) {
       tf.transforms[b].header.frame_id = "world";
-      tf.transforms[b].child_frame_id = FrameName(sim, static_cast<int>(b));
+      tf.transforms[b].child_frame_id = frameName(sim, static_cast<int>(b));
     }
   }
 
   // tf frame names: carbody, bogie_1..., wheelset_1... (by reference x, front first); other bodies keep
   // their data-file names.
-  static std::string FrameName(const rv::VehicleSimulator& sim, int b) {
-    const auto& ws = sim.wheelset_bodies();
+  static std::string frameName(const rv::VehicleSimulator& sim, int b) {
+    const auto& ws = sim.wheelsetBodies();
     const auto it = std::find(ws.begin(), ws.end(), b);
     if (it != ws.end()) return "wheelset_" + std::to_string(it - ws.begin() + 1);
     const std::string& name = sim.model().bodies()[static_cast<std::size_t>(b)].name;
@@ -122,7 +122,7 @@ struct Outputs {
     return name;
   }
 
-  void Update(const rv::VehicleSimulator& sim, const ros::Time& stamp, std::uint64_t step) {
+  void update(const rv::VehicleSimulator& sim, const ros::Time& stamp, std::uint64_t step) {
     wheel_states.header.stamp = contact_points.header.stamp = contact_wrenches.header.stamp = stamp;
     kinematics.header.stamp = stamp;
     floor.header.stamp = stamp;
@@ -139,18 +139,18 @@ struct Outputs {
       m.wheelset = static_cast<std::uint8_t>(w.wheelset);
       m.side = static_cast<std::uint8_t>(w.side);
       m.arc_length = w.arc_length;
-      Fill(m.position, w.p_in_world);
-      Fill(m.orientation, w.orientation);
-      Fill(m.linear_velocity, w.v_in_world);
-      Fill(m.angular_velocity, w.omega_in_world);
+      fill(m.position, w.p_in_world);
+      fill(m.orientation, w.orientation);
+      fill(m.linear_velocity, w.v_in_world);
+      fill(m.angular_velocity, w.omega_in_world);
       rail_msgs::ContactWrench& cw = contact_wrenches.wrenches[i];
       cw.wheel_id = m.wheel_id;
-      Fill(cw.force, w.force_in_world);
-      Fill(cw.moment, w.moment_in_world);
+      fill(cw.force, w.force_in_world);
+      fill(cw.moment, w.moment_in_world);
       for (int k = 0; k < 2; ++k) {
         const rc::ContactPointResult& c = sim.contacts()[i].contact[k];
         rail_msgs::ContactPoint& p = contact_points.points[2 * i + static_cast<std::size_t>(k)];
-        rail::ros_glue::to_message(c, m.wheel_id, m.side, k, p);
+        rail::ros_glue::toMessage(c, m.wheel_id, m.side, k, p);
       }
     }
     for (std::size_t w = 0; w < sim.wheelsets().size(); ++w) {
@@ -169,11 +169,11 @@ struct Outputs {
         const rv::WheelOutput& wheel = sim.wheels()[i];
         if (wheel.wheelset != o.wheelset) continue;
         const rv::Vector3 f_in_track = track_point_.R_track_to_world.transpose() * wheel.force_in_world;
-        Fill(wheel.side == 0 ? m.left_force_in_track : m.right_force_in_track, f_in_track);
+        fill(wheel.side == 0 ? m.left_force_in_track : m.right_force_in_track, f_in_track);
       }
     }
     for (std::size_t m = 0; m < sim.measurements().size(); ++m) {
-      Fill(floor.specific_force[m], sim.measurements()[m].specific_force_in_body);
+      fill(floor.specific_force[m], sim.measurements()[m].specific_force_in_body);
     }
     for (std::size_t b = 0; b < sim.bodies().size(); ++b) {
       geometry_msgs::TransformStamped& t = tf.transforms[b];
@@ -181,7 +181,7 @@ struct Outputs {
       t.transform.translation.x = sim.bodies()[b].p_in_world.x();
       t.transform.translation.y = sim.bodies()[b].p_in_world.y();
       t.transform.translation.z = sim.bodies()[b].p_in_world.z();
-      Fill(t.transform.rotation, sim.bodies()[b].orientation);
+      fill(t.transform.rotation, sim.bodies()[b].orientation);
     }
   }
 };
@@ -215,7 +215,7 @@ struct VehicleMarkers {
       return static_cast<int>(array.markers.size()) - 1;
     };
     for (std::size_t b = 0; b < nb; ++b) {
-      const std::string name = Outputs::FrameName(sim, static_cast<int>(b));
+      const std::string name = Outputs::frameName(sim, static_cast<int>(b));
       if (name == "carbody") {
         body_marker[b] = add("carbody", visualization_msgs::Marker::CUBE, 24.0, 2.9, 2.6, 0.7f, 0.7f, 0.75f);
         array.markers[static_cast<std::size_t>(body_marker[b])].color.a = 0.35f;
@@ -239,38 +239,38 @@ struct VehicleMarkers {
   }
 
   // q * (rotation of +90 deg about x): a cylinder's axis (z) along the body's y (the axle).
-  static void AxleOrientation(const rv::Vector4& q, geometry_msgs::Quaternion& out) {
+  static void axleOrientation(const rv::Vector4& q, geometry_msgs::Quaternion& out) {
     const double c = std::sqrt(0.5), w = q[0], x = q[1], y = q[2], z = q[3];
     out.w = c * (w - x), out.x = c * (x + w), out.y = c * (y + z), out.z = c * (z - y);
   }
 
-  const visualization_msgs::MarkerArray& Update(const rv::VehicleSimulator& sim, const ros::Time& stamp) {
+  const visualization_msgs::MarkerArray& update(const rv::VehicleSimulator& sim, const ros::Time& stamp) {
     for (auto& m : array.markers) m.header.stamp = stamp;
     for (std::size_t b = 0; b < sim.bodies().size(); ++b) {
       visualization_msgs::Marker& m = array.markers[static_cast<std::size_t>(body_marker[b])];
-      Fill(m.pose.position, sim.bodies()[b].p_in_world);
+      fill(m.pose.position, sim.bodies()[b].p_in_world);
       if (m.ns == "wheelsets") {
-        AxleOrientation(sim.bodies()[b].orientation, m.pose.orientation);
+        axleOrientation(sim.bodies()[b].orientation, m.pose.orientation);
       } else {
-        Fill(m.pose.orientation, sim.bodies()[b].orientation);
+        fill(m.pose.orientation, sim.bodies()[b].orientation);
       }
     }
     for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
       const rv::WheelOutput& w = sim.wheels()[i];
       visualization_msgs::Marker& disc = array.markers[static_cast<std::size_t>(wheel_marker[i])];
-      Fill(disc.pose.position, w.p_in_world);
-      AxleOrientation(w.orientation, disc.pose.orientation);
+      fill(disc.pose.position, w.p_in_world);
+      axleOrientation(w.orientation, disc.pose.orientation);
       visualization_msgs::Marker& arrow = array.markers[static_cast<std::size_t>(arrow_marker[i])];
       const rv::Vector3 foot = w.p_in_world - rv::Vector3(0.0, 0.0, wheel_radius);
-      Fill(arrow.points[0], foot - force_scale * w.force_in_world);
-      Fill(arrow.points[1], foot);
+      fill(arrow.points[0], foot - force_scale * w.force_in_world);
+      fill(arrow.points[1], foot);
     }
     return array;
   }
 };
 
 // Writes a cost profile beside the bag: <bag stem><suffix>. Nothing without a bag.
-void WriteCost(const std::string& bag_path, const char* suffix, const std::string& yaml, const std::string& node) {
+void writeCost(const std::string& bag_path, const char* suffix, const std::string& yaml, const std::string& node) {
   if (bag_path.empty()) return;
   const std::size_t dot = bag_path.rfind(".bag");
   const std::string path = (dot != std::string::npos ? bag_path.substr(0, dot) : bag_path) + suffix;
@@ -283,7 +283,7 @@ void WriteCost(const std::string& bag_path, const char* suffix, const std::strin
   std::fclose(f);
 }
 
-std::string OutputDir(ros::NodeHandle& pnh) {
+std::string outputDir(ros::NodeHandle& pnh) {
   std::string dir;
   if (pnh.getParam("output_dir", dir) && !dir.empty()) return dir;
   const char* ros_home = std::getenv("ROS_HOME");
@@ -293,7 +293,7 @@ std::string OutputDir(ros::NodeHandle& pnh) {
 }
 
 // mkdir -p
-bool MakeDirs(const std::string& path) {
+bool makeDirs(const std::string& path) {
   for (std::size_t pos = 1; pos <= path.size(); ++pos) {
     if (pos == path.size() || path[pos] == '/') {
       const std::string part = path.substr(0, pos);
@@ -304,7 +304,7 @@ bool MakeDirs(const std::string& path) {
 }
 
 // The exit code of a run that stopped with status s (not kRunning/kFinished).
-int ExitCodeOf(rv::RunStatus s) {
+int exitCodeOf(rv::RunStatus s) {
   switch (s) {
     case rv::RunStatus::kDerailed:
     case rv::RunStatus::kLeftTrack: return kExitDerailed;
@@ -314,7 +314,7 @@ int ExitCodeOf(rv::RunStatus s) {
   }
 }
 
-const char* StatusName(rv::RunStatus s) {
+const char* statusName(rv::RunStatus s) {
   switch (s) {
     case rv::RunStatus::kRunning: return "running";
     case rv::RunStatus::kFinished: return "finished";
@@ -329,7 +329,7 @@ const char* StatusName(rv::RunStatus s) {
 // Runs the vehicle to solver.end: alone on the rigid track, or (scene.cosimulation()) as the vehicle side of
 // the co-simulation over the scene's transport, after the handshake. Returns the exit code.
 // peer: the track node's name (handshake).
-int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& peer) {
+int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& peer) {
   const std::string node = ros::this_node::getName();
   const bool cosim = scene.cosimulation();
   CostProfile cost;
@@ -345,14 +345,14 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   rv::VehicleSimulator* sim = nullptr;
   if (cosim) {
     try {
-      transport = rail::ros_glue::MakeTransport(scene, rail::core::coupling::Role::kVehicle, nh, pnh, peer,
+      transport = rail::ros_glue::makeTransport(scene, rail::core::coupling::Role::kVehicle, nh, pnh, peer,
                                               &g_stop);
     } catch (const rail::core::coupling::CouplingError& e) {
       ROS_FATAL("%s: cannot open the %s transport to the track node: %s", node.c_str(),
-                to_string(scene.solver.transport), e.what());
-      return rail::core::coupling::exit_code(e.status());
+                toString(scene.solver.transport), e.what());
+      return rail::core::coupling::exitCode(e.status());
     } catch (const std::exception& e) {
-      ROS_FATAL("%s: cannot open the %s transport: %s", node.c_str(), to_string(scene.solver.transport), e.what());
+      ROS_FATAL("%s: cannot open the %s transport: %s", node.c_str(), toString(scene.solver.transport), e.what());
       return kExitBadInput;
     }
     try {
@@ -374,11 +374,11 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     sim = sim_alone.get();
   }
   ROS_INFO("%s: vehicle settled on the rails (lowered %.4f mm, wheel loads %.1f N of %.1f N); integrating with "
-           "%s, rtol %g, atol %g, max step %g s (0: none)%s", node.c_str(), -sim->settle_lift() * 1e3,
-           sim->settled_wheel_load_sum(), sim->static_load(),
+           "%s, rtol %g, atol %g, max step %g s (0: none)%s", node.c_str(), -sim->settleLift() * 1e3,
+           sim->settledWheelLoadSum(), sim->staticLoad(),
            sim->method() == rv::IntegrationMethod::kBdf ? "BDF" : "Adams", scene.solver.vehicle_rtol,
-           scene.solver.vehicle_atol, sim->max_step(),
-           cosim ? (std::string("; co-simulation with the track over ") + to_string(scene.solver.transport) +
+           scene.solver.vehicle_atol, sim->maxStep(),
+           cosim ? (std::string("; co-simulation with the track over ") + toString(scene.solver.transport) +
                     ", track step " + std::to_string(scene.solver.track_step) + " s").c_str() : "");
 
   ros::Publisher pub_clock = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
@@ -413,10 +413,10 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   rosbag::Bag bag;
   std::string bag_path;
   if (!scene.output.bag.empty()) {
-    bag_path = scene.output.bag[0] == '/' ? scene.output.bag : OutputDir(pnh) + "/" + scene.output.bag;
+    bag_path = scene.output.bag[0] == '/' ? scene.output.bag : outputDir(pnh) + "/" + scene.output.bag;
     const std::string dir = bag_path.substr(0, bag_path.find_last_of('/'));
     try {
-      if (!MakeDirs(dir)) throw std::runtime_error("cannot create the directory " + dir);
+      if (!makeDirs(dir)) throw std::runtime_error("cannot create the directory " + dir);
       bag.open(bag_path, rosbag::bagmode::Write);
     } catch (const std::exception& e) {
       ROS_FATAL("%s: output.bag: cannot write %s: %s", node.c_str(), bag_path.c_str(), e.what());
@@ -428,36 +428,36 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
       return t;
     }().c_str(), bag_path.c_str());
   }
-  const bool rec_states = bag.isOpen() && Records(scene, "wheel_states");
-  const bool rec_points = bag.isOpen() && Records(scene, "contact_points") && own_points;
-  const bool rec_wrenches = bag.isOpen() && Records(scene, "contact_wrenches");
-  const bool rec_kinematics = bag.isOpen() && Records(scene, "wheelset_kinematics");
-  const bool rec_floor = bag.isOpen() && Records(scene, "floor_accelerations") && own_floor;
-  const bool rec_energy = bag.isOpen() && Records(scene, "vehicle_energy") && own_energy;
-  const bool rec_tf = bag.isOpen() && Records(scene, "tf");
-  const bool rec_clock = bag.isOpen() && Records(scene, "clock");
+  const bool rec_states = bag.isOpen() && records(scene, "wheel_states");
+  const bool rec_points = bag.isOpen() && records(scene, "contact_points") && own_points;
+  const bool rec_wrenches = bag.isOpen() && records(scene, "contact_wrenches");
+  const bool rec_kinematics = bag.isOpen() && records(scene, "wheelset_kinematics");
+  const bool rec_floor = bag.isOpen() && records(scene, "floor_accelerations") && own_floor;
+  const bool rec_energy = bag.isOpen() && records(scene, "vehicle_energy") && own_energy;
+  const bool rec_tf = bag.isOpen() && records(scene, "tf");
+  const bool rec_clock = bag.isOpen() && records(scene, "clock");
 
   Outputs out(*sim, scene);
   const double dt = 1.0 / scene.output.rate;
-  const double t_estimate = sim->end_time_estimate();
+  const double t_estimate = sim->endTimeEstimate();
   // A time end stops exactly there; an arc-length end when the leading wheelset passes it.
   const double t_limit = scene.solver.end.kind == EndKind::kTime ? scene.solver.end.value : 1e9;
   auto publish = [&](std::uint64_t step) {
     CostProfile::Scope timing(cost, CostProfile::kPublish);
     const ros::Time stamp(std::max(sim->time(), 1e-9));
-    out.Update(*sim, stamp, step);
+    out.update(*sim, stamp, step);
     pub_clock.publish(out.clock);
     pub_states.publish(out.wheel_states);
-    rail::core::TimedOutput(&clock, rail::core::CostClock::kContactPointOutput, own_points,
+    rail::core::timedOutput(&clock, rail::core::CostClock::kContactPointOutput, own_points,
                             [&] { pub_points.publish(out.contact_points); });
     pub_wrenches.publish(out.contact_wrenches);
     pub_kinematics.publish(out.kinematics);
     if (own_floor) pub_floor.publish(out.floor);
     if (own_energy) pub_energy.publish(out.energy);
     tf_broadcaster.sendTransform(out.tf.transforms);
-    rail::core::TimedOutput(&clock, rail::core::CostClock::kMarkers, markers && sim->time() + 1e-12 >= next_marker, [&] {
+    rail::core::timedOutput(&clock, rail::core::CostClock::kMarkers, markers && sim->time() + 1e-12 >= next_marker, [&] {
       next_marker += marker_period;
-      pub_markers.publish(markers->Update(*sim, stamp));
+      pub_markers.publish(markers->update(*sim, stamp));
     });
     if (!bag.isOpen()) return;
     CostProfile::Scope bag_timing(cost, CostProfile::kBagWrite);
@@ -486,7 +486,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     const double eta = (t_estimate - sim->time()) / std::max(rtf, 1e-12);
     ROS_INFO("%s: t = %.3f s (%.1f %%), leading wheelset at s = %.2f m, real-time factor %.3f, ETA %.0f s",
              node.c_str(), sim->time(), 100.0 * sim->time() / std::max(t_estimate, 1e-9),
-             sim->leading_arc_length(), rtf, std::max(eta, 0.0));
+             sim->leadingArcLength(), rtf, std::max(eta, 0.0));
   };
   try {
     if (!cosim) {
@@ -494,7 +494,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
       rv::RunStatus status = rv::RunStatus::kRunning;
       for (std::uint64_t step = 1; status == rv::RunStatus::kRunning; ++step) {
         if (g_stop || !ros::ok()) {
-          ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim->time(), StopReason());
+          ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim->time(), stopReason());
           stop_logged = true;
           rc = kExitInterrupted;
           break;
@@ -502,38 +502,38 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
         const double t_next = std::min(static_cast<double>(step) * dt, t_limit);
         {
           CostProfile::Scope timing(cost, CostProfile::kVehicleIntegration);
-          status = sim->AdvanceTo(t_next);
+          status = sim->advanceTo(t_next);
         }
         publish(step);
         report();
         if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
-          ROS_ERROR("%s: run stopped (%s): %s", node.c_str(), StatusName(status), sim->message().c_str());
-          rc = ExitCodeOf(status);
+          ROS_ERROR("%s: run stopped (%s): %s", node.c_str(), statusName(status), sim->message().c_str());
+          rc = exitCodeOf(status);
         }
       }
     } else {
       // Lockstep: every Step() is one track step h (one exchange); outputs at the exchange that reaches each
       // output time k / output.rate (the exchange times are k h exactly).
       rv::CosimVehicle& v = *cosim_vehicle;
-      const double h = v.track_step();
+      const double h = v.trackStep();
       std::uint64_t n_out = 0;
       rv::RunStatus status;
       {
         CostProfile::Scope timing(cost, CostProfile::kVehicleIntegration);
-        status = v.Start();
+        status = v.start();
       }
       while (true) {
         if (status != rv::RunStatus::kRunning && status != rv::RunStatus::kFinished) {
           if (status == rv::RunStatus::kIntegratorFailed &&
-              v.exchange_status() != rail::core::coupling::Status::kOk) {
+              v.exchangeStatus() != rail::core::coupling::Status::kOk) {
             ROS_FATAL("%s: exchange with the track node failed at step %llu (t = %.6f s): %s (track node %s)",
-                      node.c_str(), static_cast<unsigned long long>(v.steps_exchanged()), v.time(),
+                      node.c_str(), static_cast<unsigned long long>(v.stepsExchanged()), v.time(),
                       v.message().c_str(), peer.c_str());
-            rc = rail::core::coupling::exit_code(v.exchange_status());
+            rc = rail::core::coupling::exitCode(v.exchangeStatus());
           } else {
-            ROS_ERROR("%s: run stopped (%s) at t = %.6f s: %s", node.c_str(), StatusName(status), v.time(),
+            ROS_ERROR("%s: run stopped (%s) at t = %.6f s: %s", node.c_str(), statusName(status), v.time(),
                       v.message().c_str());
-            rc = ExitCodeOf(status);
+            rc = exitCodeOf(status);
           }
           break;
         }
@@ -544,45 +544,45 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
         }
         if (status == rv::RunStatus::kFinished) break;
         if (g_stop || !ros::ok()) {
-          ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), v.time(), StopReason());
+          ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), v.time(), stopReason());
           stop_logged = true;
           rc = kExitInterrupted;
           break;
         }
         CostProfile::Scope timing(cost, CostProfile::kVehicleIntegration);
-        status = v.Step();
+        status = v.step();
       }
-      v.Close();
+      v.close();
       ROS_INFO("%s: %llu steps exchanged with the track node, largest CVODE step %.3g s", node.c_str(),
-               static_cast<unsigned long long>(v.steps_exchanged()), v.max_internal_step());
+               static_cast<unsigned long long>(v.stepsExchanged()), v.maxInternalStep());
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-    const rv::IntegratorCounters c = sim->Counters();
+    const rv::IntegratorCounters c = sim->counters();
     // The exchange waits were timed inside the steps too: the integration is what remains.
     if (cosim) {
       cost.add(CostProfile::kVehicleIntegration, -cost.seconds(CostProfile::kTransportWait));
     }
     // Bag writes happen inside the publishing scope: publishing is what remains.
     cost.add(CostProfile::kPublish, -cost.seconds(CostProfile::kBagWrite));
-    cost.set_count("cvode_steps", static_cast<double>(c.steps));
-    cost.set_count("rhs_evaluations", static_cast<double>(c.rhs_evals));
-    cost.set_count("rhs_for_jacobians", static_cast<double>(c.rhs_evals_jacobian));
-    cost.set_count("jacobians", static_cast<double>(c.jacobian_evals));
-    cost.set_count("projections", static_cast<double>(c.projections));
-    if (cosim) cost.set_count("exchanges", static_cast<double>(cosim_vehicle->steps_exchanged()));
+    cost.setCount("cvode_steps", static_cast<double>(c.steps));
+    cost.setCount("rhs_evaluations", static_cast<double>(c.rhs_evals));
+    cost.setCount("rhs_for_jacobians", static_cast<double>(c.rhs_evals_jacobian));
+    cost.setCount("jacobians", static_cast<double>(c.jacobian_evals));
+    cost.setCount("projections", static_cast<double>(c.projections));
+    if (cosim) cost.setCount("exchanges", static_cast<double>(cosim_vehicle->stepsExchanged()));
     clock.counts[rail::core::CostClock::kIrregularityEvaluations] =
         rail::contact::Irregularities::stationsEvaluated() - irregularity_stations0;
-    ROS_INFO_STREAM(cost.to_text(node, wall, sim->time(), &clock));
-    WriteCost(bag_path, ".cost.yaml", cost.to_yaml(node, scene, wall, sim->time(), &clock), node);
+    ROS_INFO_STREAM(cost.toText(node, wall, sim->time(), &clock));
+    writeCost(bag_path, ".cost.yaml", cost.toYaml(node, scene, wall, sim->time(), &clock), node);
     ROS_INFO("%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
              "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections, %ld Adams fallbacks", node.c_str(),
-             rc == kExitOk ? "finished" : "stopped", sim->time(), sim->leading_arc_length(), wall,
+             rc == kExitOk ? "finished" : "stopped", sim->time(), sim->leadingArcLength(), wall,
              wall / std::max(sim->time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
              c.projections, c.adams_fallbacks);
     // How the contact was found (the vehicle's own contact on the rigid track), never hiding approximations.
     if (!cosim) {
       rail::contact::DetectionCounts detection;
-      for (const rail::contact::WheelContactWork& w : sim->contact_data().work)
+      for (const rail::contact::WheelContactWork& w : sim->contactData().work)
         for (const rail::contact::DetectionWork& d : w.detection) detection.add(d);
       if (detection.approximations > 0)
         ROS_WARN("%s: %s", node.c_str(), rail::contact::describe(detection).c_str());
@@ -592,7 +592,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   } catch (const std::exception& e) {
     ROS_FATAL("%s: internal error at t = %.4f s: %s", node.c_str(), sim->time(), e.what());
     rc = kExitInternal;
-    if (cosim_vehicle) cosim_vehicle->Close();
+    if (cosim_vehicle) cosim_vehicle->close();
   }
   if (master_watch.lost()) {
     ROS_ERROR("%s: the ROS master %s went away: stopped at t = %.4f s", node.c_str(), master_watch.uri().c_str(),
@@ -600,7 +600,7 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     rc = kExitInterrupted;
   } else if (g_signal != 0 && !stop_logged) {
     // The signal ended a wait for the peer (logged above as an interrupted exchange): say which signal.
-    ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim->time(), StopReason());
+    ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim->time(), stopReason());
   }
   if (bag.isOpen()) {
     bag.close();
@@ -612,16 +612,16 @@ int RunVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (ros_glue::node_help_requested(argc, argv, "rail_vehicle", "the vehicle side of a railsim run (multibody vehicle on CVODE; alone on the rigid track or co-simulated with rail_track)")) return 0;
+  if (ros_glue::nodeHelpRequested(argc, argv, "rail_vehicle", "the vehicle side of a railsim run (multibody vehicle on CVODE; alone on the rigid track or co-simulated with rail_track)")) return 0;
   ros::init(argc, argv, "rail_vehicle", ros::init_options::NoSigintHandler);
   // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
   ::umask(077);
-  ros_glue::install_stop_signals();
-  if (const int rc = ros_glue::wait_for_master(ros::this_node::getName(), g_signal); rc != 0) return rc;
+  ros_glue::installStopSignals();
+  if (const int rc = ros_glue::waitForMaster(ros::this_node::getName(), g_signal); rc != 0) return rc;
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
   Scene scene;
-  if (!ros_glue::read_scene(pnh, scene)) return kExitBadInput;
+  if (!ros_glue::readScene(pnh, scene)) return kExitBadInput;
   ROS_INFO_STREAM(ros::this_node::getName() << ": will simulate\n" << describe(scene, Role::kVehicle));
   if (!scene.has_vehicle) {
     ROS_INFO("%s: the scene has no vehicle (moving loads on the track alone): nothing to do",
@@ -631,10 +631,10 @@ int main(int argc, char** argv) {
   if (pnh.param("validate_only", false)) return kExitOk;
   std::string peer;
   if (scene.cosimulation()) {
-    const int rc = ros_glue::handshake_as_vehicle(scene, peer);
+    const int rc = ros_glue::handshakeAsVehicle(scene, peer);
     if (rc != kExitOk) return rc;
   }
-  const int rc = RunVehicle(scene, nh, pnh, peer);
+  const int rc = runVehicle(scene, nh, pnh, peer);
   ros::shutdown();
   return rc;
 }

@@ -53,7 +53,7 @@ struct WrenchFrame : FrameStamp {
 };
 
 // Copy src into dst without allocating. False (dst unchanged) when src.count exceeds dst's capacity.
-bool copy_frame(const WheelStateFrame& src, WheelStateFrame& dst);
-bool copy_frame(const WrenchFrame& src, WrenchFrame& dst);
+bool copyFrame(const WheelStateFrame& src, WheelStateFrame& dst);
+bool copyFrame(const WrenchFrame& src, WrenchFrame& dst);
 
 }  // namespace rail::core::coupling

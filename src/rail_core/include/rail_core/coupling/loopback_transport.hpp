@@ -18,18 +18,18 @@ class LoopbackLink {
   LoopbackLink(const LoopbackLink&) = delete;
   LoopbackLink& operator=(const LoopbackLink&) = delete;
 
-  FrameTransport& vehicle_end() { return vehicle_end_; }
-  FrameTransport& track_end() { return track_end_; }
+  FrameTransport& vehicleEnd() { return vehicle_end_; }
+  FrameTransport& trackEnd() { return track_end_; }
 
  private:
   class End : public FrameTransport {
    public:
     End(LoopbackLink& link, Role role) : link_(link), role_(role) {}
     Role role() const override { return role_; }
-    Result send_states(const WheelStateFrame& frame, Deadline deadline) override;
-    Result receive_wrenches(WrenchFrame& frame, Deadline deadline) override;
-    Result receive_states(WheelStateFrame& frame, Deadline deadline) override;
-    Result send_wrenches(const WrenchFrame& frame, Deadline deadline) override;
+    Result sendStates(const WheelStateFrame& frame, Deadline deadline) override;
+    Result receiveWrenches(WrenchFrame& frame, Deadline deadline) override;
+    Result receiveStates(WheelStateFrame& frame, Deadline deadline) override;
+    Result sendWrenches(const WrenchFrame& frame, Deadline deadline) override;
     void close() override;
 
    private:

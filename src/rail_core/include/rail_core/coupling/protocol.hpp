@@ -33,7 +33,7 @@ struct CouplingConfig {
   int wheel_count = 0;             // N wheels per frame, > 0
 };
 // From solver.track_step, solver.exchange_timeout, the scene hash and wheel count.
-CouplingConfig coupling_config(const Scene& scene);
+CouplingConfig couplingConfig(const Scene& scene);
 
 // Vehicle side: keeps the last two wrench frames and extrapolates them.
 class VehicleCoupling {
@@ -41,10 +41,10 @@ class VehicleCoupling {
   // Throws std::runtime_error for a non-physical config. The transport must outlive this object.
   VehicleCoupling(const CouplingConfig& config, FrameTransport& transport);
 
-  std::uint64_t next_step() const { return next_step_; }   // k of the next exchange
-  double next_exchange_time() const;                       // t_k = k h [s]
+  std::uint64_t nextStep() const { return next_step_; }   // k of the next exchange
+  double nextExchangeTime() const;                       // t_k = k h [s]
   // Whether the vehicle, at time t [s], has reached the next exchange (t >= t_k up to 1e-9 h).
-  bool exchange_due(double t) const;
+  bool exchangeDue(double t) const;
 
   // The outgoing frame: fill wheels[0 .. wheel_count) with the states interpolated at
   // next_exchange_time(); exchange() stamps step, time, scene hash and count.
@@ -55,21 +55,21 @@ class VehicleCoupling {
   Result exchange(Deadline deadline);
 
   // Wrench frames received so far, saturated at 2.
-  int frames_received() const { return frames_; }
+  int framesReceived() const { return frames_; }
   // Wrench of wheel i at time t [s] (world frame, about the wheel centre): with two frames the line
   // through (t_{k-1}, W_{k-1}) and (t_k, W_k) evaluated at t; with one frame W_0; with none zero.
   // Exact for a wrench history linear in time; for a smooth one the error is
   // W''/2 (t - t_k)(t - t_{k-1}), O(h^2) for t in [t_k, t_k + h].
-  void wrench_at(double t, int i, Eigen::Vector3d& f_wheel_in_world, Eigen::Vector3d& n_wheel_in_world) const;
+  void wrenchAt(double t, int i, Eigen::Vector3d& f_wheel_in_world, Eigen::Vector3d& n_wheel_in_world) const;
   // All wheels at time t into `out` (capacity >= wheel_count); out is stamped with t and the last step.
   void extrapolate(double t, WrenchFrame& out) const;
   // The last frame received (W_k); empty stamp before the first exchange.
-  const WrenchFrame& last_wrenches() const { return *last_; }
+  const WrenchFrame& lastWrenches() const { return *last_; }
 
   void close() { transport_.close(); }
 
  private:
-  Result exchange_until(Deadline deadline, bool default_deadline);
+  Result exchangeUntil(Deadline deadline, bool default_deadline);
 
   CouplingConfig config_;
   FrameTransport& transport_;
@@ -88,8 +88,8 @@ class TrackCoupling {
  public:
   TrackCoupling(const CouplingConfig& config, FrameTransport& transport);
 
-  std::uint64_t next_step() const { return next_step_; }  // step receive() waits for
-  double next_time() const;                               // its time k h [s]
+  std::uint64_t nextStep() const { return next_step_; }  // step receive() waits for
+  double nextTime() const;                               // its time k h [s]
 
   // Wait (up to exchange_timeout, or `deadline`) for the states of the next step and check them.
   Result receive();
@@ -105,8 +105,8 @@ class TrackCoupling {
   void close() { transport_.close(); }
 
  private:
-  Result receive_until(Deadline deadline, bool default_deadline);
-  Result send_until(Deadline deadline, bool default_deadline);
+  Result receiveUntil(Deadline deadline, bool default_deadline);
+  Result sendUntil(Deadline deadline, bool default_deadline);
 
   CouplingConfig config_;
   FrameTransport& transport_;

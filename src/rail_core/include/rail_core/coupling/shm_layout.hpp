@@ -73,14 +73,14 @@ struct ShmWheelWrench {
 };
 
 // Bytes of the frame area for a kind and capacity.
-constexpr std::size_t shm_payload_size(FrameKind kind, std::uint32_t wheel_capacity) {
+constexpr std::size_t shmPayloadSize(FrameKind kind, std::uint32_t wheel_capacity) {
   return sizeof(ShmFrameHead) + static_cast<std::size_t>(wheel_capacity) *
                                     (kind == FrameKind::kWheelStates ? sizeof(ShmWheelState)
                                                                      : sizeof(ShmWheelWrench));
 }
 // Bytes of the whole region.
-constexpr std::size_t shm_region_size(FrameKind kind, std::uint32_t wheel_capacity) {
-  return kShmPayloadOffset + shm_payload_size(kind, wheel_capacity);
+constexpr std::size_t shmRegionSize(FrameKind kind, std::uint32_t wheel_capacity) {
+  return kShmPayloadOffset + shmPayloadSize(kind, wheel_capacity);
 }
 
 }  // namespace rail::core::coupling::shm

@@ -31,12 +31,12 @@ struct ShmOptions {
 };
 
 // Name of the region written by `writer`: "/<prefix>_<scene hash, 16 hex>_<run id>_v2t" (or "_t2v").
-std::string shm_region_name(const std::string& prefix, std::uint64_t scene_hash, const std::string& run_id,
+std::string shmRegionName(const std::string& prefix, std::uint64_t scene_hash, const std::string& run_id,
                             Role writer);
 
 // Whether a process is running: exists, is not a zombie and, when start_time != 0, started at that time
 // (/proc/<pid>/stat field 22), which tells a reused pid apart.
-bool shm_process_alive(std::int64_t pid, std::uint64_t start_time);
+bool shmProcessAlive(std::int64_t pid, std::uint64_t start_time);
 
 // One mapped region (no protocol). Used by ShmTransport; public for tests and tools.
 class ShmRegion {
@@ -69,12 +69,12 @@ class ShmRegion {
   unsigned char* payload() const { return static_cast<unsigned char*>(base_) + shm::kShmPayloadOffset; }
   std::size_t size() const { return size_; }
   // Unlink the name if it still refers to this region (not to a newer one of the same name).
-  void unlink_if_same();
+  void unlinkIfSame();
   void unmap();
   // After create(): what it replaced, "" when the name was free: "replaced the stale region <name> left
   // by pid P on host 'H' (its creator is gone)", "(closed by its writer)" or "(incomplete, left by a
   // creator that died while setting it up)". For the node's log.
-  const std::string& replaced_stale() const { return replaced_; }
+  const std::string& replacedStale() const { return replaced_; }
 
  private:
   std::string name_;
@@ -94,21 +94,21 @@ class ShmTransport : public FrameTransport {
   ShmTransport& operator=(const ShmTransport&) = delete;
 
   Role role() const override { return options_.role; }
-  Result send_states(const WheelStateFrame& frame, Deadline deadline) override;
-  Result receive_wrenches(WrenchFrame& frame, Deadline deadline) override;
-  Result receive_states(WheelStateFrame& frame, Deadline deadline) override;
-  Result send_wrenches(const WrenchFrame& frame, Deadline deadline) override;
+  Result sendStates(const WheelStateFrame& frame, Deadline deadline) override;
+  Result receiveWrenches(WrenchFrame& frame, Deadline deadline) override;
+  Result receiveStates(WheelStateFrame& frame, Deadline deadline) override;
+  Result sendWrenches(const WrenchFrame& frame, Deadline deadline) override;
   void close() override;
 
-  const std::string& write_region_name() const { return write_.name(); }
-  const std::string& read_region_name() const { return read_.name(); }
-  std::int64_t peer_pid() const { return peer_pid_; }
+  const std::string& writeRegionName() const { return write_.name(); }
+  const std::string& readRegionName() const { return read_.name(); }
+  std::int64_t peerPid() const { return peer_pid_; }
   // This side's region replaced a stale one of a crashed run: ShmRegion::replaced_stale(), else "".
-  const std::string& replaced_stale() const { return write_.replaced_stale(); }
+  const std::string& replacedStale() const { return write_.replacedStale(); }
 
  private:
   // Wait until the region's turn flag equals `want_reader_turn`; the peer's closed bit ends the wait.
-  Result wait_turn(ShmRegion& region, bool want_reader_turn, std::uint32_t peer_closed_bit,
+  Result waitTurn(ShmRegion& region, bool want_reader_turn, std::uint32_t peer_closed_bit,
                    Deadline deadline);
   Result misuse(const char* call) const;
 

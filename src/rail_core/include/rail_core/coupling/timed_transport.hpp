@@ -12,21 +12,21 @@ class TimedTransport final : public FrameTransport {
   // inner and profile must outlive this object.
   TimedTransport(FrameTransport& inner, CostProfile& profile) : inner_(inner), profile_(profile) {}
   Role role() const override { return inner_.role(); }
-  Result send_states(const WheelStateFrame& f, Deadline d) override {
+  Result sendStates(const WheelStateFrame& f, Deadline d) override {
     CostProfile::Scope s(profile_, CostProfile::kTransportWait);
-    return inner_.send_states(f, d);
+    return inner_.sendStates(f, d);
   }
-  Result receive_wrenches(WrenchFrame& f, Deadline d) override {
+  Result receiveWrenches(WrenchFrame& f, Deadline d) override {
     CostProfile::Scope s(profile_, CostProfile::kTransportWait);
-    return inner_.receive_wrenches(f, d);
+    return inner_.receiveWrenches(f, d);
   }
-  Result receive_states(WheelStateFrame& f, Deadline d) override {
+  Result receiveStates(WheelStateFrame& f, Deadline d) override {
     CostProfile::Scope s(profile_, CostProfile::kTransportWait);
-    return inner_.receive_states(f, d);
+    return inner_.receiveStates(f, d);
   }
-  Result send_wrenches(const WrenchFrame& f, Deadline d) override {
+  Result sendWrenches(const WrenchFrame& f, Deadline d) override {
     CostProfile::Scope s(profile_, CostProfile::kTransportWait);
-    return inner_.send_wrenches(f, d);
+    return inner_.sendWrenches(f, d);
   }
   void close() override { inner_.close(); }
 

@@ -18,8 +18,8 @@ using Deadline = Clock::time_point;
 // Which node an endpoint belongs to. The vehicle writes wheel states and reads wrenches; the track the
 // reverse.
 enum class Role { kVehicle, kTrack };
-const char* to_string(Role r);  // "vehicle" / "track"
-inline Role peer_of(Role r) { return r == Role::kVehicle ? Role::kTrack : Role::kVehicle; }
+const char* toString(Role r);  // "vehicle" / "track"
+inline Role peerOf(Role r) { return r == Role::kVehicle ? Role::kTrack : Role::kVehicle; }
 
 // Outcome of a transport call or a protocol exchange.
 enum class Status {
@@ -30,12 +30,12 @@ enum class Status {
   kInterrupted,  // the caller's interrupt flag was raised while waiting
   kError,        // a system call failed or the transport was misused (message says which)
 };
-const char* to_string(Status s);
+const char* toString(Status s);
 
 // The exit code (rail_core/exit_codes.hpp) a node returns after a failed exchange with this status:
 // kTimeout and kPeerClosed -> kExitPeerTimeout (the peer stopped answering), kRefused -> kExitPeerRefused,
 // kInterrupted -> kExitInterrupted, kError -> kExitInternal, kOk -> kExitOk.
-int exit_code(Status s);
+int exitCode(Status s);
 
 // Status plus, when not kOk, one message. The message is only built on failure (no allocation on the
 // normal path: an empty std::string does not allocate).
@@ -64,11 +64,11 @@ class FrameTransport {
   virtual ~FrameTransport() = default;
   virtual Role role() const = 0;
   // Vehicle side: hand over the states (waits until the previous frame was taken), then read wrenches.
-  virtual Result send_states(const WheelStateFrame& frame, Deadline deadline) = 0;
-  virtual Result receive_wrenches(WrenchFrame& frame, Deadline deadline) = 0;
+  virtual Result sendStates(const WheelStateFrame& frame, Deadline deadline) = 0;
+  virtual Result receiveWrenches(WrenchFrame& frame, Deadline deadline) = 0;
   // Track side.
-  virtual Result receive_states(WheelStateFrame& frame, Deadline deadline) = 0;
-  virtual Result send_wrenches(const WrenchFrame& frame, Deadline deadline) = 0;
+  virtual Result receiveStates(WheelStateFrame& frame, Deadline deadline) = 0;
+  virtual Result sendWrenches(const WrenchFrame& frame, Deadline deadline) = 0;
   // Tell the peer this side is done and release the resources. Idempotent; never blocks.
   virtual void close() = 0;
 };
