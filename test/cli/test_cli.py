@@ -485,6 +485,37 @@ class TestCli(unittest.TestCase):
         left = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
         self.assertNotRegex(left, r"railsim_[ab]_\d+", "network namespaces left behind")
 
+    def test_rviz_inside_the_isolated_run(self):
+        # ./railsim run --rviz: rviz runs inside the run's network namespace (it reaches the run's master on
+        # loopback and the X display by its socket file), subscribes to the markers, and ends with the run.
+        env = dict(self.env)
+        env.pop("DISPLAY", None)
+        p = subprocess.run([RAILSIM, "run", SHORT, "--out", self.out, "--rviz"], capture_output=True, text=True,
+                           env=env, cwd=ROOT, timeout=CASE_TIMEOUT)
+        self.assertEqual(p.returncode, 1, p.stdout + p.stderr)
+        self.assertIn("run: --rviz needs a display (DISPLAY is not set)", p.stderr)
+        display = ":%d" % (50 + os.getpid() % 40)
+        xvfb = subprocess.Popen(["Xvfb", display, "-screen", "0", "1024x768x24"], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+        try:
+            time.sleep(1.0)
+            env = dict(self.env, DISPLAY=display, LIBGL_ALWAYS_SOFTWARE="1")
+            p = subprocess.run([RAILSIM, "run", SHORT, "--out", self.out, "--rviz"], capture_output=True, text=True,
+                               env=env, cwd=ROOT, timeout=CASE_TIMEOUT)
+        finally:
+            xvfb.terminate()
+            xvfb.wait()
+        text = p.stdout + p.stderr
+        self.assertEqual(p.returncode, 0, text)
+        self.assertNotIn("not isolating", text)
+        with open(os.path.join(self.out, "vehicle_rigid_short.log")) as f:
+            log = f.read()
+        self.assertRegex(log, r"process\[rviz-\d+\]: started with pid")
+        self.assertIn("finished at t = 0.5000 s", log)
+        self.assertNotRegex(log, r"(?i)could not connect to display|cannot (open|connect to) (the )?display")
+        self.assertIn("effects.rviz_markers=true", self.run_yaml("vehicle_rigid_short")["overrides"])
+        self.assertEqual([c for _, c in processes_naming("/usr/lib/rviz/rviz") if self.dir in c], [])
+
     def test_readme_standalone_example(self):
         env = dict(self.env, ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.port)
         cmd = ["bash", "-c", 'source "$0/devel/setup.bash" && exec "$@"', ROOT, "roslaunch", "-p", str(self.port),
