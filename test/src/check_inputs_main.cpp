@@ -246,7 +246,9 @@ std::string check(const std::string& path, const rail::core::SceneOverrides& ove
 
   // Co-simulation: the track side fed with the vehicle's wheel states.
   if (scene.cosimulation()) {
-    rt::CosimTrack track(scene);
+    rt::CosimTrackOptions track_options;
+    track_options.window.vehicle_length = vehicle->model().wheelSpan();  // as the handshake carries it
+    rt::CosimTrack track(scene, track_options);
     const bool deflections = scene.effects.rail_deflection_output && !scene.output.deflection_sections.empty();
     if (deflections) {
       for (std::size_t i = 0; i < scene.output.deflection_sections.size(); ++i) {

@@ -31,6 +31,7 @@ struct HandshakeServer {
   bool accepted = false;
   std::string refusal;
   std::string peer;  // the vehicle node's name
+  double wheel_span = 0.0;  // the vehicle's, m
 
   bool onRequest(rail_msgs::Handshake::Request& req, rail_msgs::Handshake::Response& res) {
     core::HandshakeInfo theirs;
@@ -40,6 +41,7 @@ struct HandshakeServer {
     theirs.wheel_count = req.wheel_count;
     theirs.track_step = req.track_step;
     theirs.transport = req.transport;
+    theirs.wheel_span = req.wheel_span;
     refusal = core::compareHandshake(mine, theirs);
     res.accepted = refusal.empty();
     res.message = refusal;
@@ -47,6 +49,7 @@ struct HandshakeServer {
     answered = true;
     accepted = res.accepted;
     peer = req.node_name;
+    wheel_span = req.wheel_span;
     return true;
   }
 };
@@ -69,7 +72,7 @@ void installStopSignals() {
   std::signal(SIGTERM, onStopSignal);
 }
 
-int handshakeAsVehicle(const core::Scene& scene, std::string& peer) {
+int handshakeAsVehicle(const core::Scene& scene, double wheel_span, std::string& peer) {
   const std::string& me = ros::this_node::getName();
   // Waits in short slices so that a track node that died (its guard's record, master_watch.hpp) is
   // reported at once, with its exit code, not after the whole timeout.
@@ -95,6 +98,7 @@ int handshakeAsVehicle(const core::Scene& scene, std::string& peer) {
   srv.request.wheel_count = mine.wheel_count;
   srv.request.track_step = mine.track_step;
   srv.request.transport = mine.transport;
+  srv.request.wheel_span = wheel_span;
   if (!ros::service::call(kHandshakeService, srv)) {
     ROS_FATAL("%s: the call to %s failed: the track node went away", me.c_str(), kHandshakeService);
     return core::kExitPeerTimeout;
@@ -109,7 +113,7 @@ int handshakeAsVehicle(const core::Scene& scene, std::string& peer) {
   return core::kExitOk;
 }
 
-int handshakeAsTrack(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer) {
+int handshakeAsTrack(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer, double& wheel_span) {
   const std::string& me = ros::this_node::getName();
   HandshakeServer server;
   server.mine = core::handshakeInfo(scene, me);
@@ -142,6 +146,7 @@ int handshakeAsTrack(ros::NodeHandle& nh, const core::Scene& scene, std::string&
   }
   ROS_INFO("%s: handshake with %s complete", me.c_str(), server.peer.c_str());
   peer = server.peer;
+  wheel_span = server.wheel_span;
   // Let the service response reach the caller before the server goes away.
   ros::WallDuration(0.1).sleep();
   return core::kExitOk;

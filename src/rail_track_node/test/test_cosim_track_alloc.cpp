@@ -115,7 +115,9 @@ WindowCounted windowAllocations(bool curve) {
       "  back_to_back: 1.592\n  wheelsets: 4\n"
       "effects:\n  track_model: flexible\nsolver:\n  track_step: 1.0e-4\n  vehicle_max_step: 1.0e-4\n"
       "  end: {time: 1.0}\n  track_window: {enabled: true, behind: 2.0, ahead: 2.0, shift: 3.0}\n";
-  rt::CosimTrack track(rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes"));
+  rt::CosimTrackOptions options;
+  options.window.vehicle_length = 21.7;  // the paper coach's wheel span (its data file's load points)
+  rt::CosimTrack track(rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes"), options);
   const rc::TrackGeometry& geo = track.geometry();
   const double taping_y = 0.5 * 1.592 + rc::flangeBackY(rc::makeS1002());
   const double offsets[4] = {0.0, 2.7, 19.0, 21.7}, V = 30.0, r0 = 0.445, h = 1e-4;

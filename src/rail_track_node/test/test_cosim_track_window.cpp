@@ -59,6 +59,15 @@ Scene lineScene(bool curve, double h) {
   return rail::core::loadSceneText(text, "w.yaml", configDir() + "/scenes");
 }
 
+// The paper coach's wheel span (Table 3: 2.7 m bogie wheelbase, 19 m between the bogie centres; the load
+// points of config/vehicle/paper_coach.yaml span 0.65 .. 22.35 m), which the vehicle node sends in the
+// handshake.
+rt::CosimTrackOptions coachWindow() {
+  rt::CosimTrackOptions o;
+  o.window.vehicle_length = 21.7;
+  return o;
+}
+
 Scene windowed(Scene sc, double margin) {
   sc.solver.track_window.enabled = true;
   sc.solver.track_window.behind = margin;
@@ -114,7 +123,7 @@ struct History {
 // design rails (rails at their self-weight state) and are lowered by 0.7 mm over the first 20 ms (the
 // loads rise to about the coach's static wheel load), then roll at that height.
 History run(const Scene& sc, double s_front0, long steps, const double (&sections)[2]) {
-  rt::CosimTrack track(sc);
+  rt::CosimTrack track(sc, coachWindow());
   History H;
   for (double s : sections) track.addSection(s);
   const rc::TrackGeometry& geo = track.geometry();
@@ -252,7 +261,7 @@ TEST(CosimTrackWindow, TransitionIntoCantedCurveMatchesFullLengthTrack) { checkA
 // evaluated or integrated, and a following good frame steps normally. Non-finite arc lengths too.
 TEST(CosimTrackWindow, WheelOutsideWindowIsAStatus) {
   const Scene sc = windowed(lineScene(false, 1e-4), 2.0);
-  rt::CosimTrack track(sc);
+  rt::CosimTrack track(sc, coachWindow());
   ASSERT_NE(track.trackWindow(), nullptr);
   EXPECT_EQ(track.sceneTrack(), nullptr);
   EXPECT_TRUE(track.flexible());
@@ -276,4 +285,19 @@ TEST(CosimTrackWindow, WheelOutsideWindowIsAStatus) {
   track.addSection(61.0);
   rt::RailSectionDeflection def;
   EXPECT_THROW(track.sectionDeflection(0, Eigen::VectorXd::Zero(10), def), std::runtime_error);
+}
+
+// The window is sized by the vehicle's wheel span, which the track side takes from the caller (the handshake),
+// never from the vehicle's data file: without it the build is refused, naming the option.
+TEST(CosimTrackWindow, RefusesAWindowWithoutTheWheelSpan) {
+  const Scene sc = windowed(lineScene(false, 1e-4), 2.0);
+  try {
+    rt::CosimTrack track(sc);
+    FAIL() << "built without a wheel span";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("CosimTrackOptions::window.vehicle_length: the vehicle's wheel span (m, > 0) "
+                                         "is needed for the track window"),
+              std::string::npos)
+        << e.what();
+  }
 }

@@ -42,6 +42,14 @@ TEST(PaperCoach, MatchesTable3) {
   EXPECT_NEAR(wheel.s_in_body.z(), 0.0, 1e-12);
 }
 
+// The wheel span the vehicle node sends in the handshake: first to last wheel centre of the data file.
+TEST(PaperCoach, WheelSpanIsFirstToLastWheelCentre) {
+  const VehicleModel model = loadVehicleModel(kCoach);
+  EXPECT_NEAR(model.wheelSpan(), 22.35 - 0.65, 1e-12);  // load points at x = 0.65 .. 22.35 m
+  VehicleModel none;
+  EXPECT_EQ(none.wheelSpan(), 0.0);
+}
+
 TEST(PaperCoach, ReferenceConfigurationSatisfiesJointsAndSuspensionBalancesGravity) {
   // With the wheelsets held (their weight plus the suspension load taken by the wheel wrenches) the data
   // file's preloads make the reference configuration an equilibrium: every acceleration vanishes.

@@ -16,6 +16,9 @@ struct HandshakeInfo {
   std::uint32_t wheel_count = 0;
   double track_step = 0.0;     // [s]
   std::string transport;
+  // The vehicle's first to last wheel centre at rest, from its model [m]: how long the track window must be.
+  // Not compared; 0 from the track side.
+  double wheel_span = 0.0;
 };
 
 HandshakeInfo handshakeInfo(const Scene& scene, const std::string& node);

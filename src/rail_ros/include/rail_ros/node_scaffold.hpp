@@ -31,10 +31,12 @@ void installStopSignals();
 // The vehicle's side: waits for the track's service (up to solver.handshake_timeout; a track node that died
 // meanwhile is reported at once with its exit code) and calls it. Returns 0 and the track node's name in
 // `peer`, else the exit code (4 no or dead peer, 3 refused, 5 stopped) after a FATAL line saying why.
-int handshakeAsVehicle(const core::Scene& scene, std::string& peer);
+// wheel_span: the vehicle's first to last wheel centre at rest (m), which the track sizes its window by.
+int handshakeAsVehicle(const core::Scene& scene, double wheel_span, std::string& peer);
 
 // The track's side: serves /railsim/handshake until the vehicle has called (same timeout and dead-peer
-// check). Returns 0 and the vehicle node's name in `peer`, else the exit code after a FATAL line.
-int handshakeAsTrack(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer);
+// check). Returns 0, the vehicle node's name in `peer` and its wheel span (m) in `wheel_span`, else the exit
+// code after a FATAL line.
+int handshakeAsTrack(ros::NodeHandle& nh, const core::Scene& scene, std::string& peer, double& wheel_span);
 
 }  // namespace rail::ros_glue

@@ -76,7 +76,8 @@ struct CosimTrackOptions {
   /// With solver.track_window.enabled: the window settings the scene does not hold (entering_static,
   /// condensed_ends, boundary_length, end_dashpots). behind, ahead, shift and length come from the scene,
   /// dt from solver.track_step, include_gravity and track from the fields above. vehicle_length (m, first
-  /// to last wheel): 0 = the spread in x of the vehicle data file's load_points (wheel centres).
+  /// to last wheel) is the vehicle's wheel span, required with a window: the vehicle node sends it in the
+  /// handshake (VehicleModel::wheelSpan()); a replay takes it from the recorded run's first frame.
   TrackWindowSettings window;
   /// Optional cost clock (must outlive the track; its window.cost is set from this one): contact
   /// evaluations (contact_detection, contact_forces including the semi-implicit Newton, flange searches,

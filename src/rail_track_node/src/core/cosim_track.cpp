@@ -16,7 +16,6 @@
 #include <rail_contact/beam_shape.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "rail_track_node/elements.hpp"
 
@@ -32,37 +31,6 @@ namespace {
 constexpr int kNodeDofs = 6;
 using Vector12d = rc::Vector12d;
 
-// First to last wheel (m): the spread along x of the vehicle data file's load_points (wheel centres, world
-// positions of the vehicle at rest on straight track, x along the track).
-double vehicleWheelSpan(const Scene& scene) {
-  const std::string& file = scene.vehicle.data.path;
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file);
-  } catch (const std::exception& e) {
-    throw SceneError(scene.file + ": vehicle.data: " + file + ": " + e.what());
-  }
-  const YAML::Node points = root["load_points"];
-  if (!points || !points.IsSequence() || points.size() == 0)
-    throw SceneError(file + ": load_points: a non-empty list of wheel centres is needed for the track window's "
-                            "vehicle length");
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const YAML::Node pos = points[i]["position"];
-    double x = 0.0;
-    try {
-      if (!pos || !pos.IsSequence() || pos.size() != 3) throw std::runtime_error("not a list of 3 numbers");
-      x = pos[0].as<double>();
-    } catch (const std::exception& e) {
-      std::ostringstream os;
-      os << file << ":" << (points[i].Mark().line + 1) << ": load_points[" << i << "].position: " << e.what();
-      throw SceneError(os.str());
-    }
-    lo = std::min(lo, x);
-    hi = std::max(hi, x);
-  }
-  return hi - lo;
-}
 }  // namespace
 
 // Semi-implicit coupling state (flexible, kSemiImplicit). Everything is sized at construction.
@@ -144,7 +112,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   // Geometry (both cases), FE track (flexible only).
   double section_depth = rc::uic60::kCentroidDepth;  // rail section centre below the head top, as the vehicle
   if (scene.runsFeIntegration() && scene.solver.track_window.enabled) {
-    // Moving window: settings of the scene, vehicle length from the options or the vehicle data, first
+    // Moving window: settings of the scene, the vehicle's wheel span from the options, first
     // window around the vehicle's start position (leading wheelset at vehicle.start_arc_length).
     TrackWindowSettings ws = options.window;
     ws.behind = scene.solver.track_window.behind;
@@ -155,7 +123,13 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     ws.include_gravity = options.include_gravity;
     ws.track = options.track;
     ws.cost = options.cost;
-    if (!(ws.vehicle_length > 0.0)) ws.vehicle_length = vehicleWheelSpan(scene);
+    if (!(ws.vehicle_length > 0.0) || !std::isfinite(ws.vehicle_length)) {
+      std::ostringstream os;
+      os << "CosimTrackOptions::window.vehicle_length: the vehicle's wheel span (m, > 0) is needed for the track "
+            "window (the vehicle node sends it in the handshake), got "
+         << ws.vehicle_length;
+      throw std::invalid_argument(os.str());
+    }
     const double s_front = scene.vehicle.start_arc_length;
     window_ = std::make_unique<TrackWindow>(scene, ws, s_front - ws.vehicle_length, s_front);
     geometry_ = &window_->geometry();

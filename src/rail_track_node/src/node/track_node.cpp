@@ -412,6 +412,15 @@ class ReplayTransport final : public rail::core::coupling::FrameTransport {
     }
   }
   double endTime() const { return t_stop_; }
+  // First to last wheel centre along the track in the run's first frame (m): the recorded vehicle's span.
+  double wheelSpan() const {
+    double lo = frames_.front().wheels.front().arc_length, hi = lo;
+    for (const auto& w : frames_.front().wheels) {
+      lo = std::min(lo, w.arc_length);
+      hi = std::max(hi, w.arc_length);
+    }
+    return hi - lo;
+  }
   rail::core::coupling::Role role() const override { return rail::core::coupling::Role::kTrack; }
   Result sendStates(const rail::core::coupling::WheelStateFrame&, rail::core::coupling::Deadline) override {
     return {Status::kError, "replay: the track end does not send states"};
@@ -465,16 +474,31 @@ class ReplayTransport final : public rail::core::coupling::FrameTransport {
 // track step with the CosimTrack until the vehicle closes, and publishes /contact_points (world) and
 // /rail_deflection (track frame, output.deflection_sections) at output.rate. The vehicle node records the
 // run's bag (output.bag); what only the track has (contact_points, rail_deflection, when output.topics
-// names them) goes to a companion bag beside it, <stem>.track.bag. peer: the vehicle node's name.
+// names them) goes to a companion bag beside it, <stem>.track.bag. peer: the vehicle node's name;
+// wheel_span: the vehicle's first to last wheel (m, from the handshake; a replay takes it from the bag).
 int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer,
-             const std::string& replay_bag = "") {
+             double wheel_span, const std::string& replay_bag = "") {
   namespace cc = rail::core::coupling;
   const std::string me = ros::this_node::getName();
   CostProfile cost;
   rail::ros_glue::MasterWatch master_watch(g_stop);  // a lost master stops the run like a signal
   rail::core::CostClock clock;  // the finer split, filled by the track core (cost_profile.hpp)
+  std::unique_ptr<cc::FrameTransport> transport;
+  const bool replay = !replay_bag.empty();
+  if (replay) {
+    try {
+      auto r = std::make_unique<ReplayTransport>(replay_bag, scene, scene.wheelCount());
+      ROS_INFO("%s: replaying the wheel states of %s (t = 0 .. %.4f s)", me.c_str(), replay_bag.c_str(), r->endTime());
+      wheel_span = r->wheelSpan();
+      transport = std::move(r);
+    } catch (const std::exception& e) {
+      ROS_FATAL("%s: %s", me.c_str(), e.what());
+      return kExitBadInput;
+    }
+  }
   rt::CosimTrackOptions track_options;
   track_options.cost = &clock;
+  track_options.window.vehicle_length = wheel_span;
   const auto setup0 = std::chrono::steady_clock::now();
   std::unique_ptr<rt::CosimTrack> track;
   try {
@@ -492,18 +516,6 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
         ROS_FATAL("%s: %s: output.deflection_sections[%zu]: %s", me.c_str(), scene.file.c_str(), i, e.what());
         return kExitBadInput;
       }
-    }
-  }
-  std::unique_ptr<cc::FrameTransport> transport;
-  const bool replay = !replay_bag.empty();
-  if (replay) {
-    try {
-      auto r = std::make_unique<ReplayTransport>(replay_bag, scene, track->wheelCount());
-      ROS_INFO("%s: replaying the wheel states of %s (t = 0 .. %.4f s)", me.c_str(), replay_bag.c_str(), r->endTime());
-      transport = std::move(r);
-    } catch (const std::exception& e) {
-      ROS_FATAL("%s: %s", me.c_str(), e.what());
-      return kExitBadInput;
     }
   }
   try {
@@ -816,13 +828,14 @@ int main(int argc, char** argv) {
         ROS_FATAL("%s: ~replay_bag: the scene has no vehicle to replay", ros::this_node::getName().c_str());
         return kExitBadInput;
       }
-      return runCosim(nh, pnh, scene, "(replay)", replay_bag);
+      return runCosim(nh, pnh, scene, "(replay)", 0.0, replay_bag);
     }
     if (scene.has_vehicle) {
       std::string peer;
-      const int rc = ros_glue::handshakeAsTrack(nh, scene, peer);
+      double wheel_span = 0.0;
+      const int rc = ros_glue::handshakeAsTrack(nh, scene, peer, wheel_span);
       if (rc != kExitOk) return rc;
-      return runCosim(nh, pnh, scene, peer);
+      return runCosim(nh, pnh, scene, peer, wheel_span);
     }
     return runMovingLoads(nh, pnh, scene);
   } catch (const std::exception& e) {

@@ -43,13 +43,16 @@ static std::string configDir() {
 #endif
 }
 
+// First to last wheelset of the paper coach (Table 3), m: the track window's vehicle length.
+constexpr double kCoachWheelSpan = 21.7;
+
 // The coach's 8 wheels at step k: wheelsets at s_front - offsets along the design track (track frame, cant
 // included), rolling at V, 50 micrometres into the rails.
 static void fillFrame(const rail::core::Scene& scene, const rc::TrackGeometry& geo, double s_front0, int k,
                       cc::WheelStateFrame& frame) {
   const double V = scene.vehicle.speed, r0 = scene.vehicle.nominal_radius, h = scene.solver.track_step;
   const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::kTapingLineFromFlangeBack;
-  const double offsets[4] = {0.0, 2.7, 19.0, 21.7};  // paper coach (Table 3) wheelsets behind the leading one, m
+  const double offsets[4] = {0.0, 2.7, 19.0, kCoachWheelSpan};  // paper coach (Table 3) wheelsets behind the leading one, m
   frame.count = 8;
   frame.step = static_cast<std::uint64_t>(k);
   frame.time = k * h;
@@ -75,7 +78,9 @@ static void runWindow(rail::core::Scene scene, double s_front0, int steps, const
   scene.solver.track_window.enabled = true;
   scene.vehicle.start_arc_length = s_front0;
   const Clock::time_point t0 = Clock::now();
-  rt::CosimTrack track(scene);
+  rt::CosimTrackOptions options;
+  options.window.vehicle_length = kCoachWheelSpan;
+  rt::CosimTrack track(scene, options);
   const double build = std::chrono::duration<double>(Clock::now() - t0).count();
   cc::WheelStateFrame frame(8);
   cc::WrenchFrame out(8);
@@ -124,6 +129,7 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
   rt::CosimTrackOptions options;
   options.coupling = coupling;
   if (g_cost) options.cost = &clock;
+  options.window.vehicle_length = kCoachWheelSpan;
   rt::CosimTrack track(scene, options);
   const double build = std::chrono::duration<double>(Clock::now() - t0).count();
   cc::WheelStateFrame frame(8);

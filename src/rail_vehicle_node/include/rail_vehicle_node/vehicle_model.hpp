@@ -100,6 +100,9 @@ class VehicleModel {
   int stateSize() const { return 13 * nBodies(); }
   const std::vector<RigidBody>& bodies() const { return bodies_; }
   const std::vector<LoadPoint>& loadPoints() const { return load_points_; }
+  // First to last load point (wheel centre) along the world x axis at the reference configuration [m]: the
+  // length the track side sizes its window by (sent in the co-simulation handshake). 0 without load points.
+  double wheelSpan() const;
   const std::vector<MeasurementPoint>& measurementPoints() const { return measurement_points_; }
   const std::vector<std::unique_ptr<Joint>>& joints() const { return joints_; }
   const std::vector<std::unique_ptr<ForceElement>>& forceElements() const { return forces_; }

@@ -1,7 +1,9 @@
 #include "rail_vehicle_node/vehicle_model.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -86,6 +88,19 @@ Vector3 VehicleModel::worldToBodyAtReference(int body, const Vector3& p_in_world
   if (body == kGround) return p_in_world;
   requireBody(body, false, "world to body");
   return referenceRotation(body).transpose() * (p_in_world - bodies_[static_cast<std::size_t>(body)].r_reference);
+}
+
+double VehicleModel::wheelSpan() const {
+  if (load_points_.empty()) return 0.0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const LoadPoint& p : load_points_) {
+    const double x = p.body == kGround ? p.s_in_body.x()
+                                       : (bodies_[static_cast<std::size_t>(p.body)].r_reference +
+                                          referenceRotation(p.body) * p.s_in_body).x();
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+  return hi - lo;
 }
 
 int VehicleModel::addMeasurementPointAtWorld(const std::string& name, int body, const Vector3& p_in_world) {

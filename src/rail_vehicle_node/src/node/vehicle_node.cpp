@@ -24,6 +24,7 @@
 #include <rail_msgs/FloorAccelerations.h>
 #include <rail_msgs/Energy.h>
 #include <rail_vehicle_node/cosim_vehicle.hpp>
+#include <rail_vehicle_node/vehicle_loader.hpp>
 #include <rail_vehicle_node/vehicle_simulator.hpp>
 
 #include <rail_ros/contact_point_message.hpp>
@@ -631,7 +632,15 @@ int main(int argc, char** argv) {
   if (pnh.param("validate_only", false)) return kExitOk;
   std::string peer;
   if (scene.cosimulation()) {
-    const int rc = ros_glue::handshakeAsVehicle(scene, peer);
+    // The track sizes its window by the vehicle's wheel span: the vehicle's own data says it.
+    double wheel_span = 0.0;
+    try {
+      wheel_span = rv::loadVehicleModel(scene.vehicle.data.path).wheelSpan();
+    } catch (const std::exception& e) {
+      ROS_FATAL("%s: %s", ros::this_node::getName().c_str(), e.what());
+      return kExitBadInput;
+    }
+    const int rc = ros_glue::handshakeAsVehicle(scene, wheel_span, peer);
     if (rc != kExitOk) return rc;
   }
   const int rc = runVehicle(scene, nh, pnh, peer);
