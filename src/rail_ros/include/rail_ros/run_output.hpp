@@ -1,0 +1,99 @@
+// What both nodes do around a run's outputs and its end, the same way: where a bag goes and how it is opened
+// and closed, the cost profile written beside it, the progress line, and the closing lines (how the contact
+// was found; a stop by a signal or a lost master).
+#pragma once
+
+#include <ros/node_handle.h>
+#include <ros/time.h>
+#include <rosbag/bag.h>
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include <rail_contact/contact_detection.hpp>
+#include <rail_core/scene.hpp>
+
+namespace rail::ros_glue {
+
+class MasterWatch;
+
+// The directory of a run's files: the node's ~output_dir, else $ROS_HOME/railsim, else ~/.ros/railsim.
+std::string outputDir(const ros::NodeHandle& pnh);
+
+// Where a bag named in the scene goes: absolute as given, else under outputDir(pnh).
+std::string bagPath(const ros::NodeHandle& pnh, const std::string& name);
+
+// A path beside a bag: its stem (without ".bag") followed by `suffix` ("run.bag", ".cost.yaml" ->
+// "run.cost.yaml").
+std::string besideBag(const std::string& bag_path, const std::string& suffix);
+
+// True when the scene's output.topics names `topic` (without its leading slash).
+bool records(const core::Scene& scene, const std::string& topic);
+
+// The bag a node records to. open() creates its directory; close() (or the destructor) closes it, so that
+// a stopped run leaves a readable bag.
+class OutputBag {
+ public:
+  OutputBag() = default;
+  ~OutputBag();
+  OutputBag(const OutputBag&) = delete;
+  OutputBag& operator=(const OutputBag&) = delete;
+
+  // Opens `path` for writing, creating its directory. False after one FATAL line naming the node, the scene
+  // file and output.bag, with the reason.
+  bool open(const std::string& node, const core::Scene& scene, const std::string& path);
+  bool isOpen() const { return bag_.isOpen(); }
+  const std::string& path() const { return path_; }
+
+  // A bag refuses time 0: a message at t = 0 is filed at the smallest time it takes.
+  template <class Message>
+  void write(const std::string& topic, const ros::Time& stamp, const Message& message) {
+    bag_.write(topic, stamp < ros::TIME_MIN ? ros::TIME_MIN : stamp, message);
+  }
+
+  // Closes the bag and says so ("<node>: bag closed: <path>"); nothing when it is not open.
+  void close(const std::string& node);
+
+  // Writes `text` to besideBag(path(), suffix); a WARN line when it cannot. Nothing without a bag path.
+  void writeBeside(const std::string& node, const std::string& suffix, const std::string& text) const;
+
+ private:
+  rosbag::Bag bag_;
+  std::string path_;
+};
+
+// The console's progress line of a long run, at most once per `period_s` of wall time: simulated time, per
+// cent of the expected end, real-time factor and ETA. Starts its wall clock when built.
+class ProgressLine {
+ public:
+  ProgressLine(std::string node, double t_end_estimate, double period_s = 5.0);
+  // Prints the line when `period_s` has passed since the last one. `extra` (may be empty) is added after the
+  // time, e.g. "leading wheelset at s = 12.34 m".
+  void update(double t, const std::string& extra = std::string());
+  double wallSeconds() const;
+
+ private:
+  std::string node_;
+  double t_end_;
+  double period_s_;
+  std::chrono::steady_clock::time_point wall0_, last_;
+};
+
+// The progress line itself: "<node>: t = 1.234 s of 15.500 s (8.0 %)[, extra], real-time factor 0.93, ETA 13 s".
+void logProgress(const std::string& node, double t, double t_end, double real_time_factor, double eta_s,
+                 const std::string& extra = std::string());
+
+// "<node>: <how the contact was found>" as INFO, or as WARN when some points were approximate, so that a run
+// never hides them.
+void logDetection(const std::string& node, const contact::DetectionCounts& counts);
+
+// The end of a run that a lost master or a signal may have cut short. A lost master gives an ERROR line
+// naming its URI and exit code 5 (kExitInterrupted); a signal not yet reported by the loop (it ended a
+// wait for the peer) gives a WARN line naming it. Returns the exit code to use (exit_code otherwise).
+// t: the simulated time reached; stop_logged: the loop already said why it stopped; suffix: added to the
+// signal's line (e.g. "; closing the bag").
+int reportStop(const std::string& node, const MasterWatch& master_watch, double t, bool stop_logged, int exit_code,
+               const char* suffix = "");
+
+}  // namespace rail::ros_glue

@@ -1,0 +1,144 @@
+#include "rail_ros/run_output.hpp"
+
+#include <ros/console.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+
+#include <rail_core/exit_codes.hpp>
+
+#include "rail_ros/master_watch.hpp"
+#include "rail_ros/node_scaffold.hpp"
+
+namespace rail::ros_glue {
+
+namespace {
+
+// mkdir -p; false on the first level that cannot be made.
+bool makeDirs(const std::string& path) {
+  for (std::size_t pos = 1; pos <= path.size(); ++pos) {
+    if (pos == path.size() || path[pos] == '/') {
+      const std::string part = path.substr(0, pos);
+      if (::mkdir(part.c_str(), 0755) != 0 && errno != EEXIST) return false;
+    }
+  }
+  return true;
+}
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+std::string outputDir(const ros::NodeHandle& pnh) {
+  std::string dir;
+  if (pnh.getParam("output_dir", dir) && !dir.empty()) return dir;
+  const char* ros_home = std::getenv("ROS_HOME");
+  if (ros_home != nullptr && *ros_home != '\0') return std::string(ros_home) + "/railsim";
+  const char* home = std::getenv("HOME");
+  return std::string(home != nullptr && *home != '\0' ? home : ".") + "/.ros/railsim";
+}
+
+std::string bagPath(const ros::NodeHandle& pnh, const std::string& name) {
+  if (!name.empty() && name[0] == '/') return name;
+  return outputDir(pnh) + "/" + name;
+}
+
+std::string besideBag(const std::string& bag_path, const std::string& suffix) {
+  const std::size_t dot = bag_path.rfind(".bag");
+  const bool has_extension = dot != std::string::npos && dot + 4 == bag_path.size();
+  return (has_extension ? bag_path.substr(0, dot) : bag_path) + suffix;
+}
+
+bool records(const core::Scene& scene, const std::string& topic) {
+  return std::find(scene.output.topics.begin(), scene.output.topics.end(), topic) != scene.output.topics.end();
+}
+
+OutputBag::~OutputBag() {
+  if (bag_.isOpen()) bag_.close();
+}
+
+bool OutputBag::open(const std::string& node, const core::Scene& scene, const std::string& path) {
+  const std::size_t slash = path.rfind('/');
+  const std::string dir = slash == std::string::npos ? std::string() : path.substr(0, slash);
+  if (!dir.empty() && !makeDirs(dir)) {
+    ROS_FATAL("%s: %s: output.bag: cannot create the directory %s", node.c_str(), scene.file.c_str(), dir.c_str());
+    return false;
+  }
+  try {
+    bag_.open(path, rosbag::bagmode::Write);
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: %s: output.bag: cannot write %s: %s", node.c_str(), scene.file.c_str(), path.c_str(), e.what());
+    return false;
+  }
+  path_ = path;
+  return true;
+}
+
+void OutputBag::close(const std::string& node) {
+  if (!bag_.isOpen()) return;
+  bag_.close();
+  ROS_INFO("%s: bag closed: %s", node.c_str(), path_.c_str());
+}
+
+void OutputBag::writeBeside(const std::string& node, const std::string& suffix, const std::string& text) const {
+  if (path_.empty()) return;
+  const std::string path = besideBag(path_, suffix);
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) {
+    ROS_WARN("%s: cannot write %s", node.c_str(), path.c_str());
+    return;
+  }
+  std::fputs(text.c_str(), f);
+  std::fclose(f);
+}
+
+ProgressLine::ProgressLine(std::string node, double t_end_estimate, double period_s)
+    : node_(std::move(node)),
+      t_end_(t_end_estimate),
+      period_s_(period_s),
+      wall0_(std::chrono::steady_clock::now()),
+      last_(wall0_) {}
+
+double ProgressLine::wallSeconds() const { return secondsSince(wall0_); }
+
+void ProgressLine::update(double t, const std::string& extra) {
+  if (secondsSince(last_) < period_s_) return;
+  last_ = std::chrono::steady_clock::now();
+  const double rtf = t / std::max(wallSeconds(), 1e-9);
+  const double eta = std::max(0.0, (t_end_ - t) / std::max(rtf, 1e-12));
+  logProgress(node_, t, t_end_, rtf, eta, extra);
+}
+
+void logProgress(const std::string& node, double t, double t_end, double real_time_factor, double eta_s,
+                 const std::string& extra) {
+  ROS_INFO("%s: t = %.3f s of %.3f s (%.1f %%)%s%s, real-time factor %.3g, ETA %.0f s", node.c_str(), t, t_end,
+           100.0 * t / std::max(t_end, 1e-9), extra.empty() ? "" : ", ", extra.c_str(), real_time_factor, eta_s);
+}
+
+void logDetection(const std::string& node, const contact::DetectionCounts& counts) {
+  if (counts.approximations > 0) {
+    ROS_WARN("%s: %s", node.c_str(), contact::describe(counts).c_str());
+  } else {
+    ROS_INFO("%s: %s", node.c_str(), contact::describe(counts).c_str());
+  }
+}
+
+int reportStop(const std::string& node, const MasterWatch& master_watch, double t, bool stop_logged, int exit_code,
+               const char* suffix) {
+  if (master_watch.lost()) {
+    ROS_ERROR("%s: the ROS master %s went away: stopped at t = %.4f s", node.c_str(), master_watch.uri().c_str(), t);
+    return core::kExitInterrupted;
+  }
+  if (nodeStop().signal != 0 && !stop_logged) {
+    ROS_WARN("%s: stopped at t = %.4f s (%s)%s", node.c_str(), t, nodeStop().reason(), suffix);
+  }
+  return exit_code;
+}
+
+}  // namespace rail::ros_glue
