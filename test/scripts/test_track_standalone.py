@@ -60,7 +60,7 @@ class TrackStandalone(unittest.TestCase):
             out, _ = proc.communicate(timeout=180)
             self.assertEqual(proc.returncode, 0, out)
             self.assertIn("finished at t = 0.6000 s", out)
-            self.assertIn("x real time", out)  # progress reported
+            self.assertIn("real-time factor", out)  # progress reported
             rospy.sleep(0.5)
             sub.unregister()
             msub.unregister()

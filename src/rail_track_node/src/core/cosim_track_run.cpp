@@ -1,0 +1,109 @@
+#include "rail_track_node/cosim_track_run.hpp"
+
+#include <chrono>
+#include <cstdio>
+
+#include <rail_core/exit_codes.hpp>
+
+namespace rail::track {
+
+namespace cc = core::coupling;
+
+namespace {
+
+cc::FrameTransport& timedOrPlain(std::unique_ptr<cc::TimedTransport>& timed, cc::FrameTransport& transport,
+                                 core::CostProfile* cost) {
+  if (cost == nullptr) return transport;
+  timed = std::make_unique<cc::TimedTransport>(transport, *cost);
+  return *timed;
+}
+
+}  // namespace
+
+const char* describe(CosimStepStatus status) {
+  switch (status) {
+    case CosimStepStatus::kOk: return "accepted";
+    case CosimStepStatus::kWrongWheelCount: return "wrong wheel count";
+    case CosimStepStatus::kBadWheelId: return "bad wheel id";
+    case CosimStepStatus::kWheelOutsideWindow:
+      return "a wheel is outside the track window (solver.track_window: margins too small?)";
+    case CosimStepStatus::kWindowMoveFailed: return "the track window could not move";
+  }
+  return "?";
+}
+
+CosimTrackRun::CosimTrackRun(const core::Scene& scene, CosimTrack& track, cc::FrameTransport& transport,
+                             CosimTrackRunOptions options)
+    : scene_(scene),
+      track_(track),
+      options_(std::move(options)),
+      coupling_(cc::couplingConfig(scene), timedOrPlain(timed_, transport, options_.cost)),
+      h_(scene.solver.track_step),
+      output_period_(1.0 / scene.output.rate) {}
+
+double CosimTrackRun::time() const {
+  return coupling_.nextStep() == 0 ? 0.0 : static_cast<double>(coupling_.nextStep() - 1) * h_;
+}
+
+std::uint64_t CosimTrackRun::steps() const { return coupling_.nextStep(); }
+
+TrackRunStatus CosimTrackRun::fail(int exit_code, std::string message) {
+  exit_code_ = exit_code;
+  message_ = std::move(message);
+  return TrackRunStatus::kFailed;
+}
+
+TrackRunStatus CosimTrackRun::step() {
+  char text[160];
+  // Step 0 waits for the vehicle's set-up (its settling): the handshake timeout.
+  const cc::Result r =
+      coupling_.nextStep() == 0
+          ? coupling_.receive(cc::Clock::now() + std::chrono::duration_cast<cc::Clock::duration>(
+                                                     std::chrono::duration<double>(scene_.solver.handshake_timeout)))
+          : coupling_.receive();
+  if (r.status == cc::Status::kPeerClosed) {
+    const bool no_frame = coupling_.nextStep() == 0;
+    const double t_last = no_frame ? -1.0 : time();
+    const bool before_end =
+        no_frame || (scene_.solver.end.kind == core::EndKind::kTime && t_last < scene_.solver.end.value - 0.5 * h_);
+    if (!options_.replay && before_end) {
+      std::snprintf(text, sizeof(text), " went away after step %lld (t = %.6f s), before solver.end: ",
+                    static_cast<long long>(coupling_.nextStep()) - 1, t_last);
+      return fail(core::kExitPeerTimeout, "the vehicle node " + options_.peer + text + r.message);
+    }
+    return TrackRunStatus::kFinished;
+  }
+  if (!r) {
+    std::snprintf(text, sizeof(text), " failed at step %llu: ", static_cast<unsigned long long>(coupling_.nextStep()));
+    return fail(cc::exitCode(r.status), "exchange with the vehicle node " + options_.peer + text + r.message);
+  }
+  CosimStepStatus status;
+  if (options_.cost != nullptr) {
+    core::CostProfile::Scope timing(*options_.cost, core::CostProfile::kTrackStep);
+    status = track_.step(coupling_.states(), coupling_.wrenches());
+  } else {
+    status = track_.step(coupling_.states(), coupling_.wrenches());
+  }
+  const auto step = static_cast<unsigned long long>(coupling_.states().step);
+  if (status != CosimStepStatus::kOk) {
+    std::snprintf(text, sizeof(text), "step %llu: the vehicle's frame was refused (", step);
+    return fail(core::kExitPeerRefused, text + std::string(describe(status)) + ")");
+  }
+  const cc::Result w = coupling_.send();
+  if (!w) {
+    std::snprintf(text, sizeof(text), "sending the wrenches of step %llu to the vehicle node ", step);
+    return fail(cc::exitCode(w.status), text + options_.peer + " failed: " + w.message);
+  }
+  return TrackRunStatus::kRunning;
+}
+
+bool CosimTrackRun::outputDue() {
+  const double t = static_cast<double>(coupling_.states().step) * h_;
+  if (t + 1e-9 * h_ < static_cast<double>(outputs_) * output_period_) return false;
+  ++outputs_;
+  return true;
+}
+
+void CosimTrackRun::close() { coupling_.close(); }
+
+}  // namespace rail::track
