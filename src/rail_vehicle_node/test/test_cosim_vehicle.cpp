@@ -25,7 +25,9 @@
 #include <vector>
 
 #include "rail_vehicle_node/cosim_vehicle.hpp"
+#include "rail_vehicle_node/vehicle_run.hpp"
 #include "rail_vehicle_node/vehicle_simulator.hpp"
+#include <rail_core/exit_codes.hpp>
 
 #ifndef RAILSIM_CONFIG_DIR
 #define RAILSIM_CONFIG_DIR "config"
@@ -261,4 +263,90 @@ TEST(CosimVehicle, RefusesAScene) {
 }
 
 }  // namespace
+// The run loop of the node (VehicleRun): alone, an output at t = 0 and at every n / output.rate to the
+// end; co-simulated, at the exchange that reaches each output instant; a raised stop flag ends the run with
+// exit 5; a track that closes early is an exchange failure with the exit code of a peer gone (4).
+TEST(VehicleRun, AloneOutputsEveryInstantFromTheStartToTheEnd) {
+  core::Scene scene = cosimScene(0.02);
+  scene.output.rate = 500.0;
+  VehicleSimulator sim(scene);
+  VehicleRun run(scene, sim);
+  int outputs = 0;
+  while (run.next() == VehicleRun::Event::kOutput) {
+    EXPECT_NEAR(sim.time(), static_cast<double>(run.outputIndex()) / 500.0, 1e-12);
+    ++outputs;
+  }
+  EXPECT_EQ(outputs, 11);  // t = 0, 2, ..., 20 ms
+  EXPECT_EQ(run.end(), VehicleRun::End::kFinished);
+  EXPECT_EQ(run.exitCode(), core::kExitOk);
+  EXPECT_EQ(run.next(), VehicleRun::Event::kEnd);
+}
+
+TEST(VehicleRun, TheStopFlagEndsTheRunWithExit5) {
+  core::Scene scene = cosimScene(0.02);
+  scene.output.rate = 500.0;
+  VehicleSimulator sim(scene);
+  std::atomic<bool> stop{false};
+  VehicleRun run(scene, sim, {&stop, nullptr});
+  int outputs = 0;
+  while (run.next() == VehicleRun::Event::kOutput) {
+    if (++outputs == 3) stop = true;
+  }
+  EXPECT_EQ(outputs, 3);
+  EXPECT_EQ(run.end(), VehicleRun::End::kStopped);
+  EXPECT_EQ(run.exitCode(), core::kExitInterrupted);
+  EXPECT_NEAR(sim.time(), 0.004, 1e-12);
+}
+
+TEST(VehicleRun, CosimulatedOutputsAtTheExchangeThatReachesEachInstant) {
+  core::Scene scene = cosimScene(0.004);
+  scene.output.rate = 1000.0;
+  cc::LoopbackLink link(scene.wheelCount());
+  CosimVehicle cosim(scene, link.vehicleEnd());
+  RigidTrackPeer peer(scene, cosim.simulator().contactModel().wheels(), link.trackEnd());
+  std::thread track([&peer] { peer.run(); });
+  VehicleRun run(scene, cosim);
+  std::vector<double> times;
+  while (run.next() == VehicleRun::Event::kOutput) times.push_back(cosim.time());
+  cosim.close();
+  track.join();
+  EXPECT_EQ(run.end(), VehicleRun::End::kFinished) << run.message();
+  ASSERT_EQ(times.size(), 5u);  // t = 0, 1, 2, 3, 4 ms: steps 0, 50, ..., 200 of 2e-5 s
+  for (std::size_t i = 0; i < times.size(); ++i) EXPECT_NEAR(times[i], 1e-3 * static_cast<double>(i), 1e-12);
+  EXPECT_EQ(cosim.stepsExchanged(), 201u);
+}
+
+TEST(VehicleRun, ATrackThatClosesEarlyIsAnExchangeFailure) {
+  const core::Scene scene = cosimScene(0.004);
+  cc::LoopbackLink link(scene.wheelCount());
+  CosimVehicle cosim(scene, link.vehicleEnd());
+  // The track answers 10 steps with zero wrenches, then closes.
+  std::thread track([&] {
+    cc::TrackCoupling coupling(cc::couplingConfig(scene), link.trackEnd());
+    for (int k = 0; k < 10; ++k) {
+      if (!coupling.receive()) break;
+      for (std::uint32_t i = 0; i < coupling.states().count; ++i) coupling.wrenches().wheels[i].id = i;
+      if (!coupling.send()) break;
+    }
+    coupling.close();
+  });
+  VehicleRun run(scene, cosim);
+  while (run.next() == VehicleRun::Event::kOutput) {
+  }
+  cosim.close();
+  track.join();
+  EXPECT_EQ(run.end(), VehicleRun::End::kExchangeFailed);
+  EXPECT_EQ(run.exitCode(), core::kExitPeerTimeout);
+  EXPECT_EQ(run.message().rfind("exchange with the track node failed at step ", 0), 0u) << run.message();
+}
+
+TEST(VehicleRun, ExitCodesOfTheRunsEnds) {
+  EXPECT_EQ(exitCodeOf(RunStatus::kFinished), core::kExitOk);
+  EXPECT_EQ(exitCodeOf(RunStatus::kDerailed), core::kExitDerailed);
+  EXPECT_EQ(exitCodeOf(RunStatus::kLeftTrack), core::kExitDerailed);
+  EXPECT_EQ(exitCodeOf(RunStatus::kNonFinite), core::kExitNumerical);
+  EXPECT_EQ(exitCodeOf(RunStatus::kIntegratorFailed), core::kExitNumerical);
+  EXPECT_STREQ(toString(RunStatus::kDerailed), "derailed");
+}
+
 }  // namespace rail::vehicle
