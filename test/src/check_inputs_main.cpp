@@ -85,9 +85,7 @@ void requireFinite(double v, const std::string& what, const std::string& file) {
 std::string vehicleFile(const Scene& scene) {
   return scene.vehicle.data.empty() ? scene.file : scene.vehicle.data.path;
 }
-std::string trackDataFile(const Scene& scene) {
-  return scene.track.data.empty() ? scene.file : scene.track.data.path;
-}
+std::string trackDataFile(const Scene& scene) { return scene.track.data.empty() ? scene.file : scene.track.data.path; }
 
 // Samples the centre line and both rails at 101 points and the rail profile at 101 points.
 void checkGeometry(const Scene& scene, const rc::TrackGeometry& geometry, const rc::ProfileCurve& rail) {
@@ -165,12 +163,18 @@ rv::RunStatus advance(rv::VehicleSimulator& sim, double t) {
 
 const char* statusName(rv::RunStatus s) {
   switch (s) {
-    case rv::RunStatus::kRunning: return "running";
-    case rv::RunStatus::kFinished: return "finished";
-    case rv::RunStatus::kDerailed: return "derailed";
-    case rv::RunStatus::kNonFinite: return "non-finite";
-    case rv::RunStatus::kLeftTrack: return "left the track";
-    case rv::RunStatus::kIntegratorFailed: return "integrator failed";
+    case rv::RunStatus::kRunning:
+      return "running";
+    case rv::RunStatus::kFinished:
+      return "finished";
+    case rv::RunStatus::kDerailed:
+      return "derailed";
+    case rv::RunStatus::kNonFinite:
+      return "non-finite";
+    case rv::RunStatus::kLeftTrack:
+      return "left the track";
+    case rv::RunStatus::kIntegratorFailed:
+      return "integrator failed";
   }
   return "?";
 }
@@ -336,9 +340,12 @@ int main(int argc, char** argv) {
       } else {
         char* end = nullptr;
         const double x = std::strtod(v, &end);
-        if (end == v || *end != '\0' || !(x >= 0.0) || !std::isfinite(x)) return usage((a + ": not a number >= 0").c_str());
-        if (a == "--steps") steps = static_cast<int>(x);
-        else vehicle_time = x;
+        if (end == v || *end != '\0' || !(x >= 0.0) || !std::isfinite(x))
+          return usage((a + ": not a number >= 0").c_str());
+        if (a == "--steps")
+          steps = static_cast<int>(x);
+        else
+          vehicle_time = x;
       }
     } else if (a == "-h" || a == "--help") {
       std::cout << "usage: railsim_check_inputs <scene.yaml> [--set key=value ...] [--steps N] [--vehicle-time T]\n";

@@ -21,10 +21,10 @@
 namespace railsim_test {
 
 constexpr int kWheels = 8;
-constexpr double kTrackStep = 1e-4;                     // h [s]
+constexpr double kTrackStep = 1e-4;  // h [s]
 constexpr std::uint64_t kSceneHash = 0x5eedc0ffee000001ull;
-constexpr double kSpeed = 30.0;                         // V [m/s]
-constexpr double kWheelRadius = 0.46;                   // [m]
+constexpr double kSpeed = 30.0;        // V [m/s]
+constexpr double kWheelRadius = 0.46;  // [m]
 constexpr double kPi = 3.14159265358979323846;
 
 inline rail::core::coupling::CouplingConfig config(double exchange_timeout) {
@@ -52,20 +52,20 @@ inline void wheelStateAt(double t, int i, rail::core::coupling::WheelState& w) {
 
 // f(step, state): the wrench the synthetic track returns for one wheel.
 inline void wrenchFor(std::uint64_t step, const rail::core::coupling::WheelState& s,
-                       rail::core::coupling::WheelWrench& w) {
+                      rail::core::coupling::WheelWrench& w) {
   const double k = static_cast<double>(step);
   w.id = s.id;
-  w.f_wheel_in_world = Eigen::Vector3d(-1e3 * s.p_wheel_in_world.y() + 2e3 * std::sin(0.01 * k + s.id),
-                                       5e2 * s.q_wheelset_to_world.y(),
-                                       8e4 + 1e8 * (s.p_wheel_in_world.z() - kWheelRadius) + 10.0 * s.v_wheel_in_world.z());
+  w.f_wheel_in_world =
+      Eigen::Vector3d(-1e3 * s.p_wheel_in_world.y() + 2e3 * std::sin(0.01 * k + s.id), 5e2 * s.q_wheelset_to_world.y(),
+                      8e4 + 1e8 * (s.p_wheel_in_world.z() - kWheelRadius) + 10.0 * s.v_wheel_in_world.z());
   w.n_wheel_in_world = Eigen::Vector3d(1e-2 * s.arc_length, 0.5 * s.omega_wheelset_in_world.y(), 1e-3 * k);
 }
 
 // Whether two wheel states are identical bit for bit (the transports copy doubles, they never compute).
 inline bool same(const rail::core::coupling::WheelState& a, const rail::core::coupling::WheelState& b) {
   return a.id == b.id && a.arc_length == b.arc_length && a.p_wheel_in_world == b.p_wheel_in_world &&
-         a.q_wheelset_to_world.coeffs() == b.q_wheelset_to_world.coeffs() &&
-         a.v_wheel_in_world == b.v_wheel_in_world && a.omega_wheelset_in_world == b.omega_wheelset_in_world;
+         a.q_wheelset_to_world.coeffs() == b.q_wheelset_to_world.coeffs() && a.v_wheel_in_world == b.v_wheel_in_world &&
+         a.omega_wheelset_in_world == b.omega_wheelset_in_world;
 }
 
 // Names one run uses (a prefix of its own, so that a killed node's registrations do not disturb the next).
@@ -76,10 +76,9 @@ struct RunNames {
 
 // The transport `kind` (service, topic, shm) for `role`.
 inline std::unique_ptr<rail::core::coupling::FrameTransport> makeTransport(const std::string& kind,
-                                                                            rail::core::coupling::Role role,
-                                                                            const RunNames& names,
-                                                                            ros::NodeHandle& nh,
-                                                                            const std::string& peer_node) {
+                                                                           rail::core::coupling::Role role,
+                                                                           const RunNames& names, ros::NodeHandle& nh,
+                                                                           const std::string& peer_node) {
   using namespace rail::core;
   namespace ros_glue = rail::ros_glue;
   if (kind == "shm") {

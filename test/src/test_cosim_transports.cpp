@@ -53,8 +53,9 @@ ros::NodeHandle& node() {
 class TrackPeer {
  public:
   TrackPeer(const std::string& kind, const RunNames& names, const std::string& node_name, long steps) {
-    std::vector<std::string> args = {RAILSIM_TRACK_PEER, kind, names.prefix, names.run_id,
-                                     ros::this_node::getName(), std::to_string(steps), "__name:=" + node_name};
+    std::vector<std::string> args = {
+        RAILSIM_TRACK_PEER,    kind, names.prefix, names.run_id, ros::this_node::getName(), std::to_string(steps),
+        "__name:=" + node_name};
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -74,7 +75,8 @@ class TrackPeer {
   pid_t pid() const { return pid_; }
   // Exit code once the process ended within `timeout_s`; -1 if it did not (or died of a signal).
   int waitExit(double timeout_s) {
-    const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
+    const auto end =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
     int status = 0;
     while (Clock::now() < end) {
       const pid_t r = waitpid(pid_, &status, WNOHANG);
@@ -97,9 +99,7 @@ class TrackPeer {
   bool reaped_ = false;
 };
 
-RunNames namesFor(const std::string& run) {
-  return {"/cosim_" + run, "cosim" + std::to_string(getpid()) + run};
-}
+RunNames namesFor(const std::string& run) { return {"/cosim_" + run, "cosim" + std::to_string(getpid()) + run}; }
 
 // Bits of a double, for exact comparison (also of -0.0 against 0.0).
 std::uint64_t bits(double x) {
@@ -216,7 +216,8 @@ TEST_P(KilledTrack, VehicleReportsItWithinTheExchangeTimeout) {
   const Result r = vehicle.exchange();
   const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
   EXPECT_FALSE(r.ok());
-  EXPECT_TRUE(r.status == Status::kTimeout || r.status == Status::kPeerClosed) << toString(r.status) << ": " << r.message;
+  EXPECT_TRUE(r.status == Status::kTimeout || r.status == Status::kPeerClosed)
+      << toString(r.status) << ": " << r.message;
   // Slack of 1 s over the timeout for a loaded machine (a timeout itself takes exactly exchange_timeout).
   EXPECT_LT(elapsed, exchange_timeout + 1.0) << r.message;
   EXPECT_NE(r.message.find("the track"), std::string::npos) << r.message;

@@ -106,7 +106,8 @@ TEST(FrameMessages, WheelStatesRoundTripIsExact) {
     EXPECT_EQ(a.id, b.id);
     EXPECT_EQ(bits(a.arc_length), bits(b.arc_length));
     expectSameBits(a.p_wheel_in_world, b.p_wheel_in_world);
-    for (int c = 0; c < 4; ++c) EXPECT_EQ(bits(a.q_wheelset_to_world.coeffs()[c]), bits(b.q_wheelset_to_world.coeffs()[c]));
+    for (int c = 0; c < 4; ++c)
+      EXPECT_EQ(bits(a.q_wheelset_to_world.coeffs()[c]), bits(b.q_wheelset_to_world.coeffs()[c]));
     expectSameBits(a.v_wheel_in_world, b.v_wheel_in_world);
     expectSameBits(a.omega_wheelset_in_world, b.omega_wheelset_in_world);
   }

@@ -78,7 +78,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %ld steps received, %ld expected\n", self.c_str(), received, steps_expected);
     code = 2;
   }
-  if (code == 0) std::printf("%s: %ld steps over %s, each once and in order, states exact\n", self.c_str(), received, kind.c_str());
+  if (code == 0)
+    std::printf("%s: %ld steps over %s, each once and in order, states exact\n", self.c_str(), received, kind.c_str());
   track.close();
   transport.reset();
   ros::shutdown();

@@ -113,8 +113,7 @@ Vector12d beamEquivalentNodalLoads(double xi, double L, const Eigen::Vector3d& f
 Vector12d beamEquivalentNodalLoadsWorld(double xi, double L, const Eigen::Matrix3d& R_local_to_world,
                                         const Eigen::Vector3d& f_world, const Eigen::Vector3d& m_world) {
   const Eigen::Matrix3d R_world_to_local = R_local_to_world.transpose();
-  const Vector12d F_local =
-      beamEquivalentNodalLoads(xi, L, R_world_to_local * f_world, R_world_to_local * m_world);
+  const Vector12d F_local = beamEquivalentNodalLoads(xi, L, R_world_to_local * f_world, R_world_to_local * m_world);
   Vector12d F_world;
   for (int b = 0; b < 4; ++b) F_world.segment<3>(3 * b) = R_local_to_world * F_local.segment<3>(3 * b);
   return F_world;

@@ -28,12 +28,14 @@ void run(bool flange, bool spin) {
     const double y = 0.004 * std::sin(2.0 * M_PI * i / 4000.0);
     const rc::ContactGeometryRow& r = rows[static_cast<int>(std::lround((y + 0.004) / 1e-4))];
     const Eigen::Matrix3d R = (Eigen::AngleAxisd(1e-3 * std::cos(2.0 * M_PI * i / 4000.0), Eigen::Vector3d::UnitZ()) *
-                               Eigen::AngleAxisd(r.roll, Eigen::Vector3d::UnitX())).toRotationMatrix();
+                               Eigen::AngleAxisd(r.roll, Eigen::Vector3d::UnitX()))
+                                  .toRotationMatrix();
     for (int k = 0; k < 2; ++k) {
       rc::WheelState& w = states[2 * i + k];
       w.R_wheelset_to_world = R;
-      w.p_centre_in_world = Eigen::Vector3d(2.0 + 0.8e-3 * i, y, r.z - 20e-6) +
-                            R * Eigen::Vector3d(0.0, k == 0 ? table.wheelHalfDistance() : -table.wheelHalfDistance(), 0.0);
+      w.p_centre_in_world =
+          Eigen::Vector3d(2.0 + 0.8e-3 * i, y, r.z - 20e-6) +
+          R * Eigen::Vector3d(0.0, k == 0 ? table.wheelHalfDistance() : -table.wheelHalfDistance(), 0.0);
       w.v_centre_in_world = Eigen::Vector3d(40.0, 0.0, 0.0);
       w.omega_in_world = (40.0 / 0.46) * R.col(1);
       w.s_hint = w.p_centre_in_world.x();
@@ -79,11 +81,12 @@ void run(bool flange, bool spin) {
       it += work2[k].detection[s].newton_iterations;
       calls += work2[k].detection[s].calls;
     }
-  std::printf("flange %-3s spin %-3s: detection %.2f us/wheel, detection+forces %.2f us/wheel; "
-              "%lld detections, %.2f Newton it/detection, %lld searches (%lld fallbacks), %lld approximate "
-              "(mean Fz %.0f N)\n",
-              flange ? "on" : "off", spin ? "on" : "off", us_det, us_all, calls, double(it) / calls, se, fb, ap,
-              checksum / (2.0 * n));
+  std::printf(
+      "flange %-3s spin %-3s: detection %.2f us/wheel, detection+forces %.2f us/wheel; "
+      "%lld detections, %.2f Newton it/detection, %lld searches (%lld fallbacks), %lld approximate "
+      "(mean Fz %.0f N)\n",
+      flange ? "on" : "off", spin ? "on" : "off", us_det, us_all, calls, double(it) / calls, se, fb, ap,
+      checksum / (2.0 * n));
 }
 }  // namespace
 

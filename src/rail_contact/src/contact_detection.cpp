@@ -12,11 +12,16 @@ namespace contact {
 
 const char* toString(DetectionStatus status) noexcept {
   switch (status) {
-    case DetectionStatus::kConverged: return "converged";
-    case DetectionStatus::kConvergedAfterSearch: return "converged_after_search";
-    case DetectionStatus::kApproximate: return "approximate";
-    case DetectionStatus::kOutOfBounds: return "out_of_bounds";
-    case DetectionStatus::kInvalidInput: return "invalid_input";
+    case DetectionStatus::kConverged:
+      return "converged";
+    case DetectionStatus::kConvergedAfterSearch:
+      return "converged_after_search";
+    case DetectionStatus::kApproximate:
+      return "approximate";
+    case DetectionStatus::kOutOfBounds:
+      return "out_of_bounds";
+    case DetectionStatus::kInvalidInput:
+      return "invalid_input";
   }
   return "unknown";
 }
@@ -36,11 +41,11 @@ std::string describe(const DetectionCounts& c) {
 
 namespace {
 
+using Eigen::Matrix3d;
+using Eigen::Matrix4d;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 using Eigen::Vector4d;
-using Eigen::Matrix3d;
-using Eigen::Matrix4d;
 
 inline Vector2d perp(const Vector2d& v) { return Vector2d(-v.y(), v.x()); }  // +90 deg rotation
 
@@ -168,8 +173,12 @@ double ContactDetector::surfaceUMax(int surface) const noexcept {
 
 ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radius, const ProfileCurve& rail,
                                  const Vector2d& section_centre_yz, const DetectionOptions& options)
-    : tread_(wheel.tread), flange_(wheel.flange), rail_(rail), r0_(nominal_radius),
-      section_centre_(section_centre_yz), options_(options) {
+    : tread_(wheel.tread),
+      flange_(wheel.flange),
+      rail_(rail),
+      r0_(nominal_radius),
+      section_centre_(section_centre_yz),
+      options_(options) {
   if (!(nominal_radius > 0.1) || !(nominal_radius < 2.0)) {
     std::ostringstream m;
     m << "ContactDetector: nominal_radius = " << nominal_radius << " m is not a wheel radius (0.1 .. 2 m)";
@@ -353,8 +362,7 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
 
 template <class Deformation>
 void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
-                             const Deformation& deformation, DetectionWork& work,
-                             ContactGeometry& out) const noexcept {
+                             const Deformation& deformation, DetectionWork& work, ContactGeometry& out) const noexcept {
   ++work.calls;
   out.iterations = 0;
   WheelFrame wf;
@@ -385,8 +393,8 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
       const Vector3d d = w.p - e.r;
       const Vector4d F(d.dot(e.t_s), d.dot(e.t_u), w.n.dot(e.t_s), w.n.dot(e.t_u));
       if (!F.allFinite()) return false;
-      if (std::abs(F[0]) < opt.tolerance && std::abs(F[1]) < opt.tolerance &&
-          std::abs(F[2]) * r0_ < opt.tolerance && std::abs(F[3]) * r0_ < opt.tolerance) {
+      if (std::abs(F[0]) < opt.tolerance && std::abs(F[1]) < opt.tolerance && std::abs(F[2]) * r0_ < opt.tolerance &&
+          std::abs(F[3]) * r0_ < opt.tolerance) {
         // Converged: check the bounds and that this is a contact-type pair.
         const double eps = 1e-7;
         if (x[1] < u_lo - eps || x[1] > u_hi + eps) return false;
@@ -431,9 +439,8 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
       ++work.newton_iterations;
       // Far outside the surfaces: give up early.
       const double far = 0.02;
-      if (x[1] < u_lo - far || x[1] > u_hi + far || x[3] < rail_.uMin() - far ||
-          x[3] > rail_.uMax() + far || x[2] < track.sStart() - far || x[2] > track.sEnd() + far ||
-          std::abs(x[0]) > 1.2)
+      if (x[1] < u_lo - far || x[1] > u_hi + far || x[3] < rail_.uMin() - far || x[3] > rail_.uMax() + far ||
+          x[2] < track.sStart() - far || x[2] > track.sEnd() + far || std::abs(x[0]) > 1.2)
         return false;
     }
     return false;

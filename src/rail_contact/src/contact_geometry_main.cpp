@@ -81,25 +81,44 @@ int main(int argc, char** argv) {
       std::fputs(kUsage, stdout);
       return 0;
     }
-    if (a == "--out") out = next();
-    else if (a == "--conicity") conicity_out = next();
-    else if (a == "--wheel") wheel_file = next();
-    else if (a == "--rail") rail_file = next();
-    else if (a == "--gauge") gauge = num();
-    else if (a == "--back-to-back") b2b = num();
-    else if (a == "--taping-line") taping = num();
-    else if (a == "--radius") radius = num();
-    else if (a == "--inclination") incl = num();
-    else if (a == "--y-min") y_min = num();
-    else if (a == "--y-max") y_max = num();
-    else if (a == "--dy") dy = num();
-    else if (a == "--yaw") yaw = num();
-    else if (a == "--yaw-per-shift") yaw_per_y = num();
-    else if (a == "--load") load = num();
-    else if (a == "--speed") speed = num();
-    else if (a == "--fixed-spin") fixed_spin = true;
-    else if (a == "--friction") friction = num();
-    else usageError("unknown option " + a);
+    if (a == "--out")
+      out = next();
+    else if (a == "--conicity")
+      conicity_out = next();
+    else if (a == "--wheel")
+      wheel_file = next();
+    else if (a == "--rail")
+      rail_file = next();
+    else if (a == "--gauge")
+      gauge = num();
+    else if (a == "--back-to-back")
+      b2b = num();
+    else if (a == "--taping-line")
+      taping = num();
+    else if (a == "--radius")
+      radius = num();
+    else if (a == "--inclination")
+      incl = num();
+    else if (a == "--y-min")
+      y_min = num();
+    else if (a == "--y-max")
+      y_max = num();
+    else if (a == "--dy")
+      dy = num();
+    else if (a == "--yaw")
+      yaw = num();
+    else if (a == "--yaw-per-shift")
+      yaw_per_y = num();
+    else if (a == "--load")
+      load = num();
+    else if (a == "--speed")
+      speed = num();
+    else if (a == "--fixed-spin")
+      fixed_spin = true;
+    else if (a == "--friction")
+      friction = num();
+    else
+      usageError("unknown option " + a);
   }
   if (std::isnan(y_min)) y_min = -y_max;
   if (load > 0.0 && !(speed > 0.0)) usageError("--load needs --speed > 0 (the creepages are relative to it)");
@@ -134,8 +153,7 @@ int main(int argc, char** argv) {
                    r.failure.c_str());
     }
     if (failed == static_cast<int>(rows.size())) {
-      std::fprintf(stderr,
-                   "contact_geometry: no row of %zu solved (wheel %s, rail %s); %s not written\n", rows.size(),
+      std::fprintf(stderr, "contact_geometry: no row of %zu solved (wheel %s, rail %s); %s not written\n", rows.size(),
                    wheel_file.empty() ? "S1002" : wheel_file.c_str(), rail_file.empty() ? "UIC60" : rail_file.c_str(),
                    out.c_str());
       return 1;

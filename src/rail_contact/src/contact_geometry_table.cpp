@@ -55,9 +55,9 @@ ContactGeometryTable::ContactGeometryTable(const WheelProfile& wheel, const Prof
 
 void ContactGeometryTable::place(double y, double yaw, double z, double roll, double speed, double omega,
                                  WheelState& left, WheelState& right) const {
-  const Eigen::Matrix3d R = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
+  const Eigen::Matrix3d R =
+      (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
   const Eigen::Vector3d c(x0_, y, z);
   for (int k = 0; k < 2; ++k) {
     WheelState& w = k == 0 ? left : right;
@@ -222,8 +222,8 @@ bool ContactGeometryTable::solveLoaded(double y, double yaw, const LoadCase& loa
   auto omega_for = [&](double zz, double rr) {
     if (!solve_omega) return omega_scale;
     double w = omega_scale;
-    const bool ok = solve1d([&](double ww) { return residual(zz, rr, ww)[2]; }, 0.97 * omega_scale,
-                            1.03 * omega_scale, tol, w, &jump);
+    const bool ok = solve1d([&](double ww) { return residual(zz, rr, ww)[2]; }, 0.97 * omega_scale, 1.03 * omega_scale,
+                            tol, w, &jump);
     return ok ? w : std::numeric_limits<double>::quiet_NaN();
   };
   auto z_for = [&](double rr) {
@@ -280,10 +280,14 @@ ContactGeometryRow ContactGeometryTable::row(double y, double yaw, const LoadCas
     int kl, kr;
     wheelGap(gl, kl);
     wheelGap(gr, kr);
-    if (kl < 0 && kr < 0) r.failure = "no contact point found on either wheel (tread and flange)";
-    else if (kl < 0) r.failure = "no contact point found on the left wheel (tread and flange)";
-    else if (kr < 0) r.failure = "no contact point found on the right wheel (tread and flange)";
-    else r.failure = "the rigid position solve (height and roll for zero gap on both wheels) did not converge";
+    if (kl < 0 && kr < 0)
+      r.failure = "no contact point found on either wheel (tread and flange)";
+    else if (kl < 0)
+      r.failure = "no contact point found on the left wheel (tread and flange)";
+    else if (kr < 0)
+      r.failure = "no contact point found on the right wheel (tread and flange)";
+    else
+      r.failure = "the rigid position solve (height and roll for zero gap on both wheels) did not converge";
     return r;
   }
   r.ok = true;
@@ -318,10 +322,11 @@ ContactGeometryRow ContactGeometryTable::row(double y, double yaw, const LoadCas
     if (!solveLoaded(y, yaw, load, zl, rl, omega, &why)) {
       for (ContactGeometryWheel* w : {&r.left, &r.right})
         w->N = w->a = w->b = w->nu_x = w->nu_y = w->phi = w->F_long = w->F_lat = kNaN;
-      r.failure = !why.empty() ? why
-                  : load.free_rolling
-                      ? "the loaded solve (height, roll and free-rolling pitch rate for the wheel load) did not converge"
-                      : "the loaded solve (height and roll for the wheel load) did not converge";
+      r.failure =
+          !why.empty() ? why
+          : load.free_rolling
+              ? "the loaded solve (height, roll and free-rolling pitch rate for the wheel load) did not converge"
+              : "the loaded solve (height and roll for the wheel load) did not converge";
       return r;
     }
     r.loaded_ok = true;
@@ -332,8 +337,8 @@ ContactGeometryRow ContactGeometryTable::row(double y, double yaw, const LoadCas
     place(y, yaw, zl, rl, load.speed, omega, sl, sr);
     for (int k = 0; k < 2; ++k) {
       WheelContactResult res;
-      model_->evaluate(k == 0 ? sl : sr, k == 0 ? RailSide::kLeft : RailSide::kRight, *track_,
-                       RigidRailDeformation(), work_[k], res);
+      model_->evaluate(k == 0 ? sl : sr, k == 0 ? RailSide::kLeft : RailSide::kRight, *track_, RigidRailDeformation(),
+                       work_[k], res);
       ContactGeometryWheel& w = k == 0 ? r.left : r.right;
       const int kind = w.kind >= 0 ? w.kind : 0;
       const ContactPointResult& c = res.contact[res.contact[kind].active ? kind : 1 - kind];
@@ -443,10 +448,10 @@ int writeContactGeometryCsv(const std::string& path, const std::vector<ContactGe
   if (!f) throw std::runtime_error(path + ": cannot open for writing");
   f << "y_m,yaw_rad,z_m,roll_rad,delta_r_m,z_loaded_m,roll_loaded_rad,pitch_rate_rad_s";
   for (const char* s : {"left", "right"})
-    f << ',' << s << "_kind," << s << "_y_wheel_m," << s << "_z_wheel_m," << s << "_y_rail_m," << s << "_z_rail_m,"
-      << s << "_y_rail_from_top_m," << s << "_contact_angle_rad," << s << "_rolling_radius_m," << s << "_flange_gap_m," << s << "_N_N," << s
-      << "_a_m," << s << "_b_m," << s << "_nu_x," << s << "_nu_y," << s << "_phi_1pm," << s << "_F_long_N," << s
-      << "_F_lat_N";
+    f << ',' << s << "_kind," << s << "_y_wheel_m," << s << "_z_wheel_m," << s << "_y_rail_m," << s << "_z_rail_m," << s
+      << "_y_rail_from_top_m," << s << "_contact_angle_rad," << s << "_rolling_radius_m," << s << "_flange_gap_m," << s
+      << "_N_N," << s << "_a_m," << s << "_b_m," << s << "_nu_x," << s << "_nu_y," << s << "_phi_1pm," << s
+      << "_F_long_N," << s << "_F_lat_N";
   f << '\n' << std::setprecision(10);
   int written = 0;
   for (const ContactGeometryRow& r : rows) {
@@ -455,10 +460,13 @@ int writeContactGeometryCsv(const std::string& path, const std::vector<ContactGe
     f << r.y << ',' << r.yaw << ',' << r.z << ',' << r.roll << ',' << r.delta_r << ',' << r.z_loaded << ','
       << r.roll_loaded << ',' << r.pitch_rate;
     for (const ContactGeometryWheel* w : {&r.left, &r.right})
-      f << ',' << (w->kind == 0 ? "tread" : w->kind == 1 ? "flange" : "none") << ',' << w->y_wheel << ','
-        << w->z_wheel << ',' << w->y_rail << ',' << w->z_rail << ',' << w->y_rail_from_top << ',' << w->contact_angle << ',' << w->rolling_radius
-        << ',' << w->flange_gap << ',' << w->N << ',' << w->a << ',' << w->b << ',' << w->nu_x << ',' << w->nu_y
-        << ',' << w->phi << ',' << w->F_long << ',' << w->F_lat;
+      f << ','
+        << (w->kind == 0   ? "tread"
+            : w->kind == 1 ? "flange"
+                           : "none")
+        << ',' << w->y_wheel << ',' << w->z_wheel << ',' << w->y_rail << ',' << w->z_rail << ',' << w->y_rail_from_top
+        << ',' << w->contact_angle << ',' << w->rolling_radius << ',' << w->flange_gap << ',' << w->N << ',' << w->a
+        << ',' << w->b << ',' << w->nu_x << ',' << w->nu_y << ',' << w->phi << ',' << w->F_long << ',' << w->F_lat;
     f << '\n';
   }
   f.close();

@@ -12,7 +12,7 @@ double regularisedSpeed(double V, const CreepageOptions& o) noexcept {
 }
 
 Creepages computeCreepages(const Eigen::Vector3d& v_rel_in_contact, double omega_rel_normal, double V,
-                            const CreepageOptions& o) noexcept {
+                           const CreepageOptions& o) noexcept {
   Creepages c;
   c.V_ref = regularisedSpeed(V, o);
   const double inv = 1.0 / c.V_ref;
@@ -22,12 +22,9 @@ Creepages computeCreepages(const Eigen::Vector3d& v_rel_in_contact, double omega
   return c;
 }
 
-Creepages computeCreepages(const Eigen::Vector3d& v_wheel_point_in_world,
-                            const Eigen::Vector3d& v_rail_point_in_world,
-                            const Eigen::Vector3d& omega_wheel_in_world,
-                            const Eigen::Vector3d& omega_rail_in_world,
-                            const Eigen::Matrix3d& R_contact_to_world, double V,
-                            const CreepageOptions& o) noexcept {
+Creepages computeCreepages(const Eigen::Vector3d& v_wheel_point_in_world, const Eigen::Vector3d& v_rail_point_in_world,
+                           const Eigen::Vector3d& omega_wheel_in_world, const Eigen::Vector3d& omega_rail_in_world,
+                           const Eigen::Matrix3d& R_contact_to_world, double V, const CreepageOptions& o) noexcept {
   const Eigen::Vector3d v_rel_in_contact =
       R_contact_to_world.transpose() * (v_wheel_point_in_world - v_rail_point_in_world);
   const double omega_rel_normal = R_contact_to_world.col(2).dot(omega_wheel_in_world - omega_rail_in_world);

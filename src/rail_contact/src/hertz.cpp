@@ -141,9 +141,7 @@ double HertzGeometry::approach(double N) const noexcept {
   const double c = std::cbrt(N);
   return delta_coeff * c * c;
 }
-double HertzGeometry::load(double delta) const noexcept {
-  return delta > 0.0 ? K * delta * std::sqrt(delta) : 0.0;
-}
+double HertzGeometry::load(double delta) const noexcept { return delta > 0.0 ? K * delta * std::sqrt(delta) : 0.0; }
 
 HertzGeometry computeHertz(double A, double B, double E_star, const HertzOptions& opt) noexcept {
   HertzGeometry g;
@@ -169,7 +167,10 @@ HertzGeometry computeHertz(double A, double B, double E_star, const HertzOptions
   }
   if (std::max(A, B) > ratio_max * std::min(A, B)) {
     flags |= kHertzRatioClamped;
-    if (A < B) A = B / ratio_max; else B = A / ratio_max;
+    if (A < B)
+      A = B / ratio_max;
+    else
+      B = A / ratio_max;
   }
   g.A = A;
   g.B = B;
@@ -231,7 +232,7 @@ void validate(const NormalDampingParams& p) {
 }
 
 double dampedNormalForce(double K, double delta, double delta_dot, double delta_dot_impact,
-                           const NormalDampingParams& p) noexcept {
+                         const NormalDampingParams& p) noexcept {
   if (!(delta > 0.0) || !(K > 0.0)) return 0.0;
   const double v_impact = std::max(std::abs(delta_dot_impact), p.impact_velocity_floor);
   const double damping = 0.75 * (1.0 - p.restitution * p.restitution) * delta_dot / v_impact;
@@ -255,7 +256,7 @@ void updateImpactMemory(ImpactMemory& memory, double delta, double delta_dot) no
 }
 
 HertzGeometry limitLateralWidth(const HertzGeometry& hz, double delta, double max_b,
-                                  const HertzOptions& options) noexcept {
+                                const HertzOptions& options) noexcept {
   const auto width = [delta](const HertzGeometry& h) { return h.b(h.load(delta)); };
   if (!(max_b > 0.0) || !(delta > 0.0) || !(width(hz) > max_b) || !(hz.B > 0.0)) return hz;
   // b at a given approach falls as B grows (A fixed), smoothly in log B: find g(x) = ln b(e^x) - ln max_b = 0

@@ -59,18 +59,19 @@ constexpr double kCm2ToM2 = 1.0e-4;  // cm^2 -> m^2
 // (m rad), Omega in rad/m, S_v, S_a, S_g in m^2/(rad/m), S_c (cross-level ANGLE) in rad^2/(rad/m):
 //   vertical:    S_v = A_v Omega_c^2 / ((Omega^2 + Omega_r^2)(Omega^2 + Omega_c^2))
 //   alignment:   S_a = A_a Omega_c^2 / ((Omega^2 + Omega_r^2)(Omega^2 + Omega_c^2))
-//   cross level: S_c = (A_v / b^2) Omega_c^2 Omega^2 / ((Omega^2 + Omega_r^2)(Omega^2 + Omega_c^2)(Omega^2 + Omega_s^2))
-//   gauge:       S_g = A_g Omega_c^2 Omega^2 / ((Omega^2 + Omega_r^2)(Omega^2 + Omega_c^2)(Omega^2 + Omega_s^2))
+//   cross level: S_c = (A_v / b^2) Omega_c^2 Omega^2 / ((Omega^2 + Omega_r^2)(Omega^2 + Omega_c^2)(Omega^2 +
+//   Omega_s^2)) gauge:       S_g = A_g Omega_c^2 Omega^2 / ((Omega^2 + Omega_r^2)(Omega^2 + Omega_c^2)(Omega^2 +
+//   Omega_s^2))
 // with b = 0.75 m half the distance between the rolling circles.
 struct GermanLevel {
   double A_v, A_a, A_g;
 };
 constexpr GermanLevel kGermanLow = {4.032e-7, 2.119e-7, 0.532e-7};   // low disturbance (Zhai 2020)
 constexpr GermanLevel kGermanHigh = {10.80e-7, 6.125e-7, 1.032e-7};  // high disturbance (Zhai 2020)
-constexpr double kGermanOmegaC = 0.8246;  // rad/m (Zhai 2020)
-constexpr double kGermanOmegaR = 0.0206;  // rad/m (Zhai 2020)
-constexpr double kGermanOmegaS = 0.4380;  // rad/m (Zhai 2020)
-constexpr double kGermanB = 0.75;         // m (Zhai 2020)
+constexpr double kGermanOmegaC = 0.8246;                             // rad/m (Zhai 2020)
+constexpr double kGermanOmegaR = 0.0206;                             // rad/m (Zhai 2020)
+constexpr double kGermanOmegaS = 0.4380;                             // rad/m (Zhai 2020)
+constexpr double kGermanB = 0.75;                                    // m (Zhai 2020)
 
 const char* const kChannelNames[4] = {"alignment", "vertical level", "cross level", "gauge"};
 
@@ -184,8 +185,10 @@ Irregularities Irregularities::fromCsvStream(std::istream& in, const std::string
         continue;
       }
       if (fields.size() != 5)
-        throw std::runtime_error(where + "expected 5 comma-separated columns (s, alignment, vertical level, cross "
-                                         "level, gauge), got " + std::to_string(fields.size()));
+        throw std::runtime_error(where +
+                                 "expected 5 comma-separated columns (s, alignment, vertical level, cross "
+                                 "level, gauge), got " +
+                                 std::to_string(fields.size()));
       const char* col_name = bad_col == 0 ? "s" : kChannelNames[bad_col - 1];
       throw std::runtime_error(where + "column " + std::to_string(bad_col + 1) + " (" + col_name + "): cannot read '" +
                                fields[bad_col] + "' as a number");
@@ -199,8 +202,7 @@ Irregularities Irregularities::fromCsvStream(std::istream& in, const std::string
       }
     }
     if (!out.s_knots_.empty() && !(v[0] > out.s_knots_.back()))
-      throw std::runtime_error(where + "s not increasing (" + fmt(v[0]) + " after " + fmt(out.s_knots_.back()) +
-                               ")");
+      throw std::runtime_error(where + "s not increasing (" + fmt(v[0]) + " after " + fmt(out.s_knots_.back()) + ")");
     for (int c = 1; c < 5; ++c) {
       if (std::abs(v[c]) > kMaxPlausibleIrregularity)
         throw std::runtime_error(where + kChannelNames[c - 1] + " = " + fmt(v[c]) +
@@ -235,8 +237,7 @@ Irregularities Irregularities::fromCsvStream(std::istream& in, const std::string
 
 Irregularities Irregularities::fromPsd(const PsdRealisationSpec& spec) {
   if (!(spec.wavelength_min > 0.0) || !std::isfinite(spec.wavelength_min))
-    throw std::runtime_error("irregularity PSD: wavelength_min = " + fmt(spec.wavelength_min) +
-                             " m must be positive");
+    throw std::runtime_error("irregularity PSD: wavelength_min = " + fmt(spec.wavelength_min) + " m must be positive");
   if (!(spec.wavelength_max > spec.wavelength_min) || !std::isfinite(spec.wavelength_max))
     throw std::runtime_error("irregularity PSD: wavelength_max = " + fmt(spec.wavelength_max) +
                              " m must exceed wavelength_min = " + fmt(spec.wavelength_min) + " m");

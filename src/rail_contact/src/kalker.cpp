@@ -13,9 +13,7 @@ namespace {
 
 /// Interpolation coordinate: x = a/b for a <= b and x = 2 - b/a for a > b, so that linear
 /// interpolation in x is linear in the tabulated ratio g on each side of the circle.
-double axisCoordinate(double a_over_b) noexcept {
-  return a_over_b <= 1.0 ? a_over_b : 2.0 - 1.0 / a_over_b;
-}
+double axisCoordinate(double a_over_b) noexcept { return a_over_b <= 1.0 ? a_over_b : 2.0 - 1.0 / a_over_b; }
 
 // Kalker 1990, "Three-Dimensional Elastic Bodies in Rolling Contact", Table E.3.
 // Same numbers as data/kalker_coefficients.csv: {kind a/b (0) or b/a (1), g,
@@ -98,15 +96,15 @@ KalkerTable KalkerTable::fromRows(std::vector<Row> rows, const std::string& orig
       for (int i = 0; i < kNumPoisson; ++i)
         if (!(r.c[j][i] > 0.0) || !std::isfinite(r.c[j][i])) {
           std::ostringstream os;
-          os << origin << ": row " << k + 1 << ": coefficient " << j << "," << i
-             << " must be > 0 (got " << r.c[j][i] << ")";
+          os << origin << ": row " << k + 1 << ": coefficient " << j << "," << i << " must be > 0 (got " << r.c[j][i]
+             << ")";
           throw std::runtime_error(os.str());
         }
     const double x = axisCoordinate(r.a_over_b);
     if (!t.x_.empty() && !(x > t.x_.back())) {
       std::ostringstream os;
-      os << origin << ": row " << k + 1 << ": a/b not increasing (" << r.a_over_b << " after "
-         << rows[k - 1].a_over_b << ")";
+      os << origin << ": row " << k + 1 << ": a/b not increasing (" << r.a_over_b << " after " << rows[k - 1].a_over_b
+         << ")";
       throw std::runtime_error(os.str());
     }
     t.x_.push_back(x);

@@ -77,8 +77,7 @@ PolachResult polachForces(const PolachInput& in, const PolachOptions& o) noexcep
   const double eps = eps_per_s * s_C;
   // F = 2 mu N / pi (kA eps / (1 + (kA eps)^2) + atan(kS eps)); F / s_C written finite at s_C = 0.
   const double kAe = o.kA * eps;
-  const double F_over_sC =
-      (2.0 * muN / kPi) * eps_per_s * (o.kA / (1.0 + kAe * kAe) + o.kS * atanOverX(o.kS * eps));
+  const double F_over_sC = (2.0 * muN / kPi) * eps_per_s * (o.kA / (1.0 + kAe * kAe) + o.kS * atanOverX(o.kS * eps));
   r.Fx = -F_over_sC * nx;
   r.Fy = -F_over_sC * ny;
 

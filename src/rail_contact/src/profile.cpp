@@ -69,16 +69,11 @@ std::vector<RawSegment> splineNotAKnot(const std::vector<double>& x, const Profi
   return seg;
 }
 
-inline Eigen::Vector2d rawDeriv(const RawSegment& s, double t) {
-  return s.b + t * (2.0 * s.c + 3.0 * t * s.d);
-}
-inline Eigen::Vector2d rawPos(const RawSegment& s, double t) {
-  return s.a + t * (s.b + t * (s.c + t * s.d));
-}
+inline Eigen::Vector2d rawDeriv(const RawSegment& s, double t) { return s.b + t * (2.0 * s.c + 3.0 * t * s.d); }
+inline Eigen::Vector2d rawPos(const RawSegment& s, double t) { return s.a + t * (s.b + t * (s.c + t * s.d)); }
 
 // 5-point Gauss-Legendre nodes and weights on [-1, 1].
-constexpr double kGlX[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
-                            0.9061798459386640};
+constexpr double kGlX[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
 constexpr double kGlW[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665,
                             0.2369268850561891};
 
@@ -96,8 +91,7 @@ double rawArcLength(const RawSegment& s, double t) {
 ProfileCurve::ProfileCurve(const ProfilePoints& points_yz, SolidSide side, const ProfileCurveOptions& options)
     : side_(side), normal_sign_(side == SolidSide::Right ? 1.0 : -1.0) {
   if (!(options.ds > 0.0) || !std::isfinite(options.ds))
-    throw std::invalid_argument("ProfileCurve: node spacing ds must be positive, got " +
-                                std::to_string(options.ds));
+    throw std::invalid_argument("ProfileCurve: node spacing ds must be positive, got " + std::to_string(options.ds));
   if (points_yz.size() < 4)
     throw std::invalid_argument("ProfileCurve: at least 4 points needed, got " + std::to_string(points_yz.size()));
   // Stage 1: spline with chord-length knots through the input points.
@@ -107,8 +101,7 @@ ProfileCurve::ProfileCurve(const ProfilePoints& points_yz, SolidSide side, const
       throw std::invalid_argument("ProfileCurve: non-finite point at index " + std::to_string(i));
     if (i > 0) {
       const double chord = (points_yz[i] - points_yz[i - 1]).norm();
-      if (!(chord > 0.0))
-        throw std::invalid_argument("ProfileCurve: repeated point at index " + std::to_string(i));
+      if (!(chord > 0.0)) throw std::invalid_argument("ProfileCurve: repeated point at index " + std::to_string(i));
       x[i] = x[i - 1] + chord;
     }
   }
@@ -327,9 +320,7 @@ double extremumParameter(const ProfileCurve& curve, int axis, double sign) {
 
 }  // namespace
 
-Eigen::Vector2d railTopPoint(const ProfileCurve& rail) {
-  return rail.position(extremumParameter(rail, 1, +1.0));
-}
+Eigen::Vector2d railTopPoint(const ProfileCurve& rail) { return rail.position(extremumParameter(rail, 1, +1.0)); }
 
 Eigen::Vector2d gaugePoint(const ProfileCurve& rail, double depth) {
   if (!(depth > 0.0)) throw std::invalid_argument("gaugePoint: depth must be positive, got " + std::to_string(depth));
@@ -356,8 +347,8 @@ Eigen::Vector2d railSectionCentre(const ProfileCurve& rail, double depth_below_t
   // measured where both sides reach; below 3 mm the crown alone says nothing: the highest point is used.
   const double u_gauge_end = gauge_at_end ? rail.uMax() : rail.uMin();
   const double u_field_end = gauge_at_end ? rail.uMin() : rail.uMax();
-  const double depth = std::min({head_depth, top.y() - rail.position(u_gauge_end).y(),
-                                 top.y() - rail.position(u_field_end).y()});
+  const double depth =
+      std::min({head_depth, top.y() - rail.position(u_gauge_end).y(), top.y() - rail.position(u_field_end).y()});
   double y_centre = top.x();
   double u_gauge = 0.0, u_field = 0.0;
   if (depth >= 3e-3 && rail.findCoordinate(1, top.y() - depth, u_top, u_gauge_end, u_gauge) &&

@@ -109,8 +109,8 @@ void checkPoints(const std::string& file, int last_line, const std::vector<RawPo
     }
     if (dir * (extreme - b.y) > tol)
       throw ProfileFileError(file, b.line,
-                             axis_name + (dir > 0 ? " not increasing (" : " not decreasing (") + fmt(b.y) +
-                                 " after " + fmt(extreme) + ")");
+                             axis_name + (dir > 0 ? " not increasing (" : " not decreasing (") + fmt(b.y) + " after " +
+                                 fmt(extreme) + ")");
     extreme = dir > 0 ? std::max(extreme, b.y) : std::min(extreme, b.y);
   }
 }
@@ -162,16 +162,20 @@ ProfilePoints readPlainProfile(const std::string& path, const ProfileFileOptions
       const std::string comment = lower(trim(line.substr(hash + 1)));
       if (comment.rfind("units:", 0) == 0) {
         const std::string u = trim(comment.substr(6));
-        if (u == "mm") units = 1;
-        else if (u == "m") units = 2;
-        else throw ProfileFileError(path, iline, "unknown units '" + u + "' (expected mm or m)");
+        if (u == "mm")
+          units = 1;
+        else if (u == "m")
+          units = 2;
+        else
+          throw ProfileFileError(path, iline, "unknown units '" + u + "' (expected mm or m)");
       }
       line = line.substr(0, hash);
     }
     const std::vector<std::string> tok = splitTokens(line);
     if (tok.empty()) continue;
     if (tok.size() != 2)
-      throw ProfileFileError(path, iline, "wrong column count (" + std::to_string(tok.size()) + " values, expected 2: y z)");
+      throw ProfileFileError(path, iline,
+                             "wrong column count (" + std::to_string(tok.size()) + " values, expected 2: y z)");
     const std::vector<double> v = parseNumbers(path, iline, tok);
     pts.push_back({v[0], v[1], iline});
   }
@@ -201,8 +205,7 @@ ProfilePoints readMiniProfProfile(const std::string& path, const ProfileFileOpti
     const std::string t = trim(line);
     if (t.empty()) continue;
     if (t[0] == '"') continue;  // flagged point, excluded from the profile
-    if (t[0] == '[')
-      throw ProfileFileError(path, iline, "sectioned MiniProf file not supported ('" + t + "')");
+    if (t[0] == '[') throw ProfileFileError(path, iline, "sectioned MiniProf file not supported ('" + t + "')");
     const size_t eq = t.find('=');
     if (eq != std::string::npos) {
       const std::string key = trim(t.substr(0, eq));
@@ -298,17 +301,28 @@ ProfilePoints readSimpackProfile(const std::string& path, const ProfileFileOptio
         }
         continue;
       }
-      if (key == "point.dist.min") num(dist_min);
-      else if (key == "shift.y") num(shift_y);
-      else if (key == "shift.z") num(shift_z);
-      else if (key == "rotate") num(rotate);
-      else if (key == "bound.y.min") num(bound_y_min);
-      else if (key == "bound.y.max") num(bound_y_max);
-      else if (key == "bound.z.min") num(bound_z_min);
-      else if (key == "bound.z.max") num(bound_z_max);
-      else if (key == "mirror.y") num(mirror_y);
-      else if (key == "mirror.z") num(mirror_z);
-      else if (key == "inversion") num(inversion);
+      if (key == "point.dist.min")
+        num(dist_min);
+      else if (key == "shift.y")
+        num(shift_y);
+      else if (key == "shift.z")
+        num(shift_z);
+      else if (key == "rotate")
+        num(rotate);
+      else if (key == "bound.y.min")
+        num(bound_y_min);
+      else if (key == "bound.y.max")
+        num(bound_y_max);
+      else if (key == "bound.z.min")
+        num(bound_z_min);
+      else if (key == "bound.z.max")
+        num(bound_z_max);
+      else if (key == "mirror.y")
+        num(mirror_y);
+      else if (key == "mirror.z")
+        num(mirror_z);
+      else if (key == "inversion")
+        num(inversion);
       else if (key == "units.len.f") {
         num(len_f);
         if (!(len_f > 0.0)) throw ProfileFileError(path, iline, "units.len.f must be positive ('" + val + "')");
@@ -352,11 +366,13 @@ ProfilePoints readSimpackProfile(const std::string& path, const ProfileFileOptio
   }
   if (inversion != 0.0) std::reverse(q.begin(), q.end());
   if (q.size() < 4)
-    throw ProfileFileError(path, iline, "too few points after the spline-block modifications (" +
-                                            std::to_string(q.size()) + ", need at least 4)");
+    throw ProfileFileError(
+        path, iline,
+        "too few points after the spline-block modifications (" + std::to_string(q.size()) + ", need at least 4)");
   ProfilePoints out;
   out.reserve(q.size());
-  for (const Eigen::Vector2d& v : q) out.emplace_back(-v.x() / len_f, -v.y() / len_f);  // y field -> gauge, z down -> up
+  for (const Eigen::Vector2d& v : q)
+    out.emplace_back(-v.x() / len_f, -v.y() / len_f);  // y field -> gauge, z down -> up
   if (type_out) *type_out = type;
   return applyOptions(out, options);
 }
@@ -435,7 +451,8 @@ void writeMiniProfProfile(const std::string& path, const ProfilePoints& points_y
   closeOrThrow(out, path);
 }
 
-void writeSimpackProfile(const std::string& path, const ProfilePoints& points_yz, int type, const std::string& comment) {
+void writeSimpackProfile(const std::string& path, const ProfilePoints& points_yz, int type,
+                         const std::string& comment) {
   if (type != 0 && type != 1) throw std::invalid_argument("writeSimpackProfile: type must be 0 (rail) or 1 (wheel)");
   std::string safe_comment = comment;
   std::replace(safe_comment.begin(), safe_comment.end(), '\'', '"');

@@ -65,8 +65,9 @@ ProfilePoints uic60HeadPoints(double ds, double flank_depth) {
   appendPiece(half, arc(g.c1y, g.c1z, Uic60Head::R1), 0.0, g.phi1, Uic60Head::R1 * g.phi1, ds_mm, false);
   appendPiece(half, arc(g.c2y, g.c2z, Uic60Head::R2), g.phi1, g.phi2, Uic60Head::R2 * (g.phi2 - g.phi1), ds_mm, true);
   appendPiece(half, arc(g.c3y, g.c3z, Uic60Head::R3), g.phi2, g.phi3, Uic60Head::R3 * (g.phi3 - g.phi2), ds_mm, true);
-  appendPiece(half, [&](double s) { return Eigen::Vector2d(flank_start + s * flank_dir); }, 0.0, flank_len, flank_len,
-              ds_mm, true);
+  appendPiece(
+      half, [&](double s) { return Eigen::Vector2d(flank_start + s * flank_dir); }, 0.0, flank_len, flank_len, ds_mm,
+      true);
 
   ProfilePoints out;
   out.reserve(2 * half.size());
@@ -98,8 +99,9 @@ ProfilePoints uic60SectionOutline() {
   ProfilePoints out;
   // Gauge-side head corner, down and around clockwise, back up the field side.
   const std::vector<Eigen::Vector2d> lower = {
-      {web, z_head},          {web, z_foot},         {foot_half, z_bottom + edge}, {foot_half, z_bottom},
-      {-foot_half, z_bottom}, {-foot_half, z_bottom + edge}, {-web, z_foot},       {-web, z_head}};
+      {web, z_head},         {web, z_foot},          {foot_half, z_bottom + edge},
+      {foot_half, z_bottom}, {-foot_half, z_bottom}, {-foot_half, z_bottom + edge},
+      {-web, z_foot},        {-web, z_head}};
   out.push_back(head.back());
   for (const Eigen::Vector2d& p : lower) out.push_back(p * 1e-3);
   for (const Eigen::Vector2d& p : head) out.push_back(p);
@@ -127,8 +129,15 @@ ProfileCurve makeUic60Rail(double inclination, const ProfileCurveOptions& option
 //   H: F = AH + sqrt(BH^2 - (S + CH)^2)                S in [-70,           -62.764705882]
 namespace s1002 {
 constexpr double AA = 1.364323640, BA = 0.066666667;
-constexpr double B[9] = {0.0,           3.358537058e-02, 1.565681624e-03, 2.810427944e-05, 5.844240864e-08,
-                         1.562379023e-08, 5.309217349e-15, 5.957839843e-12, 2.646656573e-13};
+constexpr double B[9] = {0.0,
+                         3.358537058e-02,
+                         1.565681624e-03,
+                         2.810427944e-05,
+                         5.844240864e-08,
+                         1.562379023e-08,
+                         5.309217349e-15,
+                         5.957839843e-12,
+                         2.646656573e-13};
 constexpr double C[8] = {4.320221063e+03, 1.038384026e+03, 1.065501873e+02, 6.051367875,
                          2.054332446e-01, 4.169739389e-03, 4.687195829e-05, 2.252755540e-07};
 constexpr double AD = 16.446, BD = 13.0, CD = 26.210665;

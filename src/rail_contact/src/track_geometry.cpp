@@ -28,9 +28,7 @@ std::string fmt(double v) {
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error("track geometry: " + what); }
 
-std::string segField(std::size_t j, const char* field) {
-  return "segments[" + std::to_string(j) + "]." + field;
-}
+std::string segField(std::size_t j, const char* field) { return "segments[" + std::to_string(j) + "]." + field; }
 
 void requireFinite(double v, const std::string& name) {
   if (!std::isfinite(v)) fail(name + " = " + fmt(v) + " is not a finite number");
@@ -130,9 +128,9 @@ Vector3d integrateTangent(const SegmentSpec& seg, double psi0, double xa, double
 
 // Design state of the centre line at one station: position, frame and its first two derivatives.
 struct CentreState {
-  Vector3d p, t, dt;      // position, tangent, d t / ds
-  Matrix3d R, dR, ddR;    // [t n b] and derivatives
-  double kappa, phi;      // curvature, cant angle
+  Vector3d p, t, dt;    // position, tangent, d t / ds
+  Matrix3d R, dR, ddR;  // [t n b] and derivatives
+  double kappa, phi;    // curvature, cant angle
 };
 
 CentreState centreState(const SegmentSpec& seg, const Vector3d& p, double psi, double x, double e) {
@@ -198,8 +196,7 @@ TrackGeometry::TrackGeometry(const GeometrySpec& spec, const Irregularities& irr
   if (spec.segments.empty()) fail("no segments");
   if (spec.cant_reference_width <= 0.0)
     fail("cant_reference_width = " + fmt(spec.cant_reference_width) + " m must be positive");
-  if (spec.rail_half_spacing <= 0.0)
-    fail("rail_half_spacing = " + fmt(spec.rail_half_spacing) + " m must be positive");
+  if (spec.rail_half_spacing <= 0.0) fail("rail_half_spacing = " + fmt(spec.rail_half_spacing) + " m must be positive");
   if (std::abs(spec.rail_inclination) >= 0.25 * kPi)
     fail("rail_inclination = " + fmt(spec.rail_inclination) + " rad is not a rail inclination (|value| < pi/4)");
   if (spec.table_step <= 0.0) fail("table_step = " + fmt(spec.table_step) + " m must be positive");
@@ -224,8 +221,7 @@ TrackGeometry::TrackGeometry(const GeometrySpec& spec, const Irregularities& irr
     }
     for (double cant : {seg.cant_start, ramp ? seg.cant_end : seg.cant_start}) {
       if (std::abs(cant) >= e)
-        fail(segField(j, "cant") + " = " + fmt(cant) + " m is not smaller than cant_reference_width " + fmt(e) +
-             " m");
+        fail(segField(j, "cant") + " = " + fmt(cant) + " m is not smaller than cant_reference_width " + fmt(e) + " m");
     }
     if (std::abs(seg.gradient) >= 1.0)
       fail(segField(j, "gradient") + " = " + fmt(seg.gradient) + " is not a railway gradient (|g| < 1)");
@@ -328,8 +324,7 @@ TrackGeometry::TrackGeometry(const GeometrySpec& spec, const Irregularities& irr
       Node& rn = rail_nodes_[side][i];
       rn.p = cs.p + lat * n + ver * b;
       const Vector3d d_origin = cs.t + lat * dn + dl1 * n + ver * db + dv1 * b;
-      const Vector3d dd_origin =
-          cs.dt + lat * ddn + 2.0 * dl1 * dn + dl2 * n + ver * ddb + 2.0 * dv1 * db + dv2 * b;
+      const Vector3d dd_origin = cs.dt + lat * ddn + 2.0 * dl1 * dn + dl2 * n + ver * ddb + 2.0 * dv1 * db + dv2 * b;
       rn.dp = d_origin;
       // Lateral axis: the track lateral axis rolled about t by the inclination (toward the centre) and
       // the cross-level roll, then made orthogonal to the rail's own tangent.
@@ -367,14 +362,16 @@ namespace {
 // s-derivatives, then re-orthonormalised frame with its exact derivative.
 void interpolateNodes(const Eigen::Vector3d& p0, const Eigen::Vector3d& dp0, const Eigen::Matrix3d& R0,
                       const Eigen::Matrix3d& dR0, const Eigen::Vector3d& p1, const Eigen::Vector3d& dp1,
-                      const Eigen::Matrix3d& R1, const Eigen::Matrix3d& dR1, double tau, double h,
-                      Eigen::Vector3d& p, Eigen::Vector3d& dp, Eigen::Matrix3d& R, Eigen::Matrix3d& dR) {
+                      const Eigen::Matrix3d& R1, const Eigen::Matrix3d& dR1, double tau, double h, Eigen::Vector3d& p,
+                      Eigen::Vector3d& dp, Eigen::Matrix3d& R, Eigen::Matrix3d& dR) {
   const Hermite H(tau);
   p = H.h00 * p0 + (H.h10 * h) * dp0 + H.h01 * p1 + (H.h11 * h) * dp1;
   dp = (H.d00 * p0 + H.d01 * p1) / h + H.d10 * dp0 + H.d11 * dp1;
-  const Eigen::Vector3d c0 = H.h00 * R0.col(0) + (H.h10 * h) * dR0.col(0) + H.h01 * R1.col(0) + (H.h11 * h) * dR1.col(0);
+  const Eigen::Vector3d c0 =
+      H.h00 * R0.col(0) + (H.h10 * h) * dR0.col(0) + H.h01 * R1.col(0) + (H.h11 * h) * dR1.col(0);
   const Eigen::Vector3d dc0 = (H.d00 * R0.col(0) + H.d01 * R1.col(0)) / h + H.d10 * dR0.col(0) + H.d11 * dR1.col(0);
-  const Eigen::Vector3d c1 = H.h00 * R0.col(1) + (H.h10 * h) * dR0.col(1) + H.h01 * R1.col(1) + (H.h11 * h) * dR1.col(1);
+  const Eigen::Vector3d c1 =
+      H.h00 * R0.col(1) + (H.h10 * h) * dR0.col(1) + H.h01 * R1.col(1) + (H.h11 * h) * dR1.col(1);
   const Eigen::Vector3d dc1 = (H.d00 * R0.col(1) + H.d01 * R1.col(1)) / h + H.d10 * dR0.col(1) + H.d11 * dR1.col(1);
   orthonormalFrame(c0, dc0, c1, dc1, R, dR);
 }
@@ -403,8 +400,7 @@ void TrackGeometry::rail(RailSide side, double s, RailPoint& out) const {
   out.lateral_sign = side == RailSide::kLeft ? -1.0 : 1.0;
 }
 
-RailSurfacePoint TrackGeometry::railSurface(const RailPoint& rail, double y, double z, double dy_du,
-                                            double dz_du) {
+RailSurfacePoint TrackGeometry::railSurface(const RailPoint& rail, double y, double z, double dy_du, double dz_du) {
   const double ly = rail.lateral_sign * y;
   RailSurfacePoint out;
   out.r = rail.p_origin_in_world + ly * rail.R_rail_to_world.col(1) + z * rail.R_rail_to_world.col(2);
@@ -438,8 +434,7 @@ double TrackGeometry::designCurvature(double s) const {
 
 double cantAngle(double cant, double cant_reference_width) {
   if (!(cant_reference_width > 0.0) || !std::isfinite(cant_reference_width))
-    throw std::runtime_error("cant_angle: cant_reference_width = " + fmt(cant_reference_width) +
-                             " m must be positive");
+    throw std::runtime_error("cant_angle: cant_reference_width = " + fmt(cant_reference_width) + " m must be positive");
   if (!(std::abs(cant) < cant_reference_width))
     throw std::runtime_error("cant_angle: cant = " + fmt(cant) + " m is not smaller than the cant reference width " +
                              fmt(cant_reference_width) + " m");

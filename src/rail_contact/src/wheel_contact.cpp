@@ -32,8 +32,7 @@ void validate(const WheelContactOptions& o) {
 }
 
 WheelContactModel::WheelContactModel(const WheelProfile& wheel, double nominal_radius, const ProfileCurve& rail,
-                                     const Eigen::Vector2d& rail_section_centre_yz,
-                                     const WheelContactOptions& options)
+                                     const Eigen::Vector2d& rail_section_centre_yz, const WheelContactOptions& options)
     : options_(options), detector_(wheel, nominal_radius, rail, rail_section_centre_yz, options.detection) {
   validate(options_);
   polach_ = options_.polach;
@@ -46,8 +45,8 @@ WheelContactModel::WheelContactModel(const WheelProfile& wheel, double nominal_r
 
 template <class Deformation>
 void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const TrackGeometry& track,
-                                 const Deformation& deformation, WheelContactWork& work,
-                                 WheelContactResult& out, ContactCost* cost) const noexcept {
+                                 const Deformation& deformation, WheelContactWork& work, WheelContactResult& out,
+                                 ContactCost* cost) const noexcept {
   using Clock = std::chrono::steady_clock;
   const Clock::time_point t_begin = cost != nullptr ? Clock::now() : Clock::time_point();
   double detection_s = 0.0;  // this evaluation's search time
@@ -106,7 +105,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     c.contact_angle = std::asin(std::clamp(n.dot(ls * axle), -1.0, 1.0));
 
     // Material-point velocities: wheel (rigid wheelset) and rail (section motion from the provider).
-    const Eigen::Vector3d v_wheel = ws.v_centre_in_world + ws.omega_in_world.cross(g.p_wheel_in_world - ws.p_centre_in_world);
+    const Eigen::Vector3d v_wheel =
+        ws.v_centre_in_world + ws.omega_in_world.cross(g.p_wheel_in_world - ws.p_centre_in_world);
     const Eigen::Vector3d v_rail =
         g.rail_motion.u_dot + g.rail_motion.theta_dot.cross(g.p_rail_in_world - g.p_section_centre_in_world);
     // Penetration rate: the wheel is a surface of revolution about its axle, so the spin about the axle moves
@@ -129,7 +129,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     kc.rail_rolling = 0.0;
     kc.rail_lateral = g.rail_curvature;
     const HertzGeometry hz = limitLateralWidth(computeHertz(kc, E_star_, options_.hertz), c.penetration,
-                                                 options_.max_lateral_semi_axis, options_.hertz);
+                                               options_.max_lateral_semi_axis, options_.hertz);
     c.hertz_flags = hz.flags;
     if (k == kFlange && out.contact[kTread].penetration > 0.0 &&
         (out.contact[kTread].p_wheel_in_world - g.p_wheel_in_world).norm() < options_.merge_distance) {
@@ -137,8 +137,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
       // (DetectionOptions::split_overlap); a point found there belongs to the other surface, which keeps
       // its own point. Two points on their own surfaces (or both past the split): the deeper one.
       ContactPointResult& t = out.contact[kTread];
-      const bool flange_keeps = g.on_own_surface != tread_on_own_surface ? g.on_own_surface
-                                                                          : c.penetration > t.penetration;
+      const bool flange_keeps =
+          g.on_own_surface != tread_on_own_surface ? g.on_own_surface : c.penetration > t.penetration;
       if (flange_keeps) {
         t.active = false;
         t.merged = true;
@@ -150,8 +150,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
         continue;
       }
     }
-    c.N = dampedNormalForce(hz.K, c.penetration, c.penetration_rate, work.impact[k].impact_velocity,
-                              options_.damping);
+    c.N = dampedNormalForce(hz.K, c.penetration, c.penetration_rate, work.impact[k].impact_velocity, options_.damping);
     c.active = true;
     c.a = hz.a(c.N);
     c.b = hz.b(c.N);
@@ -159,7 +158,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     // Creepages (rolling speed: wheel centre relative to the rail section along t_rolling).
     const double V = (ws.v_centre_in_world - g.rail_motion.u_dot).dot(t_w);
     const Creepages cr = computeCreepages(v_wheel, v_rail, ws.omega_in_world, g.rail_motion.theta_dot,
-                                           c.R_contact_to_world, V, options_.creepage);
+                                          c.R_contact_to_world, V, options_.creepage);
     c.nu_x = cr.nu_x;
     c.nu_y = cr.nu_y;
     c.phi = options_.spin ? cr.phi : 0.0;
@@ -186,7 +185,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     }
     c.force_on_wheel_in_world = contactForceInWorld(c.R_contact_to_world, c.F_long, c.F_lat, c.N);
     c.rail_wrench = railSectionWrench(-c.force_on_wheel_in_world, Eigen::Vector3d::Zero(),
-                                        c.p_rail_in_world - c.p_section_centre_in_world, Eigen::Vector3d::Zero());
+                                      c.p_rail_in_world - c.p_section_centre_in_world, Eigen::Vector3d::Zero());
   }
 
   // Eq. 13: both contacts to the wheel centre (inactive contacts carry zero force).
@@ -194,14 +193,14 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const ContactPointResult& tr = out.contact[kTread];
   const ContactPointResult& fl = out.contact[kFlange];
   out.wheel_centre = wheelCentreWrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
-                                         A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
-                                         A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
+                                       A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
+                                       A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
   // Eq. 15: both contacts about one section centre (the tread contact's if active, else the flange's).
   const ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
   out.rail_section_s = ref.s_r;
   out.rail_section = railSectionWrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
-                                         tr.p_rail_in_world - ref.p_section_centre_in_world,
-                                         fl.p_rail_in_world - ref.p_section_centre_in_world);
+                                       tr.p_rail_in_world - ref.p_section_centre_in_world,
+                                       fl.p_rail_in_world - ref.p_section_centre_in_world);
   if (!out.wheel_centre.force_in_world.allFinite() || !out.wheel_centre.moment_in_wheelset.allFinite()) {
     out.wheel_centre = WheelsetWrench();
     out.rail_section = RailWrench();

@@ -5,10 +5,10 @@
 namespace rail::contact {
 
 WheelsetWrench wheelCentreWrench(const Eigen::Vector3d& f_tread_on_wheel_in_world,
-                                   const Eigen::Vector3d& f_flange_on_wheel_in_world,
-                                   const Eigen::Vector3d& s_tread_from_wheel_centre_in_wheelset,
-                                   const Eigen::Vector3d& s_flange_from_wheel_centre_in_wheelset,
-                                   const Eigen::Matrix3d& R_wheelset_to_world) noexcept {
+                                 const Eigen::Vector3d& f_flange_on_wheel_in_world,
+                                 const Eigen::Vector3d& s_tread_from_wheel_centre_in_wheelset,
+                                 const Eigen::Vector3d& s_flange_from_wheel_centre_in_wheelset,
+                                 const Eigen::Matrix3d& R_wheelset_to_world) noexcept {
   WheelsetWrench w;
   w.force_in_world = f_tread_on_wheel_in_world + f_flange_on_wheel_in_world;
   const Eigen::Vector3d f_tread_in_wheelset = R_wheelset_to_world.transpose() * f_tread_on_wheel_in_world;
@@ -19,8 +19,8 @@ WheelsetWrench wheelCentreWrench(const Eigen::Vector3d& f_tread_on_wheel_in_worl
 }
 
 WheelsetWrench wheelsetCentreWrench(const WheelsetWrench& wheel_centre,
-                                      const Eigen::Vector3d& s_wheel_centre_from_wheelset_centre_in_wheelset,
-                                      const Eigen::Matrix3d& R_wheelset_to_world) noexcept {
+                                    const Eigen::Vector3d& s_wheel_centre_from_wheelset_centre_in_wheelset,
+                                    const Eigen::Matrix3d& R_wheelset_to_world) noexcept {
   WheelsetWrench w;
   w.force_in_world = wheel_centre.force_in_world;
   const Eigen::Vector3d f_in_wheelset = R_wheelset_to_world.transpose() * wheel_centre.force_in_world;
@@ -35,9 +35,9 @@ void accumulate(WheelsetWrench& sum, const WheelsetWrench& w) noexcept {
 }
 
 RailWrench railSectionWrench(const Eigen::Vector3d& f_tread_on_rail_in_world,
-                               const Eigen::Vector3d& f_flange_on_rail_in_world,
-                               const Eigen::Vector3d& s_tread_from_section_centre_in_world,
-                               const Eigen::Vector3d& s_flange_from_section_centre_in_world) noexcept {
+                             const Eigen::Vector3d& f_flange_on_rail_in_world,
+                             const Eigen::Vector3d& s_tread_from_section_centre_in_world,
+                             const Eigen::Vector3d& s_flange_from_section_centre_in_world) noexcept {
   RailWrench w;
   w.force_in_world = f_tread_on_rail_in_world + f_flange_on_rail_in_world;
   w.moment_in_world = s_tread_from_section_centre_in_world.cross(f_tread_on_rail_in_world) +

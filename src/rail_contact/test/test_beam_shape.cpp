@@ -53,8 +53,8 @@ TEST(BeamShape, NodalLoadsAreStaticallyEquivalent) {
 
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d P = randomVector(gen, 10.0);  // arbitrary reference point
-      const Eigen::Vector3d moment_nodes = (x_i - P).cross(F.segment<3>(0)) + F.segment<3>(3) +
-                                           (x_j - P).cross(F.segment<3>(6)) + F.segment<3>(9);
+      const Eigen::Vector3d moment_nodes =
+          (x_i - P).cross(F.segment<3>(0)) + F.segment<3>(3) + (x_j - P).cross(F.segment<3>(6)) + F.segment<3>(9);
       const Eigen::Vector3d moment_applied = (x_load - P).cross(f) + m;
       EXPECT_LT((moment_nodes - moment_applied).norm(), 1e-12 * scale);
     }

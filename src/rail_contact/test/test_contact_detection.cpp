@@ -11,8 +11,8 @@
 #include <limits>
 #include <vector>
 
-#include "rail_contact/contact_geometry_table.hpp"
 #include "rail_contact/contact_detection.hpp"
+#include "rail_contact/contact_geometry_table.hpp"
 #include "rail_contact/rail_deformation.hpp"
 #include "rail_contact/wheel_contact.hpp"
 
@@ -66,7 +66,8 @@ struct BruteForce {
       const Vector2d& a = rail_yz[k];
       const Vector2d& b = rail_yz[k + 1];
       const double lo = std::min(a.x(), b.x()), hi = std::max(a.x(), b.x());
-      for (long i = static_cast<long>(std::ceil((lo - top_y0) / top_h)); i <= static_cast<long>((hi - top_y0) / top_h); ++i) {
+      for (long i = static_cast<long>(std::ceil((lo - top_y0) / top_h)); i <= static_cast<long>((hi - top_y0) / top_h);
+           ++i) {
         const double y = top_y0 + i * top_h;
         const double t = hi > lo ? (y - a.x()) / (b.x() - a.x()) : 0.0;
         top[i] = std::max(top[i], a.y() + t * (b.y() - a.y()));
@@ -178,8 +179,8 @@ TEST(ContactDetection, LateralShiftMovesContactPointsLikeVerticalGapMethod) {
     brute().solve(y, z, phi, il, ir);
     const double rl = kR0 - brute().wheel_yz[il].y(), rr = kR0 - brute().wheel_yz[ir].y();
     // (5 mm is avoided: S1002/UIC60 1:40 jumps there between two nearly equal gap minima, where both
-    // methods' discretisations decide.) Tolerances: the brute force samples the profiles every 0.01 mm; on tread slopes of ~1/10 the
-    // radius of the sampled minimum is within ~2 um; the contact point within ~0.3 mm on flat parts.
+    // methods' discretisations decide.) Tolerances: the brute force samples the profiles every 0.01 mm; on tread slopes
+    // of ~1/10 the radius of the sampled minimum is within ~2 um; the contact point within ~0.3 mm on flat parts.
     EXPECT_NEAR(r.delta_r, rl - rr, 4e-6) << y;
     EXPECT_NEAR(r.left.y_wheel, brute().wheel_yz[il].x(), 0.3e-3) << y;
     EXPECT_NEAR(r.right.y_wheel, brute().wheel_yz[ir].x(), 0.3e-3) << y;
@@ -233,15 +234,16 @@ namespace {
 // Exact rigid motion of the whole rail: x -> x_ref + u0 + A (x - x_ref), provided as section motion.
 class RigidMotionProvider : public rc::RailDeformation {
  public:
-  RigidMotionProvider(const rc::TrackGeometry& track, const Vector2d& centre, const Vector3d& x_ref,
-                      const Vector3d& u0, const Vector3d& theta)
+  RigidMotionProvider(const rc::TrackGeometry& track, const Vector2d& centre, const Vector3d& x_ref, const Vector3d& u0,
+                      const Vector3d& theta)
       : track_(track), centre_(centre), x_ref_(x_ref), u0_(u0), theta_(theta), A_(rc::smallRotationMatrix(theta)) {}
   void sectionMotion(rc::RailSide side, double s, rc::RailSectionMotion& out) const noexcept override {
     rc::RailPoint rp;
     track_.rail(side, s, rp);
     const Vector3d c0 = rp.p_origin_in_world + rp.lateral_sign * centre_.x() * rp.R_rail_to_world.col(1) +
                         centre_.y() * rp.R_rail_to_world.col(2);
-    const Vector3d dc0 = rp.dp_origin_ds + rp.lateral_sign * centre_.x() * rp.dR_ds.col(1) + centre_.y() * rp.dR_ds.col(2);
+    const Vector3d dc0 =
+        rp.dp_origin_ds + rp.lateral_sign * centre_.x() * rp.dR_ds.col(1) + centre_.y() * rp.dR_ds.col(2);
     out.setZero();
     out.u = u0_ + (A_ - Matrix3d::Identity()) * (c0 - x_ref_);
     out.du_ds = (A_ - Matrix3d::Identity()) * dc0;
@@ -432,8 +434,7 @@ TEST(ContactDetection, RootContactNearTheSplitIsAConvergedPointFoundAlikeWarmAnd
   rc::WheelContactOptions old_options = s.table.model().options();
   ASSERT_EQ(old_options.detection.split_overlap, 5e-3);  // rail_contact's default
   old_options.detection.split_overlap = 0.0;             // surfaces end at the split
-  const rc::WheelContactModel no_overlap(s.wheel, kR0, s.rail, s.table.model().detector().sectionCentre(),
-                                         old_options);
+  const rc::WheelContactModel no_overlap(s.wheel, kR0, s.rail, s.table.model().detector().sectionCentre(), old_options);
   rc::WheelContactOptions overlap_options = old_options;
   overlap_options.detection.split_overlap = 5e-3;
   const rc::WheelContactModel model(s.wheel, kR0, s.rail, no_overlap.detector().sectionCentre(), overlap_options);
@@ -451,14 +452,15 @@ TEST(ContactDetection, RootContactNearTheSplitIsAConvergedPointFoundAlikeWarmAnd
     for (const rc::ContactPointResult& c : out.contact) {
       if (!c.active) continue;
       ++loaded;
-      EXPECT_TRUE(c.status == rc::DetectionStatus::kConverged ||
-                  c.status == rc::DetectionStatus::kConvergedAfterSearch) << y << ": " << rc::toString(c.status);
+      EXPECT_TRUE(c.status == rc::DetectionStatus::kConverged || c.status == rc::DetectionStatus::kConvergedAfterSearch)
+          << y << ": " << rc::toString(c.status);
     }
     EXPECT_EQ(loaded, 1) << y;
     // Same point pair, so the same force, up to Newton's tolerance (1e-10 m in the point, against
     // penetrations of 20-300 um: a relative 1e-6 in the force, with N ~ delta^1.5) plus 1e-3 N.
     const Vector3d f = out.wheel_centre.force_in_world, f_fresh = fresh_out.wheel_centre.force_in_world;
-    EXPECT_LT((f - f_fresh).norm(), 1e-6 * f.norm() + 1e-3) << y << ": warm " << f.transpose() << ", fresh " << f_fresh.transpose();
+    EXPECT_LT((f - f_fresh).norm(), 1e-6 * f.norm() + 1e-3)
+        << y << ": warm " << f.transpose() << ", fresh " << f_fresh.transpose();
     bool old_converged = true;
     for (const rc::ContactPointResult& c : old_out.contact)
       old_converged = old_converged && c.status != rc::DetectionStatus::kApproximate;
@@ -496,19 +498,23 @@ TEST(ContactDetection, ContactLossAndRecontactAndFarOffWheel) {
   // Far off: 0.4 m to the side of the rail, and an axle pointing anywhere: flags, no contact, no throw.
   rc::WheelState wl, wr;
   wheelStates(0.4, r.z, 0.0, wl, wr);
-  det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(), work, g);
+  det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
+             work, g);
   EXPECT_FALSE(g.in_contact);
   EXPECT_EQ(g.status, rc::DetectionStatus::kOutOfBounds);
   EXPECT_TRUE(std::isfinite(g.penetration));
-  det.detect(rc::WheelSurface::kFlange, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(), work, g);
+  det.detect(rc::WheelSurface::kFlange, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
+             work, g);
   EXPECT_FALSE(g.in_contact);
   wl.R_wheelset_to_world = Eigen::AngleAxisd(1.3, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   wl.s_hint = 1e6;  // beyond the track: clamped
-  det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(), work, g);
+  det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
+             work, g);
   EXPECT_FALSE(g.in_contact);
   EXPECT_TRUE(std::isfinite(g.penetration));
   wl.p_centre_in_world.x() = std::numeric_limits<double>::quiet_NaN();
-  det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(), work, g);
+  det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
+             work, g);
   EXPECT_EQ(g.status, rc::DetectionStatus::kInvalidInput);
   EXPECT_FALSE(g.in_contact);
 }
@@ -528,9 +534,10 @@ TEST(DetectionCounts, SumAndDescribeSayWhatApproximateMeans) {
   EXPECT_EQ(c.calls, 20);
   EXPECT_EQ(c.approximations, 1);
   const std::string s = rc::describe(c);
-  EXPECT_NE(s.find("20 contact detections, 2.00 Newton iterations each, 2 robust searches (1 after a failed warm start), "
-                   "1 approximate (Newton did not converge"),
-            std::string::npos)
+  EXPECT_NE(
+      s.find("20 contact detections, 2.00 Newton iterations each, 2 robust searches (1 after a failed warm start), "
+             "1 approximate (Newton did not converge"),
+      std::string::npos)
       << s;
   EXPECT_EQ(rc::describe(rc::DetectionCounts()).find("(Newton"), std::string::npos);
 }

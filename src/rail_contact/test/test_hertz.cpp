@@ -103,12 +103,14 @@ TEST(Hertz, LoadScaling) {
 TEST(Hertz, EllipticMatchesBoussinesqIntegral) {
   const double E_star = steelEStar();
   const double N = 100.0e3;
-  struct Case { double A, B; };
+  struct Case {
+    double A, B;
+  };
   const Case cases[] = {
       {1.0 / (2 * 0.46), 1.0 / (2 * 0.30)},  // wheel on rail head: a > b
       {1.0 / (2 * 0.46), 1.0 / (2 * 0.60)},  // A > B: major axis lateral
-      {0.5, 20.0},                            // curvature ratio 40
-      {2.0, 2.0 * (1 + 1e-7)},                // near-circular branch
+      {0.5, 20.0},                           // curvature ratio 40
+      {2.0, 2.0 * (1 + 1e-7)},               // near-circular branch
   };
   for (const Case& c : cases) {
     const rc::HertzGeometry g = rc::computeHertz(c.A, c.B, E_star);
@@ -217,10 +219,8 @@ TEST(NormalForce, MatchesEquationNineWithFloor) {
   const double K = 2e10, d = 5e-5, vd = 0.01;
   const double elastic = K * std::pow(d, 1.5);
   EXPECT_NEAR(rc::dampedNormalForce(K, d, 0.0, 0.3, p), elastic, 1e-12 * elastic);
-  EXPECT_NEAR(rc::dampedNormalForce(K, d, vd, 0.3, p), elastic * (1 + 0.75 * (1 - 0.36) * vd / 0.3),
-              1e-12 * elastic);
-  EXPECT_NEAR(rc::dampedNormalForce(K, d, vd, 0.0, p), elastic * (1 + 0.75 * (1 - 0.36) * vd / 0.02),
-              1e-12 * elastic);
+  EXPECT_NEAR(rc::dampedNormalForce(K, d, vd, 0.3, p), elastic * (1 + 0.75 * (1 - 0.36) * vd / 0.3), 1e-12 * elastic);
+  EXPECT_NEAR(rc::dampedNormalForce(K, d, vd, 0.0, p), elastic * (1 + 0.75 * (1 - 0.36) * vd / 0.02), 1e-12 * elastic);
 }
 
 // Physical check of the Lankarani-Nikravesh model: a mass dropped on a Hertz contact with

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <random>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -146,7 +146,8 @@ Moments sampleMoments(const rc::Irregularities& r, Ch ch) {
   r.sampleUniform(0.0, L / M, x);
   Moments m;
   for (const auto& q : x) {
-    const double v = rc::channelValue(q.value, static_cast<int>(ch)), d = rc::channelValue(q.d_ds, static_cast<int>(ch));
+    const double v = rc::channelValue(q.value, static_cast<int>(ch)),
+                 d = rc::channelValue(q.d_ds, static_cast<int>(ch));
     m.mean_square += v * v / M;
     m.slope_mean_square += d * d / M;
   }
@@ -156,8 +157,8 @@ Moments sampleMoments(const rc::Irregularities& r, Ch ch) {
 // Standard deviation of (mean square - sum a_k^2 / 2) over the random phases, for M samples over one
 // period L = M ds. x^2 = 1/2 sum_jk a_j a_k [cos((W_j - W_k) s + phi_j - phi_k) + cos((W_j + W_k) s + phi_j + phi_k)].
 // The difference-frequency terms (j != k) average to exactly zero over the period (roots of unity); the
-// sum-frequency terms average to a_j a_k eps_jk cos(phi_j + phi_k + ...), |eps_jk| <= 1 / (M |sin((W_j + W_k) ds / 2)|).
-// With independent uniform phases these terms are uncorrelated with zero mean, so their sum has standard
+// sum-frequency terms average to a_j a_k eps_jk cos(phi_j + phi_k + ...), |eps_jk| <= 1 / (M |sin((W_j + W_k) ds /
+// 2)|). With independent uniform phases these terms are uncorrelated with zero mean, so their sum has standard
 // deviation sqrt(sum_{j<k} (a_j a_k eps_jk)^2 + sum_j (a_j^2 eps_jj / 2)^2). slope: amplitudes a_k W_k.
 double crossTermSigma(const rc::Irregularities& r, Ch ch, bool slope) {
   const std::vector<double>& W = r.harmonicFrequencies();

@@ -95,7 +95,8 @@ TEST(ManchesterA22, FileOrderOriginAndPointDensityDoNotChangeTheTable) {
   // Rail and wheel with four times the points on their near-vertical faces; wheel listed flange first.
   rc::writePlainProfile(tmp + "a22_rail_dense.txt", densifyVerticalFaces(rail_pts));
   const rc::ProfilePoints wheel_dense = densifyVerticalFaces(wheel_pts);
-  rc::writePlainProfile(tmp + "a22_wheel_dense_reversed.txt", rc::ProfilePoints(wheel_dense.rbegin(), wheel_dense.rend()));
+  rc::writePlainProfile(tmp + "a22_wheel_dense_reversed.txt",
+                        rc::ProfilePoints(wheel_dense.rbegin(), wheel_dense.rend()));
 
   // Tolerances: the same points in another order or frame give the same spline up to the files'
   // precision (1e-6 mm): 1 um, 1e-4 rad. Points added on the straight chords of the vertical faces move
@@ -106,10 +107,10 @@ TEST(ManchesterA22, FileOrderOriginAndPointDensityDoNotChangeTheTable) {
     std::string wheel, rail;
     double tol_position, tol_angle;
   };
-  const Variant variants[] = {{"rail reversed", kWheel, tmp + "a22_rail_reversed.txt", 1e-6, 1e-4},
-                              {"rail origin shifted", kWheel, tmp + "a22_rail_shifted.prr", 1e-6, 1e-4},
-                              {"dense faces, wheel reversed", tmp + "a22_wheel_dense_reversed.txt",
-                               tmp + "a22_rail_dense.txt", 2e-5, 1e-3}};
+  const Variant variants[] = {
+      {"rail reversed", kWheel, tmp + "a22_rail_reversed.txt", 1e-6, 1e-4},
+      {"rail origin shifted", kWheel, tmp + "a22_rail_shifted.prr", 1e-6, 1e-4},
+      {"dense faces, wheel reversed", tmp + "a22_wheel_dense_reversed.txt", tmp + "a22_rail_dense.txt", 2e-5, 1e-3}};
   for (const Variant& v : variants) {
     const std::vector<rc::ContactGeometryRow> rows = runA22(rc::loadWheelProfile(v.wheel), rc::loadRailProfile(v.rail));
     ASSERT_EQ(rows.size(), ref.size()) << v.name;

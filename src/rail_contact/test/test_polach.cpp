@@ -105,8 +105,8 @@ TEST(KalkerTable, InterpolationIsLinearInRatioAndQuadraticInNu) {
   EXPECT_NEAR(mid2.c23, 0.5 * (2.35 + 2.01), 1e-14);
   // Lagrange quadratic through (0, 3.40), (0.25, 4.12), (0.5, 5.20) evaluated at nu = 0.3.
   const double nu = 0.3;
-  const double expect = 3.40 * (nu - 0.25) * (nu - 0.5) / 0.125 - 4.12 * nu * (nu - 0.5) / 0.0625 +
-                        5.20 * nu * (nu - 0.25) / 0.125;
+  const double expect =
+      3.40 * (nu - 0.25) * (nu - 0.5) / 0.125 - 4.12 * nu * (nu - 0.5) / 0.0625 + 5.20 * nu * (nu - 0.25) / 0.125;
   EXPECT_NEAR(t.evaluate(1.0, nu).c11, expect, 1e-14);
 }
 
@@ -150,11 +150,13 @@ TEST(KalkerTable, OutOfRangeIsClampedAndFlagged) {
 }
 
 TEST(KalkerTable, LoaderReportsFileAndLine) {
-  const std::string header = "# comment\nkind,g,c11_nu0,c11_nu025,c11_nu05,c22_nu0,c22_nu025,c22_nu05,"
-                             "c23_nu0,c23_nu025,c23_nu05,c33_nu0,c33_nu025,c33_nu05\n";
+  const std::string header =
+      "# comment\nkind,g,c11_nu0,c11_nu025,c11_nu05,c22_nu0,c22_nu025,c22_nu05,"
+      "c23_nu0,c23_nu025,c23_nu05,c33_nu0,c33_nu025,c33_nu05\n";
   const std::string good1 = "a/b,0.1,2.51,3.31,4.85,2.51,2.52,2.53,0.334,0.473,0.731,6.42,8.28,11.7\n";
   const std::string good2 = "a/b,0.2,2.59,3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,5.66\n";
-  std::string p = writeTemp("k_bad_number.csv", header + good1 + "a/b,0.2,2.59,x3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,5.66\n");
+  std::string p = writeTemp(
+      "k_bad_number.csv", header + good1 + "a/b,0.2,2.59,x3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,5.66\n");
   std::string msg = loadError(p);
   EXPECT_NE(msg.find(p + ":4:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("c11_nu025"), std::string::npos) << msg;
@@ -167,7 +169,8 @@ TEST(KalkerTable, LoaderReportsFileAndLine) {
   p = writeTemp("k_kind.csv", header + good1 + "x/y" + good2.substr(3));
   msg = loadError(p);
   EXPECT_NE(msg.find(p + ":4: kind"), std::string::npos) << msg;
-  p = writeTemp("k_neg.csv", header + good1 + "a/b,0.2,2.59,3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,-5.66\n");
+  p = writeTemp("k_neg.csv",
+                header + good1 + "a/b,0.2,2.59,3.37,4.81,2.59,2.63,2.66,0.483,0.603,0.809,3.46,4.27,-5.66\n");
   msg = loadError(p);
   EXPECT_NE(msg.find(p + ":4: c33_nu05 must be > 0 (got -5.66)"), std::string::npos) << msg;
   msg = loadError("/nonexistent/kalker.csv");
@@ -280,8 +283,10 @@ TEST(Polach, CurveWithFallingFrictionHasAdhesionOptimum) {
         F_max = F;
         s_max = in.nu_x;
       }
-      if (F < prev) falling = true;
-      else if (falling && F > prev) rose_after_fall = true;
+      if (F < prev)
+        falling = true;
+      else if (falling && F > prev)
+        rose_after_fall = true;
       prev = F;
     }
     EXPECT_LT(F_max, in.mu0 * in.N);

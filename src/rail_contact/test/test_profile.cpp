@@ -73,9 +73,7 @@ Vector2d uic60Centre(int which) {
   return which == 1 ? c1 : (which == 2 ? c2 : c3);
 }
 
-Vector2d tiltPoint(const Vector2d& p, double inclination) {
-  return rc::tiltProfile({p}, inclination).front();
-}
+Vector2d tiltPoint(const Vector2d& p, double inclination) { return rc::tiltProfile({p}, inclination).front(); }
 
 std::string writeTemp(const std::string& name, const std::string& content) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "railsim_test_profile";
@@ -166,8 +164,9 @@ TEST(ProfileCurve, BadInputThrows) {
                std::invalid_argument);
   EXPECT_THROW(rc::ProfileCurve({Vector2d(0, 0), Vector2d(1, 0), Vector2d(1, 0), Vector2d(2, 0)}, rc::SolidSide::Right),
                std::invalid_argument);
-  EXPECT_THROW(rc::ProfileCurve({Vector2d(0, 0), Vector2d(1, NAN), Vector2d(2, 0), Vector2d(3, 0)}, rc::SolidSide::Right),
-               std::invalid_argument);
+  EXPECT_THROW(
+      rc::ProfileCurve({Vector2d(0, 0), Vector2d(1, NAN), Vector2d(2, 0), Vector2d(3, 0)}, rc::SolidSide::Right),
+      std::invalid_argument);
 }
 
 TEST(ProfileCurve, EvaluationDoesNotAllocateAndIsFast) {
@@ -328,9 +327,9 @@ TEST(S1002, MatchesManchesterBenchmarkPoints) {
   // Published points of the Manchester contact benchmark S1002 wheel (CONTACT software,
   // testbank/profiles/MBench_S1002_v3.prw, data columns converted: y = column 1, z = -column 2; mm).
   // Printed to 8 digits: tolerance 1e-3 mm.
-  const double ref[][2] = {{69.612628, -13.485642}, {54.892493, -27.999518}, {45.208193, -23.727001},
-                           {40.893537, -18.213368}, {38.335925, -11.757921}, {33.273160, -5.5298268},
-                           {25.580201, -2.6414043}, {12.003476, -0.68277101}, {0.34825167, -0.011887234},
+  const double ref[][2] = {{69.612628, -13.485642},  {54.892493, -27.999518},  {45.208193, -23.727001},
+                           {40.893537, -18.213368},  {38.335925, -11.757921},  {33.273160, -5.5298268},
+                           {25.580201, -2.6414043},  {12.003476, -0.68277101}, {0.34825167, -0.011887234},
                            {-14.239919, 0.24892741}, {-30.714676, 0.68793755}, {-45.008704, 1.6362567},
                            {-60.0, 2.6356764}};
   for (const auto& r : ref) EXPECT_NEAR(rc::s1002Z(r[0] * 1e-3) * 1e3, r[1], 1e-3) << "y = " << r[0];
@@ -390,12 +389,12 @@ TEST(S1002, SplineFollowsDefinitionAndArcCurvatures) {
   const rc::ProfileCurve& f = w.flange;
   double u_tip = 0;
   ASSERT_TRUE(f.findCoordinate(0, 0.055, 0.0, f.uMax(), u_tip));
-  EXPECT_NEAR(f.curvature(u_tip), 1 / 0.012, 3e-3 / 0.012);                         // G, tip
+  EXPECT_NEAR(f.curvature(u_tip), 1 / 0.012, 3e-3 / 0.012);                        // G, tip
   EXPECT_NEAR(kappaAt(f, 0, 0.0447, 0.0, u_tip), 1 / 0.020, 3e-3 / 0.020);         // F
   EXPECT_NEAR(kappaAt(f, 0, 0.0669, u_tip, f.uMax()), 1 / 0.0205, 3e-3 / 0.0205);  // H, back
   EXPECT_NEAR(kappaAt(f, 0, 0.0370, 0.0, u_tip), -1 / 0.013, 3e-3 / 0.013);        // D, root fillet
   EXPECT_NEAR(kappaAt(f, 0, 0.0391, 0.0, u_tip), 0.0, 0.5);                        // E, straight
-  EXPECT_NEAR(kappaAt(w.tread, 0, -0.046, 0.0, w.tread.uMax()), 0.0, 0.05);         // A, straight
+  EXPECT_NEAR(kappaAt(w.tread, 0, -0.046, 0.0, w.tread.uMax()), 0.0, 0.05);        // A, straight
   checkFrameConsistency(w.tread, 1e-6, 2e-3);
   checkFrameConsistency(w.flange, 1e-6, 2e-3);
 }
@@ -518,15 +517,18 @@ TEST(ProfileFiles, MalformedSimpackFiles) {
   expectFileError([&] { rc::readSimpackProfile(d + "bad_monotonic.prr"); }, d + "bad_monotonic.prr", 11,
                   "y not increasing (-20.5 after -20)");
   const std::string head = "header.begin\n type = 0\nheader.end\nspline.begin\n";
-  const std::string key = writeTemp("key.prr", head + " units.len.f = mm\n point.begin\n0 0\n1 1\n2 2\n3 3\n point.end\nspline.end\n");
+  const std::string key =
+      writeTemp("key.prr", head + " units.len.f = mm\n point.begin\n0 0\n1 1\n2 2\n3 3\n point.end\nspline.end\n");
   expectFileError([&] { rc::readSimpackProfile(key); }, key, 5, "non-numeric value 'mm' for units.len.f");
   const std::string cols = writeTemp("cols.prr", head + " point.begin\n0 0\n1 1 1 1\n point.end\nspline.end\n");
-  expectFileError([&] { rc::readSimpackProfile(cols); }, cols, 7, "wrong column count (4 values, expected y z [weight])");
+  expectFileError([&] { rc::readSimpackProfile(cols); }, cols, 7,
+                  "wrong column count (4 values, expected y z [weight])");
   const std::string outside = writeTemp("outside.prr", head + "spline.end\n0 0\n");
   expectFileError([&] { rc::readSimpackProfile(outside); }, outside, 6, "data outside point.begin/point.end ('0 0')");
   const std::string open = writeTemp("open.prr", head + " point.begin\n0 0\n1 1\n2 2\n3 3\n");
   expectFileError([&] { rc::readSimpackProfile(open); }, open, 9, "file ends inside a block");
-  const std::string nonnum = writeTemp("nonnum.prr", head + " point.begin\n0 0\n1 1\n2 two\n3 3\n point.end\nspline.end\n");
+  const std::string nonnum =
+      writeTemp("nonnum.prr", head + " point.begin\n0 0\n1 1\n2 two\n3 3\n point.end\nspline.end\n");
   expectFileError([&] { rc::readSimpackProfile(nonnum); }, nonnum, 8, "non-numeric value 'two'");
   expectFileError([&] { rc::readSimpackProfile(d + "missing.prr"); }, d + "missing.prr", 0, "cannot open file");
 }
@@ -550,7 +552,8 @@ TEST(ProfileFiles, CoordinatesBeyondOneMetreRefused) {
       "far_mm.prr", head + " units.len.f = 1000\n point.begin\n0 0\n1 1\n2 1e300\n3 3\n point.end\nspline.end\n");
   expectFileError([&] { rc::readSimpackProfile(prr_mm); }, prr_mm, 9,
                   "z = 1e+300 mm out of range (|y|, |z| must be at most 1 m)");
-  const std::string prr_m = writeTemp("far_m.prr", head + " point.begin\n0 0\n0.1 0.1\n1.5 0.2\n1.6 0.3\n point.end\nspline.end\n");
+  const std::string prr_m =
+      writeTemp("far_m.prr", head + " point.begin\n0 0\n0.1 0.1\n1.5 0.2\n1.6 0.3\n point.end\nspline.end\n");
   expectFileError([&] { rc::readSimpackProfile(prr_m); }, prr_m, 8,
                   "y = 1.5 m out of range (|y|, |z| must be at most 1 m)");
 }

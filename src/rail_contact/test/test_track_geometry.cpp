@@ -74,9 +74,7 @@ void clothoidSeries(double c, double L, double& X, double& Y) {
   Y = static_cast<double>(y);
 }
 
-Matrix3d rotZ(double a) {
-  return Eigen::AngleAxisd(a, Vector3d::UnitZ()).toRotationMatrix();
-}
+Matrix3d rotZ(double a) { return Eigen::AngleAxisd(a, Vector3d::UnitZ()).toRotationMatrix(); }
 
 double orthonormalityError(const Matrix3d& R) {
   return std::max((R.transpose() * R - Matrix3d::Identity()).cwiseAbs().maxCoeff(), std::abs(R.determinant() - 1.0));
@@ -395,8 +393,9 @@ TEST(TrackGeometry, ProfileLateralAxisPointsToTrackCentre) {
 // exact displacements: tolerance 1e-12 m (round-off).
 TEST(TrackGeometry, IrregularitiesDisplaceRailsPerEn13848Conventions) {
   const double a = 0.003, v = 0.002, c = 0.004, g = 0.006, e = 1.5, h = 0.75;
-  std::istringstream csv("s, alignment, level, cross level, gauge\n-10, 0.003, 0.002, 0.004, 0.006\n"
-                         "500, 0.003, 0.002, 0.004, 0.006\n");
+  std::istringstream csv(
+      "s, alignment, level, cross level, gauge\n-10, 0.003, 0.002, 0.004, 0.006\n"
+      "500, 0.003, 0.002, 0.004, 0.006\n");
   const rc::Irregularities irr = rc::Irregularities::fromCsvStream(csv, "constant.csv");
   rc::GeometrySpec spec;
   spec.segments = {straight(100.0)};

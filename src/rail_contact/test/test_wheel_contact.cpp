@@ -152,7 +152,7 @@ TEST(WheelContact, PenetrationRateIgnoresTheSpinAboutTheAxle) {
     }
   }
   EXPECT_GT(compared, 4);
-  EXPECT_GT(approximate, 0);  // the case that matters was exercised
+  EXPECT_GT(approximate, 0);     // the case that matters was exercised
   EXPECT_LT(largest_rate, 0.1);  // the wheelset's own approach (0.05 m/s lateral, 0.01 m/s down) bounds it
 }
 
@@ -210,7 +210,8 @@ TEST(WheelContact, WrenchesAtWheelCentreAndRailSection) {
   const rc::ContactPointResult& c = out.contact[rc::kTread];
   ASSERT_TRUE(c.active);
   // Eq. 12: f = N n + F_long t_w + F_lat t_u.
-  const Vector3d f = c.N * c.normal_in_world + c.F_long * c.R_contact_to_world.col(0) + c.F_lat * c.R_contact_to_world.col(1);
+  const Vector3d f =
+      c.N * c.normal_in_world + c.F_long * c.R_contact_to_world.col(0) + c.F_lat * c.R_contact_to_world.col(1);
   EXPECT_LT((c.force_on_wheel_in_world - f).norm(), 1e-9 * f.norm());
   // Eq. 13 about the wheel centre, moment in the wheelset frame; eq. 15 opposite force on the rail.
   const Matrix3d& A = w.R_wheelset_to_world;

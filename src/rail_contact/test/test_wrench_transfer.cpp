@@ -19,9 +19,7 @@ struct Rng {
   std::mt19937 gen{12345u};
   std::uniform_real_distribution<double> u{-1.0, 1.0};
   Vector3d vec(double scale) { return Vector3d(u(gen), u(gen), u(gen)) * scale; }
-  Matrix3d rot() {
-    return Eigen::AngleAxisd(3.0 * u(gen), vec(1.0).normalized()).toRotationMatrix();
-  }
+  Matrix3d rot() { return Eigen::AngleAxisd(3.0 * u(gen), vec(1.0).normalized()).toRotationMatrix(); }
 };
 
 void expectVecNear(const Vector3d& a, const Vector3d& b, double tol) {
@@ -36,9 +34,9 @@ void expectVecNear(const Vector3d& a, const Vector3d& b, double tol) {
 TEST(WrenchTransfer, WheelsetEquivalentForceSystem) {
   Rng rng;
   for (int trial = 0; trial < 50; ++trial) {
-    const Matrix3d A_ws = rng.rot();              // wheelset body -> world
-    const Vector3d r_ws = rng.vec(100.0);          // wheelset centre, world
-    const Vector3d P = rng.vec(100.0);             // arbitrary point, world
+    const Matrix3d A_ws = rng.rot();       // wheelset body -> world
+    const Vector3d r_ws = rng.vec(100.0);  // wheelset centre, world
+    const Vector3d P = rng.vec(100.0);     // arbitrary point, world
     rc::WheelsetWrench total;
     Vector3d F_ref = Vector3d::Zero(), M_ref_about_P = Vector3d::Zero();
     for (int side = 0; side < 2; ++side) {
@@ -94,8 +92,9 @@ TEST(WrenchTransfer, RailSectionEquivalentForceSystem) {
     // Wheel side of the same contacts, wheel centre chosen at the section centre + offset.
     const Matrix3d A_ws = rng.rot();
     const Vector3d r_wc = r_sec + rng.vec(0.5);
-    const rc::WheelsetWrench ww = rc::wheelCentreWrench(
-        f_tr_wheel, f_fl_wheel, A_ws.transpose() * (r_sec + s_tr - r_wc), A_ws.transpose() * (r_sec + s_fl - r_wc), A_ws);
+    const rc::WheelsetWrench ww =
+        rc::wheelCentreWrench(f_tr_wheel, f_fl_wheel, A_ws.transpose() * (r_sec + s_tr - r_wc),
+                              A_ws.transpose() * (r_sec + s_fl - r_wc), A_ws);
     const Vector3d M_wheel_about_P = A_ws * ww.moment_in_wheelset + (r_wc - P).cross(ww.force_in_world);
     const Vector3d M_rail_about_P = w.moment_in_world + (r_sec - P).cross(w.force_in_world);
     expectVecNear(M_wheel_about_P + M_rail_about_P, Vector3d::Zero(), 1e-12 * 1e5 * 1000.0);

@@ -7,41 +7,64 @@ namespace rail::core {
 
 const char* CostProfile::name(Component c) {
   switch (c) {
-    case kVehicleIntegration: return "vehicle_integration";
-    case kTrackStep: return "track_step";
-    case kTransportWait: return "transport_wait";
-    case kPublish: return "publish";
-    case kBagWrite: return "bag_write";
-    case kSetUp: return "set_up";
-    case kComponentCount: break;
+    case kVehicleIntegration:
+      return "vehicle_integration";
+    case kTrackStep:
+      return "track_step";
+    case kTransportWait:
+      return "transport_wait";
+    case kPublish:
+      return "publish";
+    case kBagWrite:
+      return "bag_write";
+    case kSetUp:
+      return "set_up";
+    case kComponentCount:
+      break;
   }
   return "?";
 }
 
 const char* CostClock::name(Part p) {
   switch (p) {
-    case kVehicleRhs: return "vehicle_rhs";
-    case kVehicleJacobian: return "vehicle_jacobian";
-    case kTrackRhs: return "track_rhs";
-    case kTrackSolve: return "track_solve";
-    case kWindowMoves: return "window_moves";
-    case kFloorAccelerations: return "floor_accelerations";
-    case kPadForces: return "pad_forces";
-    case kMarkers: return "markers";
-    case kRailDeflection: return "rail_deflection";
-    case kContactPointOutput: return "contact_point_output";
-    case kEnergyOutput: return "energy_output";
-    case kPartCount: break;
+    case kVehicleRhs:
+      return "vehicle_rhs";
+    case kVehicleJacobian:
+      return "vehicle_jacobian";
+    case kTrackRhs:
+      return "track_rhs";
+    case kTrackSolve:
+      return "track_solve";
+    case kWindowMoves:
+      return "window_moves";
+    case kFloorAccelerations:
+      return "floor_accelerations";
+    case kPadForces:
+      return "pad_forces";
+    case kMarkers:
+      return "markers";
+    case kRailDeflection:
+      return "rail_deflection";
+    case kContactPointOutput:
+      return "contact_point_output";
+    case kEnergyOutput:
+      return "energy_output";
+    case kPartCount:
+      break;
   }
   return "?";
 }
 
 const char* CostClock::name(Count c) {
   switch (c) {
-    case kDampingProducts: return "damping_products";
-    case kEndDashpotForces: return "end_dashpot_forces";
-    case kIrregularityEvaluations: return "irregularity_evaluations";
-    case kCountCount: break;
+    case kDampingProducts:
+      return "damping_products";
+    case kEndDashpotForces:
+      return "end_dashpot_forces";
+    case kIrregularityEvaluations:
+      return "irregularity_evaluations";
+    case kCountCount:
+      break;
   }
   return "?";
 }
@@ -82,8 +105,8 @@ bool directChild(const CostProfile::FinerLine& l, bool track_side) {
 }
 }  // namespace
 
-std::string CostProfile::toYaml(const std::string& node, const Scene& scene, double loop_wall,
-                                 double simulated, const CostClock* clock) const {
+std::string CostProfile::toYaml(const std::string& node, const Scene& scene, double loop_wall, double simulated,
+                                const CostClock* clock) const {
   std::ostringstream o;
   o.precision(6);
   o << "# Where the wall time of " << node << " went (s; share of the run loop's wall time)\n";
@@ -95,8 +118,9 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
   o << "components:\n";
   for (int c = 0; c < kComponentCount; ++c) {
     const Component k = static_cast<Component>(c);
-    o << "  " << name(k) << ": {seconds: " << seconds_[c] << ", share: "
-      << (loop_wall > 0 && k != kSetUp ? seconds_[c] / loop_wall : 0.0) << ", calls: " << calls_[c] << "}\n";
+    o << "  " << name(k) << ": {seconds: " << seconds_[c]
+      << ", share: " << (loop_wall > 0 && k != kSetUp ? seconds_[c] / loop_wall : 0.0) << ", calls: " << calls_[c]
+      << "}\n";
   }
   double accounted = 0.0;
   for (int c = 0; c < kComponentCount; ++c)
@@ -135,8 +159,8 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
       << "  creep_evaluations: " << clock->contact.creep_evaluations << "\n"
       << "  creep_evaluations_with_spin: " << clock->contact.spin_evaluations << "\n";
     for (int c = 0; c < CostClock::kCountCount; ++c)
-      o << "  " << CostClock::name(static_cast<CostClock::Count>(c)) << ": " << clock->counts[static_cast<std::size_t>(c)]
-        << "\n";
+      o << "  " << CostClock::name(static_cast<CostClock::Count>(c)) << ": "
+        << clock->counts[static_cast<std::size_t>(c)] << "\n";
   }
   const Effects& e = scene.effects;
   o << "effects:\n"
@@ -157,7 +181,7 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
 }
 
 std::string CostProfile::toText(const std::string& node, double loop_wall, double simulated,
-                                 const CostClock* clock) const {
+                                const CostClock* clock) const {
   std::ostringstream o;
   char line[160];
   std::snprintf(line, sizeof line, "%s: cost profile, %.2f s wall for %.4f s simulated (%.2f s per simulated s)\n",
@@ -181,7 +205,8 @@ std::string CostProfile::toText(const std::string& node, double loop_wall, doubl
     }
   }
   if (clock != nullptr) {
-    std::snprintf(line, sizeof line, "  flange searches %lld, creep evaluations %ld (with spin %ld), damping products %lld\n",
+    std::snprintf(line, sizeof line,
+                  "  flange searches %lld, creep evaluations %ld (with spin %ld), damping products %lld\n",
                   static_cast<long long>(clock->contact.flange_searches), clock->contact.creep_evaluations,
                   clock->contact.spin_evaluations, clock->counts[CostClock::kDampingProducts]);
     o << line;

@@ -16,8 +16,8 @@ namespace rc = rail::contact;
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kDefaultTableStep = 0.1;     // m, table spacing of the geometry (doc/geometry.md)
-constexpr int kMinHarmonics = 4096;           // PSD harmonics, the rail_contact default
+constexpr double kDefaultTableStep = 0.1;  // m, table spacing of the geometry (doc/geometry.md)
+constexpr int kMinHarmonics = 4096;        // PSD harmonics, the rail_contact default
 
 [[noreturn]] void fail(const Scene& scene, const std::string& field, const std::string& what) {
   throw SceneError(scene.file + ": " + field + ": " + what);
@@ -37,9 +37,12 @@ std::string geometryField(const std::string& message) {
 
 rc::SegmentSpec::Type segmentType(SegmentType t) {
   switch (t) {
-    case SegmentType::kStraight: return rc::SegmentSpec::Type::Straight;
-    case SegmentType::kTransition: return rc::SegmentSpec::Type::Transition;
-    case SegmentType::kCircular: return rc::SegmentSpec::Type::Circular;
+    case SegmentType::kStraight:
+      return rc::SegmentSpec::Type::Straight;
+    case SegmentType::kTransition:
+      return rc::SegmentSpec::Type::Transition;
+    case SegmentType::kCircular:
+      return rc::SegmentSpec::Type::Circular;
   }
   return rc::SegmentSpec::Type::Straight;
 }
@@ -78,8 +81,7 @@ rc::WheelContactOptions contactOptions(const Scene& scene, rc::WheelContactOptio
   return base;
 }
 
-Eigen::Vector2d gaugePointInTrackPlane(const rc::ProfileCurve& rail_own_frame, double inclination,
-                                           double depth) {
+Eigen::Vector2d gaugePointInTrackPlane(const rc::ProfileCurve& rail_own_frame, double inclination, double depth) {
   // tiltProfile takes the tan of the tilt.
   const rc::ProfilePoints tilted = rc::tiltProfile(rail_own_frame.nodes(), std::tan(inclination));
   const rc::ProfileCurve curve(tilted, rc::SolidSide::Right);
@@ -121,8 +123,7 @@ rc::GeometrySpec geometrySpec(const Scene& scene) {
   spec.table_step = kDefaultTableStep;
   if (irregularitiesOn(scene)) {
     const Irregularities& irr = t.irregularities;
-    if (irr.source == IrregularitySource::kPsd)
-      spec.table_step = std::min(spec.table_step, irr.wavelength_min / 8.0);
+    if (irr.source == IrregularitySource::kPsd) spec.table_step = std::min(spec.table_step, irr.wavelength_min / 8.0);
     // A table's shortest wavelength is only known once it is read: build_track_geometry refines then.
   }
   return spec;

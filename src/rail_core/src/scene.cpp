@@ -21,9 +21,12 @@ double curvatureOf(double radius, Direction d) { return radius > 0.0 ? sideSign(
 
 double Segment::curvatureAtStart() const {
   switch (type) {
-    case SegmentType::kStraight: return 0.0;
-    case SegmentType::kCircular: return curvatureOf(radius, direction);
-    case SegmentType::kTransition: return curvatureOf(radius_start, direction);
+    case SegmentType::kStraight:
+      return 0.0;
+    case SegmentType::kCircular:
+      return curvatureOf(radius, direction);
+    case SegmentType::kTransition:
+      return curvatureOf(radius_start, direction);
   }
   return 0.0;
 }
@@ -46,59 +49,80 @@ double Track::length() const {
 
 const char* toString(TrackModel v) {
   switch (v) {
-    case TrackModel::kRigid: return "rigid";
-    case TrackModel::kRigidFe: return "rigid_fe";
-    case TrackModel::kFlexible: return "flexible";
+    case TrackModel::kRigid:
+      return "rigid";
+    case TrackModel::kRigidFe:
+      return "rigid_fe";
+    case TrackModel::kFlexible:
+      return "flexible";
   }
   return "?";
 }
 const char* toString(Transport v) {
   switch (v) {
-    case Transport::kService: return "service";
-    case Transport::kTopic: return "topic";
-    case Transport::kShm: return "shm";
+    case Transport::kService:
+      return "service";
+    case Transport::kTopic:
+      return "topic";
+    case Transport::kShm:
+      return "shm";
   }
   return "?";
 }
 const char* toString(CreepLaw) { return "polach"; }
 const char* toString(SegmentType v) {
   switch (v) {
-    case SegmentType::kStraight: return "straight";
-    case SegmentType::kTransition: return "transition";
-    case SegmentType::kCircular: return "circular";
+    case SegmentType::kStraight:
+      return "straight";
+    case SegmentType::kTransition:
+      return "transition";
+    case SegmentType::kCircular:
+      return "circular";
   }
   return "?";
 }
 const char* toString(Direction v) {
   switch (v) {
-    case Direction::kNone: return "none";
-    case Direction::kLeft: return "left";
-    case Direction::kRight: return "right";
+    case Direction::kNone:
+      return "none";
+    case Direction::kLeft:
+      return "left";
+    case Direction::kRight:
+      return "right";
   }
   return "?";
 }
 const char* toString(IrregularitySource v) {
   switch (v) {
-    case IrregularitySource::kNone: return "none";
-    case IrregularitySource::kFile: return "file";
-    case IrregularitySource::kPsd: return "psd";
+    case IrregularitySource::kNone:
+      return "none";
+    case IrregularitySource::kFile:
+      return "file";
+    case IrregularitySource::kPsd:
+      return "psd";
   }
   return "?";
 }
 const char* toString(VehicleMethod v) {
   switch (v) {
-    case VehicleMethod::kAuto: return "auto";
-    case VehicleMethod::kBdf: return "bdf";
-    case VehicleMethod::kAdams: return "adams";
+    case VehicleMethod::kAuto:
+      return "auto";
+    case VehicleMethod::kBdf:
+      return "bdf";
+    case VehicleMethod::kAdams:
+      return "adams";
   }
   return "?";
 }
 const char* toString(EndKind v) { return v == EndKind::kTime ? "time" : "arc_length"; }
 const char* toString(LoadRail v) {
   switch (v) {
-    case LoadRail::kBoth: return "both";
-    case LoadRail::kLeft: return "left";
-    case LoadRail::kRight: return "right";
+    case LoadRail::kBoth:
+      return "both";
+    case LoadRail::kLeft:
+      return "left";
+    case LoadRail::kRight:
+      return "right";
   }
   return "?";
 }
@@ -120,7 +144,9 @@ void emitSegment(YAML::Emitter& e, const Segment& s) {
   num(e, "length", s.length);
   if (s.direction != Direction::kNone) kv(e, "direction", toString(s.direction));
   switch (s.type) {
-    case SegmentType::kStraight: num(e, "cant", s.cant); break;
+    case SegmentType::kStraight:
+      num(e, "cant", s.cant);
+      break;
     case SegmentType::kCircular:
       num(e, "radius", s.radius);
       num(e, "cant", s.cant);
@@ -310,8 +336,8 @@ std::string describe(const Scene& s, Role role) {
   if (s.has_vehicle) {
     const Vehicle& v = s.vehicle;
     o << "vehicle: " << v.data.as_written << ", " << v.wheelsets << " wheelsets, " << fixed(v.speed * 3.6, 1)
-      << " km/h from s = " << fixed(v.start_arc_length, 1) << " m, wheel " << v.wheel_profile << " r0 = "
-      << fixed(v.nominal_radius, 3) << " m\n";
+      << " km/h from s = " << fixed(v.start_arc_length, 1) << " m, wheel " << v.wheel_profile
+      << " r0 = " << fixed(v.nominal_radius, 3) << " m\n";
   } else {
     o << "moving loads: " << s.moving_loads.loads.size() << " load(s) at " << fixed(s.moving_loads.speed, 2)
       << " m/s from s = " << fixed(s.moving_loads.start_arc_length, 1) << " m\n";
@@ -335,8 +361,9 @@ std::string describe(const Scene& s, Role role) {
   o << "effects on: " << detail::join(on) << "\n";
   o << "effects off: " << (off.empty() ? "none" : detail::join(off)) << "\n";
   const Solver& v = s.solver;
-  o << "solver: " << (v.end.kind == EndKind::kTime ? "until t = " + fixed(v.end.value, 3) + " s"
-                                                   : "until s = " + fixed(v.end.value, 1) + " m");
+  o << "solver: "
+    << (v.end.kind == EndKind::kTime ? "until t = " + fixed(v.end.value, 3) + " s"
+                                     : "until s = " + fixed(v.end.value, 1) + " m");
   if (s.needsTrackNode()) o << ", track step " << formatDouble(v.track_step) << " s";
   if (s.runsFeIntegration() && s.has_vehicle) {
     o << (v.track_window.enabled ? ", moving track window (" + fixed(v.track_window.behind, 1) + " m behind, " +
@@ -344,10 +371,11 @@ std::string describe(const Scene& s, Role role) {
                                  : ", whole track integrated");
   }
   if (s.has_vehicle) {
-    o << ", vehicle rtol " << formatDouble(v.vehicle_rtol) << " atol " << formatDouble(v.vehicle_atol)
-      << " max step " << formatDouble(v.vehicle_max_step) << " s (" << toString(v.vehicle_method) << ")";
+    o << ", vehicle rtol " << formatDouble(v.vehicle_rtol) << " atol " << formatDouble(v.vehicle_atol) << " max step "
+      << formatDouble(v.vehicle_max_step) << " s (" << toString(v.vehicle_method) << ")";
   }
-  if (s.cosimulation()) o << ", transport " << toString(v.transport) << ", timeout " << fixed(v.exchange_timeout, 1) << " s";
+  if (s.cosimulation())
+    o << ", transport " << toString(v.transport) << ", timeout " << fixed(v.exchange_timeout, 1) << " s";
   o << "\n";
 
   // Components this process builds (the FE sizes follow the mesh rules of the track model).
@@ -375,8 +403,8 @@ std::string describe(const Scene& s, Role role) {
   if (track_side && s.needsTrackNode()) {
     if (s.runsFeIntegration()) {
       add("FE track: " + std::to_string(sleepers) + " sleepers, " + std::to_string(2 * rail_nodes) +
-          " rail nodes, about " + std::to_string(6 * free_nodes) + " DOF, Newmark step " +
-          formatDouble(v.track_step) + " s, CHOLMOD factor");
+          " rail nodes, about " + std::to_string(6 * free_nodes) + " DOF, Newmark step " + formatDouble(v.track_step) +
+          " s, CHOLMOD factor");
       add(std::string("track damping ") + (f.track_damping ? "on" : "off") + ", absorbing ends " +
           (f.absorbing_ends ? "on" : "off"));
     } else {
@@ -396,8 +424,8 @@ std::string describe(const Scene& s, Role role) {
   if (role == Role::kTrack && !s.needsTrackNode()) add("nothing: track_model is rigid, the vehicle runs alone");
   if (role == Role::kVehicle && !s.has_vehicle) add("nothing: the scene has no vehicle");
   if (!builds.empty()) o << "builds:\n" << builds;
-  o << "output: " << (s.output.bag.empty() ? "no bag" : "bag " + s.output.bag) << ", "
-    << fixed(s.output.rate, 0) << " Hz";
+  o << "output: " << (s.output.bag.empty() ? "no bag" : "bag " + s.output.bag) << ", " << fixed(s.output.rate, 0)
+    << " Hz";
   if (!s.output.topics.empty()) {
     o << ", topics";
     for (const auto& tp : s.output.topics) o << " " << tp;

@@ -25,18 +25,16 @@ using detail::join;
 using detail::MapReader;
 
 const std::vector<std::string> kKnownTopics = {
-    "wheel_states", "contact_wrenches", "contact_points", "rail_deflection", "wheelset_kinematics",
-    "markers",      "tf",               "clock",          "floor_accelerations", "pad_forces",
-    "vehicle_energy", "track_energy"};
+    "wheel_states", "contact_wrenches",    "contact_points", "rail_deflection", "wheelset_kinematics", "markers", "tf",
+    "clock",        "floor_accelerations", "pad_forces",     "vehicle_energy",  "track_energy"};
 
 // Built-in profiles (everything else names a profile file).
 static const std::vector<std::string> kBuiltinRailProfiles = {"uic60"};
 static const std::vector<std::string> kBuiltinWheelProfiles = {"s1002"};
 // Published track-irregularity spectra a realisation can be drawn from (see rail_contact's geometry
 // notes for their sources).
-static const std::vector<std::string> kKnownPsds = {"fra_class_1", "fra_class_2", "fra_class_3",
-                                                    "fra_class_4", "fra_class_5", "fra_class_6",
-                                                    "german_low",  "german_high"};
+static const std::vector<std::string> kKnownPsds = {"fra_class_1", "fra_class_2", "fra_class_3", "fra_class_4",
+                                                    "fra_class_5", "fra_class_6", "german_low",  "german_high"};
 
 namespace {
 
@@ -128,8 +126,8 @@ Segment readSegment(const YAML::Node& node, const std::string& path, const Conte
   r.number("length", seg.length);
   positive(r, "length", seg.length);
   if (seg.length > kMaxTrackLength) {
-    r.fail("length", "must be <= " + formatDouble(kMaxTrackLength) + " m (the longest track a run builds)" +
-                         got(seg.length));
+    r.fail("length",
+           "must be <= " + formatDouble(kMaxTrackLength) + " m (the longest track a run builds)" + got(seg.length));
   }
   r.number("gradient", seg.gradient);
   inRange(r, "gradient", seg.gradient, -0.1, 0.1, "(rise over run)");
@@ -160,8 +158,7 @@ Segment readSegment(const YAML::Node& node, const std::string& path, const Conte
       inRange(r, "cant_start", seg.cant_start, 0.0, 0.25, "m");
       r.number("cant_end", seg.cant_end);
       inRange(r, "cant_end", seg.cant_end, 0.0, 0.25, "m");
-      readDirection(r, seg,
-                     seg.radius_start > 0 || seg.radius_end > 0 || seg.cant_start > 0 || seg.cant_end > 0);
+      readDirection(r, seg, seg.radius_start > 0 || seg.radius_end > 0 || seg.cant_start > 0 || seg.cant_end > 0);
       if (seg.radius_start == 0.0 && seg.radius_end == 0.0 && seg.cant_start == seg.cant_end) {
         r.failHere("a transition must change the curvature or the cant (both ends straight and equal cant)");
       }
@@ -182,19 +179,19 @@ void checkChain(const Track& t, const YAML::Node& seq, const std::string& file) 
     const double k0 = a.curvatureAtEnd(), k1 = b.curvatureAtStart();
     if (std::abs(k0 - k1) > 1e-9) {
       failAt(file, path,
-              "curvature jumps at its start from " + formatDouble(k0) + " to " + formatDouble(k1) +
-                  " 1/m (" + prev + " ends there); make the chain continuous (a transition) or mark the "
-                  "jump with jump_allowed: true",
-              line);
+             "curvature jumps at its start from " + formatDouble(k0) + " to " + formatDouble(k1) + " 1/m (" + prev +
+                 " ends there); make the chain continuous (a transition) or mark the "
+                 "jump with jump_allowed: true",
+             line);
     }
     const double c0 = a.signedCantAtEnd(), c1 = b.signedCantAtStart();
     if (std::abs(c0 - c1) > 1e-6) {
       failAt(file, path,
-              "cant jumps at its start from " + formatDouble(std::abs(c0)) + " to " +
-                  formatDouble(std::abs(c1)) + " m (" + prev +
-                  " ends there); make the chain continuous (a cant ramp) or mark the jump with "
-                  "jump_allowed: true",
-              line);
+             "cant jumps at its start from " + formatDouble(std::abs(c0)) + " to " + formatDouble(std::abs(c1)) +
+                 " m (" + prev +
+                 " ends there); make the chain continuous (a cant ramp) or mark the jump with "
+                 "jump_allowed: true",
+             line);
     }
   }
 }
@@ -231,11 +228,11 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
   if (t.cant_reference_width == 0.0) t.cant_reference_width = t.gauge + 0.065;
   if (!(t.cant_reference_width >= t.gauge && t.cant_reference_width <= t.gauge + 0.2)) {
     // Named against the gauge, and the gauge's origin when the scene left it to its default.
-    r.fail("cant_reference_width", "must be between track.gauge (" + formatDouble(t.gauge) + " m) and track.gauge + 0.2 m" +
-                                       got(t.cant_reference_width) +
-                                       (r.has("gauge") ? std::string()
-                                                       : "; track.gauge is not set, so its default " +
-                                                             formatDouble(t.gauge) + " m applies"));
+    r.fail("cant_reference_width",
+           "must be between track.gauge (" + formatDouble(t.gauge) + " m) and track.gauge + 0.2 m" +
+               got(t.cant_reference_width) +
+               (r.has("gauge") ? std::string()
+                               : "; track.gauge is not set, so its default " + formatDouble(t.gauge) + " m applies"));
   }
   r.string("rail_profile", t.rail_profile);
   if (!contains(kBuiltinRailProfiles, t.rail_profile)) {
@@ -264,17 +261,15 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
                            formatDouble(t.length()) + " m");
   }
   if (t.length() < 2.0 * t.sleeper_spacing) {
-    r.fail("segments", "the track must be at least two sleeper spacings long, got " +
-                           formatDouble(t.length()) + " m");
+    r.fail("segments", "the track must be at least two sleeper spacings long, got " + formatDouble(t.length()) + " m");
   }
 
   Irregularities& irr = t.irregularities;
   if (const YAML::Node n = r.child("irregularities")) {
     MapReader ir(n, "track.irregularities", ctx.file);
-    ir.choice("source", irr.source,
-              {{"none", IrregularitySource::kNone},
-               {"file", IrregularitySource::kFile},
-               {"psd", IrregularitySource::kPsd}});
+    ir.choice(
+        "source", irr.source,
+        {{"none", IrregularitySource::kNone}, {"file", IrregularitySource::kFile}, {"psd", IrregularitySource::kPsd}});
     if (irr.source == IrregularitySource::kFile) {
       irr.file = readFileKey(ir, "file", true, ctx);
     } else if (irr.source == IrregularitySource::kPsd) {
@@ -288,8 +283,8 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
       positive(ir, "wavelength_min", irr.wavelength_min);
       ir.number("wavelength_max", irr.wavelength_max);
       if (!(irr.wavelength_max > irr.wavelength_min)) {
-        ir.fail("wavelength_max", "must be > wavelength_min (" + formatDouble(irr.wavelength_min) + ")" +
-                                      got(irr.wavelength_max));
+        ir.fail("wavelength_max",
+                "must be > wavelength_min (" + formatDouble(irr.wavelength_min) + ")" + got(irr.wavelength_max));
       }
     }
     ir.finish();
@@ -318,8 +313,8 @@ void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
   inRange(r, "nominal_radius", v.nominal_radius, 0.2, 0.7, "m");
   r.number("back_to_back", v.back_to_back);
   if (!(v.back_to_back > s.track.gauge - 0.2 && v.back_to_back < s.track.gauge)) {
-    r.fail("back_to_back", "must be between track.gauge - 0.2 and track.gauge (" +
-                               formatDouble(s.track.gauge) + ") m" + got(v.back_to_back));
+    r.fail("back_to_back", "must be between track.gauge - 0.2 and track.gauge (" + formatDouble(s.track.gauge) + ") m" +
+                               got(v.back_to_back));
   }
   r.integer("wheelsets", v.wheelsets);
   if (v.wheelsets < 1 || v.wheelsets > 16) {
@@ -486,19 +481,18 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   };
   if (s.moving_loads.present && s.effects.track_model != TrackModel::kFlexible) {
     failAt(file, "effects.track_model",
-            std::string("moving_loads need the finite-element track (flexible), got ") +
-                toString(s.effects.track_model),
-            line_of("effects", "track_model"));
+           std::string("moving_loads need the finite-element track (flexible), got ") + toString(s.effects.track_model),
+           line_of("effects", "track_model"));
   }
   if (s.effects.irregularities && s.track.irregularities.source == IrregularitySource::kNone) {
-    failAt(file, "effects.irregularities",
-            "is on but track.irregularities gives no source (file or psd)", line_of("effects", "irregularities"));
+    failAt(file, "effects.irregularities", "is on but track.irregularities gives no source (file or psd)",
+           line_of("effects", "irregularities"));
   }
   if (s.cosimulation() && s.solver.vehicle_max_step > s.solver.track_step) {
     failAt(file, "solver.vehicle_max_step",
-            "must be <= solver.track_step (" + formatDouble(s.solver.track_step) +
-                " s) in co-simulation" + got(s.solver.vehicle_max_step),
-            line_of("solver", "vehicle_max_step"));
+           "must be <= solver.track_step (" + formatDouble(s.solver.track_step) + " s) in co-simulation" +
+               got(s.solver.vehicle_max_step),
+           line_of("solver", "vehicle_max_step"));
   }
   // End condition: default is the track's end, reached by the leading wheelset (or first load).
   Solver& sol = s.solver;
@@ -508,13 +502,13 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     if (sol.end.value == 0.0) sol.end.value = s.track.endArcLength();
     if (sol.end.value <= start || sol.end.value > s.track.endArcLength()) {
       failAt(file, "solver.end.arc_length",
-              "must lie after the start (" + formatDouble(start) + " m) and on the track (end " +
-                  formatDouble(s.track.endArcLength()) + " m)" + got(sol.end.value),
-              0);
+             "must lie after the start (" + formatDouble(start) + " m) and on the track (end " +
+                 formatDouble(s.track.endArcLength()) + " m)" + got(sol.end.value),
+             0);
     }
     if (speed <= 0.0) {
       failAt(file, s.has_vehicle ? "vehicle.speed" : "moving_loads.speed",
-              "must be > 0 when solver.end is an arc length (the run would never end), got 0", 0);
+             "must be > 0 when solver.end is an arc length (the run would never end), got 0", 0);
     }
   }
   const Output& o = s.output;
@@ -528,12 +522,14 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     if (t == "floor_accelerations" && !s.effects.floor_acceleration_output)
       needs = "effects.floor_acceleration_output: true";
     if (t == "pad_forces" && !s.effects.pad_force_output) needs = "effects.pad_force_output: true";
-    if ((t == "vehicle_energy" || t == "track_energy") && !s.effects.energy_output) needs = "effects.energy_output: true";
+    if ((t == "vehicle_energy" || t == "track_energy") && !s.effects.energy_output)
+      needs = "effects.energy_output: true";
     if (needs) failAt(file, key, "'" + t + "' is recorded only with " + needs, 0);
     if (t == "rail_deflection" && s.effects.track_model == TrackModel::kRigid) {
       failAt(file, key,
-              "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
-              "move: zeros)", 0);
+             "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
+             "move: zeros)",
+             0);
     }
     if (t == "track_energy" && s.effects.track_model != TrackModel::kFlexible) {
       failAt(file, key, "'track_energy' needs the integrated FE track: effects.track_model flexible", 0);
@@ -541,8 +537,8 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     if (t == "pad_forces" && s.effects.track_model != TrackModel::kFlexible) {
       failAt(file, key, "'pad_forces' needs the integrated FE track: effects.track_model flexible", 0);
     }
-    if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches" ||
-         t == "floor_accelerations") && !s.has_vehicle) {
+    if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches" || t == "floor_accelerations") &&
+        !s.has_vehicle) {
       failAt(file, key, "'" + t + "' needs a vehicle in the scene", 0);
     }
   }
@@ -598,7 +594,7 @@ namespace {
 // Sets node[parts[i]][parts[i+1]]... = value, creating missing maps. yaml-cpp nodes are handles: each
 // level gets a fresh handle (a parameter), never a reassigned one.
 void setAt(YAML::Node node, const std::vector<std::string>& parts, std::size_t i, const YAML::Node& value,
-            const std::string& file, const std::string& item) {
+           const std::string& file, const std::string& item) {
   if (i + 1 == parts.size()) {
     node[parts[i]] = value;
     return;
@@ -667,7 +663,7 @@ void applyOverride(YAML::Node& doc, const std::string& file, const std::string& 
 }  // namespace
 
 Scene loadSceneText(const std::string& text, const std::string& file, const std::string& base_dir,
-                      const SceneOverrides& overrides) {
+                    const SceneOverrides& overrides) {
   YAML::Node doc;
   try {
     doc = YAML::Load(text);
@@ -713,8 +709,8 @@ Scene loadSceneText(const std::string& text, const std::string& file, const std:
   // The hash covers the resolved scene and the bytes of every data file it names, so two nodes agree
   // only when they would build the same models.
   std::uint64_t h = fnv1a64(toYaml(s));
-  for (const DataFile* f : {&s.track.data, &s.track.rail_profile_file, &s.track.irregularities.file,
-                            &s.vehicle.data, &s.vehicle.wheel_profile_file}) {
+  for (const DataFile* f : {&s.track.data, &s.track.rail_profile_file, &s.track.irregularities.file, &s.vehicle.data,
+                            &s.vehicle.wheel_profile_file}) {
     if (!f->empty()) h = fnv1a64(readAll(f->path), h);
   }
   s.hash = h;

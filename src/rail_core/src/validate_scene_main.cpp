@@ -51,15 +51,16 @@ int main(int argc, char** argv) {
   try {
     const rail::core::Scene scene = rail::core::loadSceneFile(path, overrides);
     if (plan) {
-      std::cout << (!scene.has_vehicle ? "track_standalone" : scene.cosimulation() ? "cosim" : "vehicle_standalone")
+      std::cout << (!scene.has_vehicle     ? "track_standalone"
+                    : scene.cosimulation() ? "cosim"
+                                           : "vehicle_standalone")
                 << "\n";
     } else if (hash_only) {
       std::printf("%016llx\n", static_cast<unsigned long long>(scene.hash));
     } else if (summary) {
       std::cout << rail::core::describe(scene, rail::core::Role::kValidator);
     } else {
-      std::cout << "# resolved scene, hash " << std::hex << scene.hash << std::dec << "\n"
-                << rail::core::toYaml(scene);
+      std::cout << "# resolved scene, hash " << std::hex << scene.hash << std::dec << "\n" << rail::core::toYaml(scene);
     }
     return 0;
   } catch (const rail::core::SceneError& e) {

@@ -50,9 +50,7 @@ int MapReader::lineOf(const char* key) const {
   return node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0;
 }
 
-void MapReader::fail(const char* key, const std::string& what) const {
-  failAt(file_, field(key), what, lineOf(key));
-}
+void MapReader::fail(const char* key, const std::string& what) const { failAt(file_, field(key), what, lineOf(key)); }
 
 void MapReader::failHere(const std::string& what) const {
   failAt(file_, path_, what, node_.Mark().line >= 0 ? node_.Mark().line + 1 : 0);
@@ -132,9 +130,7 @@ void MapReader::boolean(const char* key, bool& value) {
   }
 }
 
-void MapReader::string(const char* key, std::string& value) {
-  scalar(key, value);
-}
+void MapReader::string(const char* key, std::string& value) { scalar(key, value); }
 
 YAML::Node MapReader::child(const char* key) {
   read_.insert(key);
@@ -158,9 +154,8 @@ void MapReader::numberList(const char* key, std::vector<double>& value) {
     const int line = n[i].Mark().line >= 0 ? n[i].Mark().line + 1 : lineOf(key);
     double v = 0.0;
     if (!n[i].IsScalar() || !parseNumber(n[i].Scalar(), v) || !std::isfinite(v)) {
-      failAt(file_, item,
-              "must be a finite number, got '" + (n[i].IsScalar() ? n[i].Scalar() : "a list or map") + "'",
-              line);
+      failAt(file_, item, "must be a finite number, got '" + (n[i].IsScalar() ? n[i].Scalar() : "a list or map") + "'",
+             line);
     }
     value.push_back(v);
   }
@@ -174,7 +169,7 @@ void MapReader::stringList(const char* key, std::vector<std::string>& value) {
   for (std::size_t i = 0; i < n.size(); ++i) {
     if (!n[i].IsScalar()) {
       failAt(file_, field(key) + "[" + std::to_string(i) + "]", "must be a name",
-              n[i].Mark().line >= 0 ? n[i].Mark().line + 1 : lineOf(key));
+             n[i].Mark().line >= 0 ? n[i].Mark().line + 1 : lineOf(key));
     }
     value.push_back(n[i].Scalar());
   }
@@ -187,7 +182,7 @@ void MapReader::finish() const {
       std::string known;
       for (const auto& k : read_) known += (known.empty() ? "" : ", ") + k;
       failAt(file_, field(key.c_str()), "unknown key (known here: " + known + ")",
-              kv.first.Mark().line >= 0 ? kv.first.Mark().line + 1 : 0);
+             kv.first.Mark().line >= 0 ? kv.first.Mark().line + 1 : 0);
     }
   }
 }

@@ -65,12 +65,10 @@ class MapReader {
   std::set<std::string> read_;
 };
 
-[[noreturn]] void failAt(const std::string& file, const std::string& path, const std::string& what,
-                          int line);
+[[noreturn]] void failAt(const std::string& file, const std::string& path, const std::string& what, int line);
 
 template <typename E>
-void MapReader::choice(const char* key, E& value,
-                       std::initializer_list<std::pair<const char*, E>> choices) {
+void MapReader::choice(const char* key, E& value, std::initializer_list<std::pair<const char*, E>> choices) {
   std::string text;
   bool present = has(key);
   string(key, text);

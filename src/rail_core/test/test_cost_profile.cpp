@@ -23,7 +23,8 @@ TEST(CostProfile, ScopesAddToTheirComponentOnly) {
   EXPECT_EQ(p.calls(CostProfile::kTrackStep), 1);
   for (int c = 0; c < CostProfile::kComponentCount; ++c) {
     if (c == CostProfile::kTrackStep) continue;
-    EXPECT_EQ(p.seconds(static_cast<CostProfile::Component>(c)), 0.0) << CostProfile::name(static_cast<CostProfile::Component>(c));
+    EXPECT_EQ(p.seconds(static_cast<CostProfile::Component>(c)), 0.0)
+        << CostProfile::name(static_cast<CostProfile::Component>(c));
     EXPECT_EQ(p.calls(static_cast<CostProfile::Component>(c)), 0);
   }
 }
@@ -108,10 +109,12 @@ TEST(CostClock, FinerSplitAddsUpWithinItsComponent) {
   Scene scene;
   scene.file = "s.yaml";
   const std::string y = p.toYaml("/t", scene, 10.0, 1.0, &k);
-  EXPECT_NE(y.find("contact_detection: {seconds: 1, share: 0.1, calls: 8, within: track_step}"), std::string::npos) << y;
+  EXPECT_NE(y.find("contact_detection: {seconds: 1, share: 0.1, calls: 8, within: track_step}"), std::string::npos)
+      << y;
   EXPECT_NE(y.find("track_solve: {seconds: 1.5, share: 0.15, calls: 1, within: track_step}"), std::string::npos) << y;
-  EXPECT_NE(y.find("track_step_other: {seconds: 0.5, share: 0.05}"), std::string::npos) << y;  // 4 - 1 - 0.5 - 0.5 - 1.5
-  EXPECT_NE(y.find("publish_other: {seconds: 0.75, share: 0.075}"), std::string::npos) << y;   // 1 - 0.25
+  EXPECT_NE(y.find("track_step_other: {seconds: 0.5, share: 0.05}"), std::string::npos)
+      << y;                                                                                   // 4 - 1 - 0.5 - 0.5 - 1.5
+  EXPECT_NE(y.find("publish_other: {seconds: 0.75, share: 0.075}"), std::string::npos) << y;  // 1 - 0.25
   EXPECT_NE(y.find("flange_searches: 0"), std::string::npos) << y;
   // Vehicle side: the contact parts are inside the right-hand sides and not subtracted again.
   CostProfile v;
@@ -122,6 +125,7 @@ TEST(CostClock, FinerSplitAddsUpWithinItsComponent) {
   kv.contact.evaluations = 8;
   const std::string yv = v.toYaml("/v", scene, 4.0, 1.0, &kv);
   EXPECT_NE(yv.find("contact_detection: {seconds: 1, share: 0.25, calls: 8, within: vehicle_integration}"),
-            std::string::npos) << yv;
+            std::string::npos)
+      << yv;
   EXPECT_NE(yv.find("vehicle_integration_other: {seconds: 1, share: 0.25}"), std::string::npos) << yv;  // 3 - 2
 }

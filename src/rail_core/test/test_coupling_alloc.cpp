@@ -46,7 +46,7 @@ using namespace rail::core::coupling;
 namespace {
 
 constexpr int kWheels = 8;
-constexpr long kWarmup = 10;   // exchanges before counting
+constexpr long kWarmup = 10;  // exchanges before counting
 constexpr long kCounted = 500;
 
 CouplingConfig config() {

@@ -31,8 +31,7 @@ CouplingConfig config(int wheels = 8, double h = 2e-5, double timeout = 5.0) {
 // A track thread that answers every step with wrench(t, wheel, f, n) and records the steps it saw.
 struct ScriptedTrack {
   using WrenchFn = std::function<void(double t, int wheel, Eigen::Vector3d& f, Eigen::Vector3d& n)>;
-  ScriptedTrack(const CouplingConfig& c, FrameTransport& end, WrenchFn fn)
-      : coupling(c, end), wrench(std::move(fn)) {
+  ScriptedTrack(const CouplingConfig& c, FrameTransport& end, WrenchFn fn) : coupling(c, end), wrench(std::move(fn)) {
     thread = std::thread([this, c] {
       for (;;) {
         last = coupling.receive();
@@ -62,13 +61,10 @@ struct ScriptedTrack {
 };
 
 void fillStates(VehicleCoupling& v, int wheels) {
-  for (int i = 0; i < wheels; ++i)
-    v.states().wheels[i].arc_length = 100.0 * static_cast<double>(v.nextStep()) + i;
+  for (int i = 0; i < wheels; ++i) v.states().wheels[i].arc_length = 100.0 * static_cast<double>(v.nextStep()) + i;
 }
 
-double secondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 }  // namespace
 
@@ -199,8 +195,7 @@ TEST(CouplingProtocol, LoopbackThousandStepsInOrder) {
   EXPECT_EQ(track.bad_states, 0);
   // The vehicle's close ends the track's next wait as "peer closed", naming both roles and the step.
   EXPECT_EQ(track.last.status, Status::kPeerClosed);
-  EXPECT_EQ(track.last.message,
-            "track: waiting for the wheel states of step 1000: the vehicle closed the connection");
+  EXPECT_EQ(track.last.message, "track: waiting for the wheel states of step 1000: the vehicle closed the connection");
   EXPECT_EQ(exitCode(track.last.status), kExitPeerTimeout);
 }
 

@@ -64,10 +64,14 @@ std::uint64_t bits(double d) {
 double pattern(std::uint64_t step, int wheel, int field) {
   const std::uint64_t seed = (step << 16) ^ (static_cast<std::uint64_t>(wheel) << 8) ^ field;
   switch (field) {  // a few fixed special values besides the random ones
-    case 0: return wheel == 0 ? -0.0 : fromBits(mix(seed));
-    case 1: return wheel == 1 ? fromBits(1) : fromBits(mix(seed));                      // subnormal
-    case 2: return wheel == 2 ? fromBits(0x7ff8000000001234ull + step) : fromBits(mix(seed));  // NaN
-    default: return fromBits(mix(seed));
+    case 0:
+      return wheel == 0 ? -0.0 : fromBits(mix(seed));
+    case 1:
+      return wheel == 1 ? fromBits(1) : fromBits(mix(seed));  // subnormal
+    case 2:
+      return wheel == 2 ? fromBits(0x7ff8000000001234ull + step) : fromBits(mix(seed));  // NaN
+    default:
+      return fromBits(mix(seed));
   }
 }
 void fillStates(WheelStateFrame& f, std::uint64_t step) {
@@ -99,8 +103,7 @@ bool sameBits(const WheelStateFrame& a, const WheelStateFrame& b) {
   if (a.count != b.count) return false;
   for (std::uint32_t i = 0; i < a.count; ++i) {
     const WheelState &x = a.wheels[i], &y = b.wheels[i];
-    if (x.id != y.id || bits(x.arc_length) != bits(y.arc_length) ||
-        !sameBits(x.p_wheel_in_world, y.p_wheel_in_world) ||
+    if (x.id != y.id || bits(x.arc_length) != bits(y.arc_length) || !sameBits(x.p_wheel_in_world, y.p_wheel_in_world) ||
         !sameBits(x.q_wheelset_to_world.coeffs(), y.q_wheelset_to_world.coeffs()) ||
         !sameBits(x.v_wheel_in_world, y.v_wheel_in_world) ||
         !sameBits(x.omega_wheelset_in_world, y.omega_wheelset_in_world))
@@ -312,8 +315,8 @@ TEST_F(ShmTest, AttachRefusesMismatchedRegions) {
     ASSERT_GE(fd, 0);
     ASSERT_EQ(ftruncate(fd, static_cast<off_t>(r.size() + 4096)), 0);
     close(fd);
-    expect_refusal("shm transport: region " + t2v + " refused: size " + std::to_string(r.size()) +
-                   " bytes expected, " + std::to_string(r.size() + 4096) + " bytes in the region");
+    expect_refusal("shm transport: region " + t2v + " refused: size " + std::to_string(r.size()) + " bytes expected, " +
+                   std::to_string(r.size() + 4096) + " bytes in the region");
     r.unlinkIfSame();
   }
   {  // another layout version
@@ -333,8 +336,8 @@ TEST_F(ShmTest, AttachRefusesMismatchedRegions) {
     std::strcpy(r.header().creator_host, "elsewhere");
     char host[64] = {};
     gethostname(host, sizeof host - 1);
-    expect_refusal("shm transport: region " + t2v + " refused: created on host 'elsewhere', this is host '" +
-                   host + "'; the shm transport needs both nodes on one host (use transport service or topic)");
+    expect_refusal("shm transport: region " + t2v + " refused: created on host 'elsewhere', this is host '" + host +
+                   "'; the shm transport needs both nodes on one host (use transport service or topic)");
     r.unlinkIfSame();
   }
 }
@@ -371,18 +374,24 @@ TEST_F(ShmTest, LiveRegionIsRefusedClosedOneReplaced) {
     FAIL() << "took over a live region";
   } catch (const CouplingError& e) {
     EXPECT_EQ(e.status(), Status::kRefused);
-    EXPECT_EQ(std::string(e.what()).rfind("shm transport: region " + spec.name + " is in use by pid " +
-                                          std::to_string(getpid()) + " on host '", 0), 0u) << e.what();
+    EXPECT_EQ(
+        std::string(e.what()).rfind(
+            "shm transport: region " + spec.name + " is in use by pid " + std::to_string(getpid()) + " on host '", 0),
+        0u)
+        << e.what();
   }
   EXPECT_EQ(first.replacedStale(), "");  // the name was free
   first.header().state.fetch_or(shm::kWriterClosed);
   ShmRegion second = ShmRegion::create(spec);  // the closed one is stale: replaced
   EXPECT_EQ(second.header().state.load(), 0u);
-  EXPECT_EQ(second.replacedStale().rfind("replaced the stale region " + spec.name + " left by pid " +
-                                              std::to_string(getpid()) + " on host '", 0), 0u)
+  EXPECT_EQ(
+      second.replacedStale().rfind(
+          "replaced the stale region " + spec.name + " left by pid " + std::to_string(getpid()) + " on host '", 0),
+      0u)
       << second.replacedStale();
   EXPECT_NE(second.replacedStale().find("' (closed by its writer)"), std::string::npos) << second.replacedStale();
-  struct stat a {}, b {};
+  struct stat a {
+  }, b{};
   ASSERT_EQ(stat(("/dev/shm" + spec.name).c_str(), &b), 0);
   second.unlinkIfSame();
   first.unlinkIfSame();  // no longer its name: does nothing
@@ -405,7 +414,7 @@ TEST_F(ShmTest, IncompleteRegionOfDeadCreatorIsReplaced) {
     EXPECT_EQ(r.header().magic.load(), shm::kShmMagic);
     EXPECT_EQ(r.header().creator_pid, getpid());
     EXPECT_EQ(r.replacedStale(), "replaced the stale region " + spec.name +
-                                      " (incomplete, left by a creator that died while setting it up)");
+                                     " (incomplete, left by a creator that died while setting it up)");
     r.unlinkIfSame();
   }
 }
@@ -438,7 +447,10 @@ TEST_F(ShmTest, StaleRegionOfKilledProcessIsReplaced) {
   ShmTransport t(options(Role::kVehicle));
   EXPECT_EQ(t.peerPid(), track);
   EXPECT_EQ(t.replacedStale().rfind("replaced the stale region " + name(Role::kVehicle) + " left by pid " +
-                                         std::to_string(doomed) + " on host '", 0), 0u) << t.replacedStale();
+                                        std::to_string(doomed) + " on host '",
+                                    0),
+            0u)
+      << t.replacedStale();
   EXPECT_NE(t.replacedStale().find("' (its creator is gone)"), std::string::npos) << t.replacedStale();
   VehicleCoupling v(config(), t);
   for (std::uint64_t k = 0; k < 3; ++k) {
@@ -533,8 +545,10 @@ TEST_F(ShmTest, KilledPeerIsReportedBeforeTheTimeout) {
   const Result r = v.exchange();
   EXPECT_EQ(r.status, Status::kPeerClosed);
   EXPECT_LE(secondsSince(t0), 1.0);  // 50 ms slices; 1 s leaves room for a loaded machine
-  EXPECT_EQ(r.message, "vehicle: waiting for the contact wrenches of step 1: the track closed the connection "
-                       "(its process " + std::to_string(child) + " ended without closing)");
+  EXPECT_EQ(r.message,
+            "vehicle: waiting for the contact wrenches of step 1: the track closed the connection "
+            "(its process " +
+                std::to_string(child) + " ended without closing)");
   EXPECT_EQ(waitChild(child), 128 + SIGKILL);
 }
 

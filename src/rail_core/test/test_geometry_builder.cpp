@@ -160,9 +160,9 @@ TEST(GeometryBuilder, IrregularitiesOffCostNothing) {
 
 // A PSD realisation is drawn with enough harmonics not to repeat within the track.
 TEST(GeometryBuilder, PsdRealisationDoesNotRepeatWithinTrack) {
-  const Scene on = curveScene(
-      "  irregularities: {source: psd, psd: german_low, wavelength_min: 0.5, wavelength_max: 120.0}",
-      "effects: {track_model: flexible, irregularities: true}");
+  const Scene on =
+      curveScene("  irregularities: {source: psd, psd: german_low, wavelength_min: 0.5, wavelength_max: 120.0}",
+                 "effects: {track_model: flexible, irregularities: true}");
   const rc::Irregularities irr = buildIrregularities(on);
   EXPECT_GT(irr.repeatLength(), on.track.length());
   EXPECT_NEAR(irr.shortestWavelength(), 0.5, 1e-12);

@@ -77,13 +77,13 @@ TEST(Scene, BaseSceneLoadsWithDefaults) {
   EXPECT_EQ(s.name, "base");
   EXPECT_DOUBLE_EQ(s.track.gauge, 1.668);
   EXPECT_DOUBLE_EQ(s.track.cant_reference_width, 1.668 + 0.065);  // default: gauge + 65 mm
-  EXPECT_DOUBLE_EQ(s.track.rail_inclination, 0.05);                // default 1/20
+  EXPECT_DOUBLE_EQ(s.track.rail_inclination, 0.05);               // default 1/20
   EXPECT_EQ(s.track.segments.size(), 3u);
   EXPECT_DOUBLE_EQ(s.track.length(), 150.0);
   EXPECT_EQ(s.effects.track_model, TrackModel::kRigidFe);
-  EXPECT_TRUE(s.effects.flange_contact);                           // default on
+  EXPECT_TRUE(s.effects.flange_contact);  // default on
   EXPECT_EQ(s.solver.end.kind, EndKind::kArcLength);
-  EXPECT_DOUBLE_EQ(s.solver.end.value, 150.0);                     // default: the track's end
+  EXPECT_DOUBLE_EQ(s.solver.end.value, 150.0);  // default: the track's end
   EXPECT_EQ(s.wheelCount(), 8);
   EXPECT_TRUE(s.cosimulation());
   EXPECT_FALSE(s.runsFeIntegration());
@@ -129,10 +129,10 @@ TEST(Scene, HashChangesWithTheSceneAndNotWithComments) {
 }
 
 TEST(Scene, InclinationAcceptsARatioOrANumber) {
-  EXPECT_DOUBLE_EQ(load(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 1/40"))
-                       .track.rail_inclination, 0.025);
-  EXPECT_DOUBLE_EQ(load(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 0.025"))
-                       .track.rail_inclination, 0.025);
+  EXPECT_DOUBLE_EQ(
+      load(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 1/40")).track.rail_inclination, 0.025);
+  EXPECT_DOUBLE_EQ(
+      load(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 0.025")).track.rail_inclination, 0.025);
   EXPECT_EQ(errorOf(replaced(kBase, "gauge: 1.668", "gauge: 1.668\n  rail_inclination: 1/zero")),
             "scene.yaml: track.rail_inclination: must be a ratio such as 1/20 or a number, got '1/zero' (line 4)");
 }
@@ -206,10 +206,11 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, vehicle_energy]"),
        "scene.yaml: output.topics[1]: 'vehicle_energy' is recorded only with effects.energy_output: true"},
       {"track energy without the integrated FE track",
-       replaced(replaced(kBase, "topics: [wheel_states]", "topics: [track_energy]"),
-                "track_model: rigid_fe", "track_model: rigid_fe\n  energy_output: true"),
+       replaced(replaced(kBase, "topics: [wheel_states]", "topics: [track_energy]"), "track_model: rigid_fe",
+                "track_model: rigid_fe\n  energy_output: true"),
        "scene.yaml: output.topics[0]: 'track_energy' needs the integrated FE track: effects.track_model flexible"},
-      {"negative pad force margin", replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states]\n  pad_force_margin: -1"),
+      {"negative pad force margin",
+       replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states]\n  pad_force_margin: -1"),
        "scene.yaml: output.pad_force_margin: must be between 0.0 and 100.0 m, got -1.0 (line 21)"},
       {"friction above 1", kBase + "contact: {friction: 1.5}\n",
        "scene.yaml: contact.friction: must be > 0 and <= 1, got 1.5 (line 21)"},
@@ -220,9 +221,12 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
       {"unknown contact key", kBase + "contact: {mu: 0.4}\n",
        "scene.yaml: contact.mu: unknown key (known here: friction, impact_velocity_floor, restitution) (line 21)"},
       {"contact data without a vehicle",
-       replaced(replaced(kBase, "vehicle:\n  data: vehicle_data.yaml\n  start_arc_length: 25.0\n  speed: 30.0\n  back_to_back: 1.592\n",
-                         "moving_loads:\n  loads: [{vertical: 1.0e5}]\ncontact: {friction: 0.4}\n"),
-                "track_model: rigid_fe", "track_model: flexible"),
+       replaced(
+           replaced(
+               kBase,
+               "vehicle:\n  data: vehicle_data.yaml\n  start_arc_length: 25.0\n  speed: 30.0\n  back_to_back: 1.592\n",
+               "moving_loads:\n  loads: [{vertical: 1.0e5}]\ncontact: {friction: 0.4}\n"),
+           "track_model: rigid_fe", "track_model: flexible"),
        "scene.yaml: contact: a moving-load scene has no wheel-rail contact; remove the section"},
       {"radius of a few nanometres", replaced(kBase, "radius: 500.0, cant: 0.1}", "radius: 1e-300, cant: 0.1}"),
        "scene.yaml: track.segments[2].radius: must be >= 10.0 m (0 = straight where allowed), got 1e-300 (line 8)"},
@@ -234,9 +238,12 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        "1.733; track.gauge is not set, so its default 1.435 m applies (line 3)"},
       {"vehicle off the track", replaced(kBase, "start_arc_length: 25.0", "start_arc_length: 150.0"),
        "scene.yaml: vehicle.start_arc_length: must lie on the track [0.0, 150.0) m, got 150.0 (line 11)"},
-      {"irregularities on without a source", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  irregularities: true"),
+      {"irregularities on without a source",
+       replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  irregularities: true"),
        "scene.yaml: effects.irregularities: is on but track.irregularities gives no source (file or psd) (line 16)"},
-      {"unknown spectrum", replaced(kBase, "  data: track_data.yaml\n", "  data: track_data.yaml\n  irregularities: {source: psd, psd: fra_class_9}\n"),
+      {"unknown spectrum",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  irregularities: {source: psd, psd: fra_class_9}\n"),
        "scene.yaml: track.irregularities.psd: must be one of fra_class_1, fra_class_2, fra_class_3, fra_class_4, "
        "fra_class_5, fra_class_6, german_low, german_high, got 'fra_class_9' (line 5)"},
       {"not YAML", "track: [unclosed\n", "scene.yaml: not valid YAML: end of sequence flow not found (line 2)"},
@@ -260,7 +267,8 @@ TEST(Scene, ContactSectionReachesTheSceneAndItsHash) {
   EXPECT_DOUBLE_EQ(wet.contact.impact_velocity_floor, 0.1);
   EXPECT_NE(wet.hash, base.hash);  // two nodes with different rail conditions refuse each other
   EXPECT_NE(toYaml(wet).find("contact:\n  friction: 0.15\n  restitution: 0.8\n  impact_velocity_floor: 0.1"),
-            std::string::npos) << toYaml(wet);
+            std::string::npos)
+      << toYaml(wet);
   // Overrides reach it like any key.
   EXPECT_DOUBLE_EQ(loadSceneText(kBase, "scene.yaml", kData, {"contact.friction=0.45"}).contact.friction, 0.45);
 }
@@ -278,9 +286,11 @@ TEST(Scene, DescribeListsEffectsAndComponents) {
   const Scene s = load(kBase);
   const std::string v = describe(s, Role::kVehicle);
   EXPECT_NE(v.find("effects on: track_model=rigid_fe, flange_contact, spin_creepage, creep_law=polach"),
-            std::string::npos) << v;
+            std::string::npos)
+      << v;
   EXPECT_NE(v.find("effects off: irregularities, track_damping, absorbing_ends, rail_deflection_output"),
-            std::string::npos) << v;
+            std::string::npos)
+      << v;
   EXPECT_NE(v.find("wheel-centre wrenches from the track node over shm"), std::string::npos) << v;
   const std::string t = describe(s, Role::kTrack);
   EXPECT_NE(t.find("rigid FE rails: contact on the undeformed rails, no FE integration"), std::string::npos) << t;
@@ -290,7 +300,7 @@ TEST(Scene, OverridesChangeKeysAsIfTheFileSaidSo) {
   // One scene run with each track model and a shorter end: the override gives the scene (and the hash) the
   // file would give with those keys written in it.
   const Scene over = loadSceneText(kBase, "scene.yaml", kData,
-                                     {"effects.track_model=flexible", "solver.end={time: 0.5}", "output.bag=x.bag"});
+                                   {"effects.track_model=flexible", "solver.end={time: 0.5}", "output.bag=x.bag"});
   std::string edited = replaced(kBase, "track_model: rigid_fe", "track_model: flexible");
   edited = replaced(edited, "  vehicle_max_step: 1.0e-5\n", "  vehicle_max_step: 1.0e-5\n  end: {time: 0.5}\n");
   edited = replaced(edited, "output:\n", "output:\n  bag: x.bag\n");
@@ -304,8 +314,7 @@ TEST(Scene, OverridesChangeKeysAsIfTheFileSaidSo) {
   // An empty value keeps the file's value (a launch argument left empty).
   EXPECT_EQ(loadSceneText(kBase, "scene.yaml", kData, {"effects.track_model="}).hash, load(kBase).hash);
   // A missing map is created.
-  EXPECT_EQ(loadSceneText(kBase, "scene.yaml", kData, {"effects.irregularities=false"}).effects.irregularities,
-            false);
+  EXPECT_EQ(loadSceneText(kBase, "scene.yaml", kData, {"effects.irregularities=false"}).effects.irregularities, false);
   EXPECT_EQ(splitOverrides("  a=1 b.c=2\tc= "), (SceneOverrides{"a=1", "b.c=2", "c="}));
   EXPECT_EQ(splitOverrides("solver.end={time: 1.5} output.bag='a b.bag' t=[x, y]"),
             (SceneOverrides{"solver.end={time: 1.5}", "output.bag='a b.bag'", "t=[x, y]"}));
@@ -338,7 +347,8 @@ TEST(Scene, AKeyGivenTwiceIsRefusedNamingBothLines) {
   const std::string e = errorOf(twice);
   EXPECT_NE(e.find("scene.yaml: vehicle.speed: given twice (lines "), std::string::npos) << e;
   // Inside a list item too.
-  const std::string in_list = replaced(kBase, "{type: straight, length: 50.0}", "{type: straight, length: 50.0, length: 5}");
+  const std::string in_list =
+      replaced(kBase, "{type: straight, length: 50.0}", "{type: straight, length: 50.0, length: 5}");
   EXPECT_NE(errorOf(in_list).find("track.segments[0].length: given twice"), std::string::npos) << errorOf(in_list);
 }
 

@@ -39,8 +39,8 @@ void put(const Eigen::Vector3d& v, geometry_msgs::Vector3& m) {
 void get(const geometry_msgs::Vector3& m, Eigen::Vector3d& v) { v = Eigen::Vector3d(m.x, m.y, m.z); }
 
 // The checks shared by both message kinds: wheel count against the capacity, stamp against k h.
-Result checkIncoming(std::uint64_t step, const ros::Time& stamp, std::size_t count, int capacity,
-                      double track_step, const char* source) {
+Result checkIncoming(std::uint64_t step, const ros::Time& stamp, std::size_t count, int capacity, double track_step,
+                     const char* source) {
   if (count > static_cast<std::size_t>(capacity))
     return {Status::kRefused, std::string(source) + ": " + std::to_string(count) + " wheels in step " +
                                   std::to_string(step) + ", more than the capacity " + std::to_string(capacity)};
@@ -50,8 +50,8 @@ Result checkIncoming(std::uint64_t step, const ros::Time& stamp, std::size_t cou
   const std::int64_t diff = static_cast<std::int64_t>(stamp.toNSec()) - static_cast<std::int64_t>(expected.toNSec());
   if (!valid || diff > 1 || diff < -1) {
     char buf[200];
-    std::snprintf(buf, sizeof(buf), "%s: stamp %u.%09u s of step %llu differs from step x track_step = %.9g s",
-                  source, stamp.sec, stamp.nsec, static_cast<unsigned long long>(step), t);
+    std::snprintf(buf, sizeof(buf), "%s: stamp %u.%09u s of step %llu differs from step x track_step = %.9g s", source,
+                  stamp.sec, stamp.nsec, static_cast<unsigned long long>(step), t);
     return {Status::kRefused, buf};
   }
   return {};
@@ -128,7 +128,7 @@ void makeCloseMarker(rail_msgs::ContactWrenches& msg) {
 }
 
 Result fromMessage(const rail_msgs::WheelStates& msg, double track_step, coupling::WheelStateFrame& frame,
-                    const char* source) {
+                   const char* source) {
   Result r = checkIncoming(msg.step, msg.header.stamp, msg.wheels.size(), frame.capacity(), track_step, source);
   if (!r) return r;
   frame.step = msg.step;
@@ -150,7 +150,7 @@ Result fromMessage(const rail_msgs::WheelStates& msg, double track_step, couplin
 }
 
 Result fromMessage(const rail_msgs::ContactWrenches& msg, double track_step, coupling::WrenchFrame& frame,
-                    const char* source) {
+                   const char* source) {
   Result r = checkIncoming(msg.step, msg.header.stamp, msg.wrenches.size(), frame.capacity(), track_step, source);
   if (!r) return r;
   frame.step = msg.step;

@@ -6,8 +6,8 @@
 
 #include <chrono>
 #include <cstdio>
-#include <string>
 #include <memory>
+#include <string>
 #include <thread>
 
 namespace rail::ros_glue {
@@ -79,8 +79,10 @@ int waitForMaster(const std::string& node, const std::atomic<int>& signal, doubl
     if (signal.load() != 0) return 5;
     const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (waited > timeout_s) {
-      std::fprintf(stderr, "%s: no ROS master answers at %s after %.0f s: start the node with roslaunch (or "
-                   "roscore first)\n", node.c_str(), ros::master::getURI().c_str(), timeout_s);
+      std::fprintf(stderr,
+                   "%s: no ROS master answers at %s after %.0f s: start the node with roslaunch (or "
+                   "roscore first)\n",
+                   node.c_str(), ros::master::getURI().c_str(), timeout_s);
       return 4;
     }
     if (!said && waited > 2.0) {
@@ -97,10 +99,12 @@ bool nodeHelpRequested(int argc, char** argv, const char* node, const char* what
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") {
-      std::printf("%s: %s\nStarted by roslaunch (launch/*.launch; ./railsim run picks the file); its settings are "
-                  "the private parameters ~scene_yaml (the scene, loaded by launch/scene.launch with its overrides), "
-                  "~output_dir and ~validate_only.\n"
-                  "See README.md (running a scenario, exit codes) and docs/scene.md.\n", node, what);
+      std::printf(
+          "%s: %s\nStarted by roslaunch (launch/*.launch; ./railsim run picks the file); its settings are "
+          "the private parameters ~scene_yaml (the scene, loaded by launch/scene.launch with its overrides), "
+          "~output_dir and ~validate_only.\n"
+          "See README.md (running a scenario, exit codes) and docs/scene.md.\n",
+          node, what);
       return true;
     }
   }

@@ -30,7 +30,7 @@ struct HandshakeServer {
   bool answered = false;
   bool accepted = false;
   std::string refusal;
-  std::string peer;  // the vehicle node's name
+  std::string peer;         // the vehicle node's name
   double wheel_span = 0.0;  // the vehicle's, m
 
   bool onRequest(rail_msgs::Handshake::Request& req, rail_msgs::Handshake::Response& res) {
@@ -85,8 +85,10 @@ int handshakeAsVehicle(const core::Scene& scene, double wheel_span, std::string&
     }
     if (stopRequested()) return core::kExitInterrupted;
     if (ros::WallTime::now() >= deadline) {
-      ROS_FATAL("%s: the track node did not offer %s within %.1f s (solver.handshake_timeout): is rail_track "
-                "running?", me.c_str(), kHandshakeService, scene.solver.handshake_timeout);
+      ROS_FATAL(
+          "%s: the track node did not offer %s within %.1f s (solver.handshake_timeout): is rail_track "
+          "running?",
+          me.c_str(), kHandshakeService, scene.solver.handshake_timeout);
       return core::kExitPeerTimeout;
     }
   }

@@ -29,8 +29,7 @@ void checkOptions(const RosTransportOptions& o, const char* what) {
     throw std::runtime_error(std::string(what) + ": wheel_capacity must be in 1..256 (got " +
                              std::to_string(o.wheel_capacity) + ")");
   if (!(o.attach_timeout > 0.0) || !std::isfinite(o.attach_timeout))
-    throw std::runtime_error(std::string(what) + ": attach_timeout must be > 0 s (got " + num(o.attach_timeout) +
-                             ")");
+    throw std::runtime_error(std::string(what) + ": attach_timeout must be > 0 s (got " + num(o.attach_timeout) + ")");
 }
 
 namespace detail {

@@ -11,9 +11,10 @@ bool readScene(ros::NodeHandle& private_nh, core::Scene& scene) {
   const std::string& node = ros::this_node::getName();
   std::string text, file;
   if (!ros::param::get(ns + "/scene_yaml", text)) {
-    ROS_FATAL("%s: parameter %s/scene_yaml is not set: start the node from a launch file that loads a scene "
-              "(e.g. roslaunch launch/cosim.launch scene:=<file>)",
-              node.c_str(), ns.c_str());
+    ROS_FATAL(
+        "%s: parameter %s/scene_yaml is not set: start the node from a launch file that loads a scene "
+        "(e.g. roslaunch launch/cosim.launch scene:=<file>)",
+        node.c_str(), ns.c_str());
     return false;
   }
   ros::param::param<std::string>(ns + "/scene_file", file, ns + "/scene_yaml");

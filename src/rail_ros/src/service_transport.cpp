@@ -5,9 +5,9 @@
 #include <mutex>
 #include <thread>
 
+#include <rail_msgs/Lockstep.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
-#include <rail_msgs/Lockstep.h>
 
 #include "rail_ros/frame_messages.hpp"
 #include "ros_transport_util.hpp"
@@ -64,10 +64,10 @@ struct ServiceTransport::VehicleEnd : std::enable_shared_from_this<VehicleEnd> {
   Phase phase = Phase::kIdle;
   bool call_ok = false;
   bool closed = false;
-  bool give_up = false;        // destructor: no further call
-  bool abandoned = false;      // a call outlived its deadline and is still in flight
-  std::uint64_t step = 0;      // step of the last request
-  std::string peer;            // provider node (set before the thread starts)
+  bool give_up = false;    // destructor: no further call
+  bool abandoned = false;  // a call outlived its deadline and is still in flight
+  std::uint64_t step = 0;  // step of the last request
+  std::string peer;        // provider node (set before the thread starts)
   std::thread worker;
 
   void run(std::shared_ptr<VehicleEnd> self_keepalive);
@@ -129,8 +129,9 @@ Result ServiceTransport::VehicleEnd::receive(coupling::WrenchFrame& frame, Deadl
     if (phase == Phase::kDone) {
       phase = Phase::kIdle;
       if (!call_ok)
-        return {Status::kPeerClosed, where() + ": the call failed, the connection was dropped (the node ended, "
-                                               "closed or withdrew the service)"};
+        return {Status::kPeerClosed, where() +
+                                         ": the call failed, the connection was dropped (the node ended, "
+                                         "closed or withdrew the service)"};
       if (!srv.response.ok) return {Status::kRefused, where() + " refused the call: " + srv.response.error};
       return fromMessage(srv.response.wrenches, o.track_step, frame, service.c_str());
     }
@@ -174,13 +175,13 @@ struct ServiceTransport::TrackEnd {
   Phase phase = Phase::kNone;
   const rail_msgs::WheelStates* request = nullptr;  // valid while a call waits
   rail_msgs::Lockstep::Response* response = nullptr;
-  std::uint64_t step = 0;         // step of the call taken last
-  bool vehicle_closed = false;    // close marker received
+  std::uint64_t step = 0;       // step of the call taken last
+  bool vehicle_closed = false;  // close marker received
   bool closed = false;
-  bool withdrawn = false;         // the service was shut down
-  std::string vehicle;            // caller node of the last call
+  bool withdrawn = false;                // the service was shut down
+  std::string vehicle;                   // caller node of the last call
   const void* vehicle_header = nullptr;  // connection header of the vehicle's calls (identifies them without a lookup)
-  long foreign_calls = 0;         // calls from a node that is not the handshake's peer, refused
+  long foreign_calls = 0;                // calls from a node that is not the handshake's peer, refused
 
   bool serve(ros::ServiceEvent<rail_msgs::Lockstep::Request, rail_msgs::Lockstep::Response>& event);
   Result receive(coupling::WheelStateFrame& frame, Deadline deadline);
@@ -264,7 +265,8 @@ Result ServiceTransport::TrackEnd::receive(coupling::WheelStateFrame& frame, Dea
       phase = Phase::kTaken;
       return {};
     }
-    if (vehicle_closed) return {Status::kPeerClosed, nodeLabel(vehicle, Role::kVehicle) + " sent its close marker on service " + service};
+    if (vehicle_closed)
+      return {Status::kPeerClosed, nodeLabel(vehicle, Role::kVehicle) + " sent its close marker on service " + service};
     Result r = interrupted(o.interrupt);
     if (!r) return r;
     if (Clock::now() >= deadline) return {Status::kTimeout, "no call on " + where()};
@@ -305,8 +307,7 @@ void ServiceTransport::TrackEnd::close() {
 }
 
 // ---------------------------------------------------------------------------------------------------------
-ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOptions& options)
-    : role_(options.role) {
+ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOptions& options) : role_(options.role) {
   checkOptions(options, "service transport");
   if (!(options.reply_timeout > 0.0))
     throw std::runtime_error("service transport: reply_timeout must be > 0 s (got " + num(options.reply_timeout) + ")");
@@ -322,11 +323,12 @@ ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOp
     for (;;) {
       if (ros::service::exists(service, /*print_failure_reason=*/false)) break;
       if (!interrupted(options.interrupt))
-        throw coupling::CouplingError(Status::kInterrupted, "vehicle: interrupted while waiting for service " + service);
+        throw coupling::CouplingError(Status::kInterrupted,
+                                      "vehicle: interrupted while waiting for service " + service);
       if (Clock::now() >= deadline)
-        throw coupling::CouplingError(
-            Status::kTimeout, "vehicle: the track's service " + service + " did not appear within " +
-                                  num(options.attach_timeout) + " s (solver.handshake_timeout)");
+        throw coupling::CouplingError(Status::kTimeout, "vehicle: the track's service " + service +
+                                                            " did not appear within " + num(options.attach_timeout) +
+                                                            " s (solver.handshake_timeout)");
       std::this_thread::sleep_for(detail::kSlice);
     }
     v->peer = options.peer_node.empty() ? detail::serviceProvider(service) : options.peer_node;
@@ -346,8 +348,7 @@ ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOp
         });
     ops.callback_queue = &t->queue;
     t->server = nh.advertiseService(ops);
-    if (!t->server)
-      throw coupling::CouplingError(Status::kError, "track: could not advertise service " + service);
+    if (!t->server) throw coupling::CouplingError(Status::kError, "track: could not advertise service " + service);
     t->spinner = std::make_unique<ros::AsyncSpinner>(1, &t->queue);
     t->spinner->start();
     track_ = std::move(t);

@@ -50,7 +50,7 @@ struct TopicTransport::Impl {
   ros::CallbackQueue link_queue;    // subscribers (dis)connecting to out_topic
   ros::Publisher pub;
   ros::Subscriber sub;
-  rail_msgs::WheelStates states_out;       // outgoing messages, reused
+  rail_msgs::WheelStates states_out;  // outgoing messages, reused
   rail_msgs::ContactWrenches wrenches_out;
 
   // The receive in progress.
@@ -121,8 +121,10 @@ void TopicTransport::Impl::onFrame(const ros::MessageEvent<Msg const>& event) {
     const std::string& from = event.getPublisherName();
     if (!o.peer_node.empty() && from != o.peer_node) {
       if (foreign_frames++ == 0) {
-        ROS_WARN("topic %s: a frame from node %s, not this run's peer %s, was dropped (further ones are dropped "
-                 "silently)", in_topic.c_str(), from.c_str(), o.peer_node.c_str());
+        ROS_WARN(
+            "topic %s: a frame from node %s, not this run's peer %s, was dropped (further ones are dropped "
+            "silently)",
+            in_topic.c_str(), from.c_str(), o.peer_node.c_str());
       }
       return;
     }
@@ -165,9 +167,9 @@ Result TopicTransport::Impl::receive(Frame& frame, Deadline deadline) {
     if (outcome != Outcome::kWaiting) break;
     link_queue.callAvailable(ros::WallDuration(0.0));
     if (peer_dropped) {
-      const Deadline grace = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kDropGrace));
-      while (outcome == Outcome::kWaiting && Clock::now() < grace)
-        frame_queue.callOne(wall(grace - Clock::now()));
+      const Deadline grace =
+          Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(kDropGrace));
+      while (outcome == Outcome::kWaiting && Clock::now() < grace) frame_queue.callOne(wall(grace - Clock::now()));
       if (outcome != Outcome::kWaiting) break;
       result = {Status::kPeerClosed, nodeLabel(peer, coupling::peerOf(role)) + " ended its subscription to " +
                                          out_topic + " (the node ended or closed)"};
@@ -176,19 +178,22 @@ Result TopicTransport::Impl::receive(Frame& frame, Deadline deadline) {
     result = interrupted(o.interrupt);
     if (!result) break;
     if (Clock::now() >= deadline) {
-      result = {Status::kTimeout, "no frame of step " + std::to_string(expected) + " on topic " + in_topic +
-                                      " from " + nodeLabel(peer, coupling::peerOf(role))};
+      result = {Status::kTimeout, "no frame of step " + std::to_string(expected) + " on topic " + in_topic + " from " +
+                                      nodeLabel(peer, coupling::peerOf(role))};
       break;
     }
   }
   states_target = nullptr;
   wrenches_target = nullptr;
   switch (outcome) {
-    case Outcome::kGot: return {};
-    case Outcome::kRefused: return refusal;
+    case Outcome::kGot:
+      return {};
+    case Outcome::kRefused:
+      return refusal;
     case Outcome::kCloseMarker:
       return {Status::kPeerClosed, nodeLabel(peer, coupling::peerOf(role)) + " sent its close marker on " + in_topic};
-    case Outcome::kWaiting: break;
+    case Outcome::kWaiting:
+      break;
   }
   return result;
 }
@@ -221,8 +226,12 @@ TopicTransport::TopicTransport(ros::NodeHandle& nh, const TopicTransportOptions&
   // Queue size 0 = unbounded (roscpp): no frame is dropped, in lockstep or when a bag runs ahead.
   ros::AdvertiseOptions ao;
   Impl* raw = &d;
-  const ros::SubscriberStatusCallback on_connect = [raw](const ros::SingleSubscriberPublisher& p) { raw->onLink(p, true); };
-  const ros::SubscriberStatusCallback on_disconnect = [raw](const ros::SingleSubscriberPublisher& p) { raw->onLink(p, false); };
+  const ros::SubscriberStatusCallback on_connect = [raw](const ros::SingleSubscriberPublisher& p) {
+    raw->onLink(p, true);
+  };
+  const ros::SubscriberStatusCallback on_disconnect = [raw](const ros::SingleSubscriberPublisher& p) {
+    raw->onLink(p, false);
+  };
   if (vehicle)
     ao.init<rail_msgs::WheelStates>(d.out_topic, 0, on_connect, on_disconnect);
   else
@@ -242,8 +251,8 @@ TopicTransport::TopicTransport(ros::NodeHandle& nh, const TopicTransportOptions&
   so.callback_queue = &d.frame_queue;
   d.sub = nh.subscribe(so);
   if (!d.pub || !d.sub)
-    throw coupling::CouplingError(Status::kError, std::string(coupling::toString(d.role)) +
-                                                      ": could not advertise " + d.out_topic + " or subscribe to " + d.in_topic);
+    throw coupling::CouplingError(Status::kError, std::string(coupling::toString(d.role)) + ": could not advertise " +
+                                                      d.out_topic + " or subscribe to " + d.in_topic);
 
   if (!options.wait_for_subscriber) return;
   // Wait until the peer subscribes to this end's topic, so that the first frame reaches it (not latched).
@@ -254,13 +263,15 @@ TopicTransport::TopicTransport(ros::NodeHandle& nh, const TopicTransportOptions&
     if (d.hasSubscriber()) break;
     const Result r = interrupted(options.interrupt);
     if (!r)
-      throw coupling::CouplingError(Status::kInterrupted, std::string(coupling::toString(d.role)) +
-                                                              ": interrupted while waiting for a subscriber of " + d.out_topic);
-    if (Clock::now() >= deadline)
       throw coupling::CouplingError(
-          Status::kTimeout, std::string(coupling::toString(d.role)) + ": " +
-                                nodeLabel(options.peer_node, coupling::peerOf(d.role)) + " did not subscribe to " +
-                                d.out_topic + " within " + num(options.attach_timeout) + " s (solver.handshake_timeout)");
+          Status::kInterrupted,
+          std::string(coupling::toString(d.role)) + ": interrupted while waiting for a subscriber of " + d.out_topic);
+    if (Clock::now() >= deadline)
+      throw coupling::CouplingError(Status::kTimeout, std::string(coupling::toString(d.role)) + ": " +
+                                                          nodeLabel(options.peer_node, coupling::peerOf(d.role)) +
+                                                          " did not subscribe to " + d.out_topic + " within " +
+                                                          num(options.attach_timeout) +
+                                                          " s (solver.handshake_timeout)");
     d.link_queue.callAvailable(ros::WallDuration(0.01));
   }
 }

@@ -210,15 +210,19 @@ int main(int argc, char** argv) {
 
   ros::init(remap, "railsim_bench_vehicle_" + std::to_string(getpid()), ros::init_options::NoSigintHandler);
   if (!ros::master::check()) {
-    std::fprintf(stderr, "railsim_bench_transports needs a ROS master (%s): start roscore, or run "
-                         "roslaunch test/bench_transports.launch\n", ros::master::getURI().c_str());
+    std::fprintf(stderr,
+                 "railsim_bench_transports needs a ROS master (%s): start roscore, or run "
+                 "roslaunch test/bench_transports.launch\n",
+                 ros::master::getURI().c_str());
     kill(child, SIGKILL);
     waitpid(child, nullptr, 0);
     return 4;
   }
   ros::NodeHandle nh;
-  std::printf("round trip of one exchange, %d wheels, two processes, %u hardware threads, %ld exchanges after %ld "
-              "warm-up\n", kWheels, std::thread::hardware_concurrency(), steps, warmup);
+  std::printf(
+      "round trip of one exchange, %d wheels, two processes, %u hardware threads, %ld exchanges after %ld "
+      "warm-up\n",
+      kWheels, std::thread::hardware_concurrency(), steps, warmup);
   bool ok = true;
   for (const std::string& kind : kinds) {
     std::vector<double> rtt;
@@ -238,6 +242,7 @@ int main(int argc, char** argv) {
   waitpid(child, &status, 0);
   ros::shutdown();
   ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  if (!ok) std::fprintf(stderr, "benchmark failed (track exit status %d)\n", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+  if (!ok)
+    std::fprintf(stderr, "benchmark failed (track exit status %d)\n", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
   return ok ? 0 : 1;
 }

@@ -9,17 +9,15 @@
 #include <string>
 #include <vector>
 
+#include "rail_contact/tool_args.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/track_data.hpp"
 #include "rail_track_node/track_model.hpp"
-#include "rail_contact/tool_args.hpp"
 
 namespace rt = rail::track;
 using Clock = std::chrono::steady_clock;
 
-static double seconds(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double>(b - a).count();
-}
+static double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 namespace {
 const char* const kUsage =
@@ -68,11 +66,12 @@ int main(int argc, char** argv) {
       times[n] = seconds(a, Clock::now());
     }
     std::nth_element(times.begin(), times.begin() + steps / 2, times.end());
-    std::printf("%5.0f m: %d free DOFs, nnz(K) = %ld, nnz(L) = %.0f (%s), build+assembly %.3f s, "
-                "factorisation of K_eff %.3f s, median step %.3f ms\n",
-                length, model.system.size(), static_cast<long>(model.system.K.nonZeros()),
-                integ.factor().factorNonZeros(), integ.factor().isSupernodal() ? "supernodal" : "simplicial",
-                seconds(t0, t1), seconds(t1, t2), 1e3 * times[steps / 2]);
+    std::printf(
+        "%5.0f m: %d free DOFs, nnz(K) = %ld, nnz(L) = %.0f (%s), build+assembly %.3f s, "
+        "factorisation of K_eff %.3f s, median step %.3f ms\n",
+        length, model.system.size(), static_cast<long>(model.system.K.nonZeros()), integ.factor().factorNonZeros(),
+        integ.factor().isSupernodal() ? "supernodal" : "simplicial", seconds(t0, t1), seconds(t1, t2),
+        1e3 * times[steps / 2]);
   }
   return 0;
 }

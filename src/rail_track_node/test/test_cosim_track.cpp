@@ -45,10 +45,14 @@ Scene scene(const std::string& track_model, double track_step = 2.0e-5, int whee
       "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n  data: ../track/paper_track.yaml\n"
       "  segments:\n    - {type: straight, length: 30.0}\n"
       "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 25.0\n  speed: 0.0\n"
-      "  back_to_back: 1.592\n  nominal_radius: 0.445\n  wheelsets: " + std::to_string(wheelsets) + "\n"
-      "effects:\n  track_model: " + track_model + "\n"
-      "solver:\n  track_step: " + std::string(step) + "\n  vehicle_max_step: " + std::string(step) +
-      "\n  end: {time: 1.0}\n";
+      "  back_to_back: 1.592\n  nominal_radius: 0.445\n  wheelsets: " +
+      std::to_string(wheelsets) +
+      "\n"
+      "effects:\n  track_model: " +
+      track_model +
+      "\n"
+      "solver:\n  track_step: " +
+      std::string(step) + "\n  vehicle_max_step: " + std::string(step) + "\n  end: {time: 1.0}\n";
   return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
 }
 
@@ -165,9 +169,9 @@ TEST(CosimTrack, RigidFeGivesRailContactWrenches) {
       EXPECT_LE((w.f_wheel_in_world - f).norm(), 1e-9 * f.norm()) << "step " << k << " wheel " << i;
       EXPECT_LE((w.n_wheel_in_world - n).norm(), 1e-9 * std::max(1.0, n.norm())) << "step " << k << " wheel " << i;
       // The contact results kept for output are the same contact points.
-      EXPECT_LE((track.contact(i).contact[rc::kTread].p_contact_in_world - res.contact[rc::kTread].p_contact_in_world)
-                    .norm(),
-                1e-12);
+      EXPECT_LE(
+          (track.contact(i).contact[rc::kTread].p_contact_in_world - res.contact[rc::kTread].p_contact_in_world).norm(),
+          1e-12);
     }
   }
   // The creep moments are there (spin about the axle from the longitudinal creep force).
@@ -258,10 +262,9 @@ StaticContact staticContact(rt::CosimTrack& track, const DirectContact& direct, 
                           rc::RigidRailDeformation(), work, res);
     const rc::ContactPointResult& c = res.contact[rc::kTread];
     EXPECT_TRUE(c.active);
-    EXPECT_TRUE(rt::addRailPointLoad(st.model.mesh, side == 0 ? rt::kLeftRail : rt::kRightRail, c.s_r,
-                                     -c.force_on_wheel_in_world,
-                                     (c.p_rail_in_world - c.p_section_centre_in_world).cross(-c.force_on_wheel_in_world),
-                                     loads));
+    EXPECT_TRUE(rt::addRailPointLoad(
+        st.model.mesh, side == 0 ? rt::kLeftRail : rt::kRightRail, c.s_r, -c.force_on_wheel_in_world,
+        (c.p_rail_in_world - c.p_section_centre_in_world).cross(-c.force_on_wheel_in_world), loads));
     if (side == 0) {
       arm = c.p_rail_in_world - c.p_section_centre_in_world;
       out.Fz = res.wheel_centre.force_in_world.z();
@@ -308,14 +311,16 @@ WheelsetRun runWheelset(rt::CosimTrack& track, double taping_y, double s0, doubl
     run.Fz0.push_back(out.wheels[0].f_wheel_in_world.z());
     run.Fz1.push_back(out.wheels[1].f_wheel_in_world.z());
     for (int i = 0; i < 2; ++i)
-      if (first_step + k > 0 && !(track.contact(i).contact[rc::kTread].N > 0.0 || track.contact(i).contact[rc::kFlange].N > 0.0))
+      if (first_step + k > 0 &&
+          !(track.contact(i).contact[rc::kTread].N > 0.0 || track.contact(i).contact[rc::kFlange].N > 0.0))
         ++run.losses;
   }
   return run;
 }
 
 // Complex amplitude of frequency f (Hz) in x(t) over t in [t0, t1) (a whole number of periods).
-std::complex<double> harmonic(const std::vector<double>& t, const std::vector<double>& x, double f, double t0, double t1) {
+std::complex<double> harmonic(const std::vector<double>& t, const std::vector<double>& x, double f, double t0,
+                              double t1) {
   std::complex<double> sum = 0.0;
   long n = 0;
   for (std::size_t k = 0; k < t.size(); ++k) {
@@ -455,8 +460,8 @@ TEST(CosimTrack, ExplicitCouplingChattersWithContactDampingSemiImplicitDoesNot) 
     for (const auto* f : {&held.Fz0, &held.Fz1})
       for (double x : *f) lo = std::min(lo, x), hi = std::max(hi, x);
     span[scheme] = hi - lo;
-    std::printf("%s coupling: contact losses %ld, wheel loads %.1f .. %.1f kN\n", scheme == 0 ? "explicit" : "semi-implicit",
-                held.losses, lo / 1e3, hi / 1e3);
+    std::printf("%s coupling: contact losses %ld, wheel loads %.1f .. %.1f kN\n",
+                scheme == 0 ? "explicit" : "semi-implicit", held.losses, lo / 1e3, hi / 1e3);
   }
   EXPECT_GT(span[0], 0.5 * Q) << "explicit coupling: the load should swing";
   EXPECT_LT(span[1], 0.1 * Q) << "semi-implicit coupling";
@@ -528,8 +533,8 @@ TEST(CosimTrack, FlexibleRollingWheelsetKeepsContactAndLoad) {
   {
     const double V_slow = 3.0, h_slow = 1e-4, T_slow = 0.1 + 2 * a / V_slow;
     rt::CosimTrack slow(scene("flexible", h_slow, 1));
-    const WheelsetRun run = runWheelset(slow, direct.taping_y, 14.4 - 0.1 * V_slow, V_slow, z_rigid, z, T_ramp,
-                                        T_slow, h_slow);
+    const WheelsetRun run =
+        runWheelset(slow, direct.taping_y, 14.4 - 0.1 * V_slow, V_slow, z_rigid, z, T_ramp, T_slow, h_slow);
     EXPECT_EQ(run.losses, 0);
     for (const std::vector<double>* F : {&run.Fz0, &run.Fz1}) {
       EXPECT_NEAR(mean(run.t, *F, 0.1, T_slow), Q, 0.01 * Q);

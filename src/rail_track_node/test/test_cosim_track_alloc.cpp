@@ -38,7 +38,8 @@ rail::core::Scene scene(const std::string& track_model) {
       "  segments:\n    - {type: straight, length: 30.0}\n"
       "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 25.0\n  speed: 30.0\n"
       "  back_to_back: 1.592\n  wheelsets: 4\n"
-      "effects:\n  track_model: " + track_model + "\nsolver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
+      "effects:\n  track_model: " +
+      track_model + "\nsolver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
   return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
 }
 
@@ -106,11 +107,13 @@ struct WindowCounted {
   double fz = 0.0;
 };
 WindowCounted windowAllocations(bool curve) {
-  const std::string segment = curve ? "    - {type: circular, length: 70.0, direction: left, radius: 500.0, cant: 0.160}\n"
-                                    : "    - {type: straight, length: 70.0}\n";
+  const std::string segment =
+      curve ? "    - {type: circular, length: 70.0, direction: left, radius: 500.0, cant: 0.160}\n"
+            : "    - {type: straight, length: 70.0}\n";
   const std::string text =
       "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n  data: ../track/paper_track.yaml\n"
-      "  segments:\n" + segment +
+      "  segments:\n" +
+      segment +
       "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 30.0\n  speed: 30.0\n"
       "  back_to_back: 1.592\n  wheelsets: 4\n"
       "effects:\n  track_model: flexible\nsolver:\n  track_step: 1.0e-4\n  vehicle_max_step: 1.0e-4\n"

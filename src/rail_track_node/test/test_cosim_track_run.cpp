@@ -89,8 +89,8 @@ TEST(CosimTrackRun, AVehicleClosingAtSolverEndFinishesTheRun) {
   const Outcome o = run(sc, recording(sc.wheelCount(), 0.02), false);
   EXPECT_EQ(o.status, rt::TrackRunStatus::kFinished) << o.message;
   EXPECT_EQ(o.exit_code, 0);
-  EXPECT_EQ(o.steps, 21);    // t = 0, 1, ..., 20 ms
-  EXPECT_EQ(o.outputs, 5);   // t = 0, 5, 10, 15, 20 ms at 200 Hz
+  EXPECT_EQ(o.steps, 21);   // t = 0, 1, ..., 20 ms
+  EXPECT_EQ(o.outputs, 5);  // t = 0, 5, 10, 15, 20 ms at 200 Hz
 }
 
 TEST(CosimTrackRun, AVehicleClosingBeforeSolverEndWentAway) {
@@ -118,8 +118,9 @@ TEST(CosimTrackRun, AFrameWithTheWrongWheelCountIsRefused) {
   const Outcome o = run(sc, recording(sc.wheelCount() - 2, 0.02), false);
   EXPECT_EQ(o.status, rt::TrackRunStatus::kFailed);
   EXPECT_EQ(o.exit_code, rail::core::kExitPeerRefused);
-  EXPECT_EQ(o.message, "exchange with the vehicle node /vehicle_under_test failed at step 0: track: wheel states "
-                       "from the vehicle refused at step 0: 6 wheels received, 8 expected");
+  EXPECT_EQ(o.message,
+            "exchange with the vehicle node /vehicle_under_test failed at step 0: track: wheel states "
+            "from the vehicle refused at step 0: 6 wheels received, 8 expected");
 }
 
 TEST(CosimTrackRun, AFrameWithABadWheelIdIsRefusedByTheTrack) {

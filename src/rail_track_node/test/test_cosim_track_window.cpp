@@ -50,12 +50,13 @@ Scene lineScene(bool curve, double h) {
             : "    - {type: straight, length: 150.0}\n";
   const std::string text =
       "name: w\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n  data: ../track/paper_track.yaml\n"
-      "  segments:\n" + segments +
+      "  segments:\n" +
+      segments +
       "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 60.0\n  speed: 30.0\n"
       "  back_to_back: 1.592\n  nominal_radius: 0.445\n  wheelsets: 4\n"
       "effects:\n  track_model: flexible\n"
-      "solver:\n  track_step: " + std::string(step) + "\n  vehicle_max_step: " + std::string(step) +
-      "\n  end: {time: 1.0}\n";
+      "solver:\n  track_step: " +
+      std::string(step) + "\n  vehicle_max_step: " + std::string(step) + "\n  end: {time: 1.0}\n";
   return rail::core::loadSceneText(text, "w.yaml", configDir() + "/scenes");
 }
 
@@ -113,8 +114,8 @@ void fillFrame(const rc::TrackGeometry& geo, double s_front, double V, double z,
 }
 
 struct History {
-  std::vector<double> fz, fy;                   // per step and wheel: wheel force in the track frame, N
-  std::vector<double> sz, sy;                   // per step, section and rail: rail deflection, m
+  std::vector<double> fz, fy;  // per step and wheel: wheel force in the track frame, N
+  std::vector<double> sz, sy;  // per step, section and rail: rail deflection, m
   int moves = 0, rebuilds = 0, drops = 0, outside = 0;
   long unconverged = 0, clipped = 0, steps = 0;
 };
@@ -144,7 +145,8 @@ History run(const Scene& sc, double s_front0, long steps, const double (&section
     }
     for (int i = 0; i < 8; ++i) {
       geo.centre(s_front - kOffsets[i / 2], tp);
-      const Eigen::Vector3d f = tp.R_track_to_world.transpose() * out.wheels[static_cast<std::size_t>(i)].f_wheel_in_world;
+      const Eigen::Vector3d f =
+          tp.R_track_to_world.transpose() * out.wheels[static_cast<std::size_t>(i)].f_wheel_in_world;
       H.fz.push_back(f.z());
       H.fy.push_back(f.y());
     }
@@ -234,10 +236,11 @@ void checkAgainstFull(bool curve) {
     }
     EXPECT_EQ(w.drops, w.rebuilds);
     const Agreement a = compare(w, full);
-    std::printf("%s, margins %.0f m: %d moves (%d rebuilt); |window - full| / peak: wheel Fz %.3g %%, Fy %.3g %%, "
-                "section z %.3g %%, y %.3g %% (peaks Fz %.0f N, Fy %.0f N)\n",
-                curve ? "curve" : "straight", margin, w.moves, w.rebuilds, 100 * a.fz, 100 * a.fy, 100 * a.sz,
-                100 * a.sy, Qpeak, Ypeak);
+    std::printf(
+        "%s, margins %.0f m: %d moves (%d rebuilt); |window - full| / peak: wheel Fz %.3g %%, Fy %.3g %%, "
+        "section z %.3g %%, y %.3g %% (peaks Fz %.0f N, Fy %.0f N)\n",
+        curve ? "curve" : "straight", margin, w.moves, w.rebuilds, 100 * a.fz, 100 * a.fy, 100 * a.sz, 100 * a.sy,
+        Qpeak, Ypeak);
     // 1 % of each quantity's peak, the target of the window design (doc/track_window.md: its own
     // moving-load comparison gives <= 0.15 % with 2 m margins).
     EXPECT_LT(a.fz, 0.01);

@@ -112,7 +112,8 @@ TEST(Newmark, DampedSdofDecaysAtAnalyticRate) {
   using Complex = std::complex<double>;
   const double sigma = zeta * omega, omega_d = omega * std::sqrt(1.0 - zeta * zeta);
   const Complex lam1(-sigma, omega_d), lam2(-sigma, -omega_d);
-  const Complex z1 = (1.0 + lam1 * h / 2.0) / (1.0 - lam1 * h / 2.0), z2 = (1.0 + lam2 * h / 2.0) / (1.0 - lam2 * h / 2.0);
+  const Complex z1 = (1.0 + lam1 * h / 2.0) / (1.0 - lam1 * h / 2.0),
+                z2 = (1.0 + lam2 * h / 2.0) / (1.0 - lam2 * h / 2.0);
   // y0 = c1 [1, lam1] + c2 [1, lam2] with y0 = [d0, 0]
   const Complex c2 = d0 * lam1 / (lam1 - lam2), c1 = d0 - c2;
   const double A0 = std::hypot(d0, sigma * d0 / omega_d);
@@ -158,8 +159,8 @@ TEST(Newmark, UndampedTrackConservesEnergy) {
   rt::TrackModel model = rt::buildTrackModel(data, opt, rt::straightTrackFrames());
   model.system.C.setZero();
   rt::NodalLoads load(64);
-  ASSERT_TRUE(rt::addRailPointLoad(model.mesh, rt::kLeftRail, 1.5, Eigen::Vector3d(0, 0, -1e5),
-                                   Eigen::Vector3d::Zero(), load));
+  ASSERT_TRUE(
+      rt::addRailPointLoad(model.mesh, rt::kLeftRail, 1.5, Eigen::Vector3d(0, 0, -1e5), Eigen::Vector3d::Zero(), load));
   Eigen::VectorXd f = Eigen::VectorXd::Zero(model.system.size());
   for (int q = 0; q < load.size(); ++q) f(load.index(q)) += load.value(q);
   const Eigen::VectorXd d0 = rt::solveStatic(model.system, f);

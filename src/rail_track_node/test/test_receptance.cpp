@@ -30,9 +30,12 @@ std::string configDir() {
 // The paper's track on a straight of the given length, absorbing ends on; rail_beta >= 0 replaces the
 // rail's stiffness-proportional Rayleigh coefficient.
 rt::SceneTrack straightTrack(double length, double rail_beta) {
-  const std::string text = "name: r\ntrack:\n  gauge: 1.668\n  data: ../track/paper_track.yaml\n  segments:\n"
-                           "    - {type: straight, length: " + std::to_string(length) + "}\n"
-                           "moving_loads:\n  loads:\n    - {vertical: 0.0}\nsolver:\n  end: {time: 1.0}\n";
+  const std::string text =
+      "name: r\ntrack:\n  gauge: 1.668\n  data: ../track/paper_track.yaml\n  segments:\n"
+      "    - {type: straight, length: " +
+      std::to_string(length) +
+      "}\n"
+      "moving_loads:\n  loads:\n    - {vertical: 0.0}\nsolver:\n  end: {time: 1.0}\n";
   const rail::core::Scene scene = rail::core::loadSceneText(text, "r.yaml", configDir() + "/scenes");
   rt::SceneTrack t = rt::buildSceneTrack(scene);
   if (rail_beta >= 0.0) {

@@ -5,13 +5,13 @@
 
 #include <array>
 #include <cmath>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include <rail_core/scene_loader.hpp>
 
-#include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/pad_forces.hpp"
+#include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
 
 namespace rt = rail::track;
@@ -32,9 +32,10 @@ std::string configDir() {
 // A moving-load scene on the paper's track; SEGMENTS, LOADS and EFFECTS are filled in per test.
 Scene scene(const std::string& segments, const std::string& loads, const std::string& effects,
             const std::string& solver = "  track_step: 1.0e-3\n  end: {time: 1.0}") {
-  const std::string text = "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n"
-                           "  data: ../track/paper_track.yaml\n  segments:\n" + segments +
-                           "\nmoving_loads:\n" + loads + "\neffects:\n" + effects + "\nsolver:\n" + solver + "\n";
+  const std::string text =
+      "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n"
+      "  data: ../track/paper_track.yaml\n  segments:\n" +
+      segments + "\nmoving_loads:\n" + loads + "\neffects:\n" + effects + "\nsolver:\n" + solver + "\n";
   return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
 }
 
@@ -136,8 +137,8 @@ TEST(SceneTrack, DeflectionProbeInterpolatesNodalValues) {
 // 10.5 .. 13.5 m, at every 0.1 m: the difference stays below 1 % of the peak static deflection (what is
 // left is the small vibration started at t = 0 by the load's sudden speed, damped by the track).
 TEST(TrackSimulator, SlowlyMovingLoadMatchesStaticDeflection) {
-  const Scene sc = scene(kStraight24, kOneLoad, "  track_damping: true",
-                         "  track_step: 1.0e-3\n  end: {arc_length: 14.0}");
+  const Scene sc =
+      scene(kStraight24, kOneLoad, "  track_damping: true", "  track_step: 1.0e-3\n  end: {arc_length: 14.0}");
   const rt::SceneTrack t = rt::buildSceneTrack(sc);
   rt::SimulatorSettings set;
   set.dt = sc.solver.track_step;
@@ -229,8 +230,8 @@ TEST(PadForceProbe, PadsCarryTheLoadAndTheRailWeightAtRest) {
   rt::PadForceProbe probe(m);
   ASSERT_EQ(probe.sleeperCount(), m.n_sleepers);
   std::vector<rt::PadForceSample> out(static_cast<std::size_t>(m.n_sleepers));
-  const int n = probe.evaluate(m, t.geometry, sim.state().d, sim.state().v, nullptr, -1.0, 1e9, out.data(),
-                               m.n_sleepers);
+  const int n =
+      probe.evaluate(m, t.geometry, sim.state().d, sim.state().v, nullptr, -1.0, 1e9, out.data(), m.n_sleepers);
   ASSERT_EQ(n, m.n_sleepers);
   double sum_z = 0.0;
   std::array<int, 2> k_max{-1, -1};
@@ -239,7 +240,8 @@ TEST(PadForceProbe, PadsCarryTheLoadAndTheRailWeightAtRest) {
     for (int r = 0; r < 2; ++r) {
       const double fz = out[static_cast<std::size_t>(k)].force_in_track[static_cast<std::size_t>(r)].z();
       sum_z += fz;
-      if (-fz > f_max[static_cast<std::size_t>(r)]) f_max[static_cast<std::size_t>(r)] = -fz, k_max[static_cast<std::size_t>(r)] = k;
+      if (-fz > f_max[static_cast<std::size_t>(r)])
+        f_max[static_cast<std::size_t>(r)] = -fz, k_max[static_cast<std::size_t>(r)] = k;
     }
   }
   const double expected = -(2.0 * 100000.0 + rail_weight);
@@ -247,11 +249,14 @@ TEST(PadForceProbe, PadsCarryTheLoadAndTheRailWeightAtRest) {
   for (int r = 0; r < 2; ++r) {
     EXPECT_NEAR(out[static_cast<std::size_t>(k_max[static_cast<std::size_t>(r)])].s, 9.0, 1e-9) << "rail " << r;
     // Under the load the rail is pressed down: its displacement at that sleeper is negative.
-    EXPECT_LT(out[static_cast<std::size_t>(k_max[static_cast<std::size_t>(r)])].rail_displacement_in_track[static_cast<std::size_t>(r)].z(), 0.0);
+    EXPECT_LT(out[static_cast<std::size_t>(k_max[static_cast<std::size_t>(r)])]
+                  .rail_displacement_in_track[static_cast<std::size_t>(r)]
+                  .z(),
+              0.0);
   }
   // A sub-range returns the sleepers inside it only, in order of s.
-  const int n_sub = probe.evaluate(m, t.geometry, sim.state().d, sim.state().v, nullptr, 8.95, 10.25, out.data(),
-                                   m.n_sleepers);
+  const int n_sub =
+      probe.evaluate(m, t.geometry, sim.state().d, sim.state().v, nullptr, 8.95, 10.25, out.data(), m.n_sleepers);
   ASSERT_EQ(n_sub, 3);  // 9.0, 9.6, 10.2
   EXPECT_NEAR(out[0].s, 9.0, 1e-9);
   EXPECT_NEAR(out[2].s, 10.2, 1e-9);

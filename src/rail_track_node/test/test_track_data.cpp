@@ -101,7 +101,8 @@ TEST(TrackData, MissingKeyThrows) {
 
 TEST(TrackData, WrongTypeThrows) {
   const std::string text = readFile(paperTrackPath());
-  EXPECT_EQ(errorOf(replaced(text, "  rho: 7860.0", "  rho: heavy")), "track.yaml: rail.rho: expected a number, got 'heavy'");
+  EXPECT_EQ(errorOf(replaced(text, "  rho: 7860.0", "  rho: heavy")),
+            "track.yaml: rail.rho: expected a number, got 'heavy'");
   EXPECT_EQ(errorOf(replaced(text, "rail_elements_between_sleepers: 6", "rail_elements_between_sleepers: 6.5")),
             "track.yaml: layout.rail_elements_between_sleepers: expected an integer, got '6.5'");
   EXPECT_EQ(errorOf(replaced(text, "  enabled: true", "  enabled: [1]")),
@@ -138,6 +139,4 @@ TEST(TrackData, AbsurdOrInfiniteThrows) {
   EXPECT_EQ(errorOf(replaced(text, "  k_vertical: 1.30e8", "  k_vertical: 1e12")), "no exception");
 }
 
-TEST(TrackData, MissingFileThrows) {
-  EXPECT_THROW(rt::loadTrackData("/nonexistent/track.yaml"), std::runtime_error);
-}
+TEST(TrackData, MissingFileThrows) { EXPECT_THROW(rt::loadTrackData("/nonexistent/track.yaml"), std::runtime_error); }

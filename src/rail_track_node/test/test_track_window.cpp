@@ -55,12 +55,12 @@ Scene lineScene(const std::string& segments, double start, double lateral, doubl
   for (double off : kOffsets)
     loads += "    - {offset: " + std::to_string(off) + ", rail: both, vertical: " + std::to_string(kWheelLoad) +
              ", lateral: " + std::to_string(lateral) + "}\n";
-  const std::string text = "name: w\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n"
-                           "  data: ../track/paper_track.yaml\n  segments:\n" + segments +
-                           "\nmoving_loads:\n  start_arc_length: " + std::to_string(start) +
-                           "\n  speed: " + std::to_string(kSpeed) + "\n  loads:\n" + loads +
-                           "effects:\n  track_model: flexible\nsolver:\n  track_step: " + std::to_string(h) +
-                           "\n  end: {time: 10.0}\n";
+  const std::string text =
+      "name: w\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n"
+      "  data: ../track/paper_track.yaml\n  segments:\n" +
+      segments + "\nmoving_loads:\n  start_arc_length: " + std::to_string(start) +
+      "\n  speed: " + std::to_string(kSpeed) + "\n  loads:\n" + loads +
+      "effects:\n  track_model: flexible\nsolver:\n  track_step: " + std::to_string(h) + "\n  end: {time: 10.0}\n";
   return rail::core::loadSceneText(text, "w.yaml", configDir() + "/scenes");
 }
 
@@ -72,7 +72,9 @@ const std::string kCurve200 =
     " cant_start: 0.0, cant_end: 0.160}\n"
     "    - {type: circular, length: 110.0, direction: left, radius: 500.0, cant: 0.160}";
 
-double headArm(const rt::TrackData& data) { return rt::SceneTrackOptions().rail_height - data.layout.rail_centroid_height; }
+double headArm(const rt::TrackData& data) {
+  return rt::SceneTrackOptions().rail_height - data.layout.rail_centroid_height;
+}
 
 // The scene's moving loads at time t on mesh (the same placement as TrackSimulator::loadsAt).
 void movingLoadsAt(const rail::core::MovingLoads& ml, const rt::TrackMesh& mesh, const rt::TrackData& data, double t,
@@ -200,9 +202,10 @@ void checkAgainstFull(const Scene& scene, const std::vector<double>& sections, d
       for (int c = 0; c < 4; ++c) {
         double e = 0.0, p = 0.0;
         compare(full, win, i, c, e, p);
-        std::printf("margin %4.1f m  section s = %5.1f m  %-7s  peak %8.3f um  max error %8.4f um  = %.4f %% of the "
-                    "vertical peak\n",
-                    set.behind, sections[i], kComponent[c], 1e6 * p, 1e6 * e, 100.0 * e / peak_v);
+        std::printf(
+            "margin %4.1f m  section s = %5.1f m  %-7s  peak %8.3f um  max error %8.4f um  = %.4f %% of the "
+            "vertical peak\n",
+            set.behind, sections[i], kComponent[c], 1e6 * p, 1e6 * e, 100.0 * e / peak_v);
         worst[m] = std::max(worst[m], e / peak_v);
         EXPECT_LT(e, tol * peak_v) << "margin " << set.behind << " m, section " << sections[i] << " m, "
                                    << kComponent[c];
@@ -260,7 +263,8 @@ TEST(TrackWindow, CondensedEndsReproduceTheLineStatically) {
     const double peak_u = peak.head<3>().maxCoeff(), peak_theta = peak.tail<3>().maxCoeff();
     if (!condensed) {
       worst_free = std::max(err.head<3>().maxCoeff() / peak_u, err.tail<3>().maxCoeff() / peak_theta);
-      std::printf("free ends: worst rail-node error %.1f %% of the largest translation (rotation)\n", 100.0 * worst_free);
+      std::printf("free ends: worst rail-node error %.1f %% of the largest translation (rotation)\n",
+                  100.0 * worst_free);
       continue;
     }
     for (int j = 0; j < 6; ++j) EXPECT_LT(err(j), 1e-4 * (j < 3 ? peak_u : peak_theta)) << "DOF " << j;
@@ -278,12 +282,14 @@ TEST(TrackWindow, CondensedEndsReproduceTheLineStatically) {
         const int j = sim.addSection(s, frames);
         win.sectionDeflection(i, a);
         sim.sectionDeflection(j, d_full, b);
-        for (int r = 0; r < 2; ++r) worst = std::max(worst, (a.displacement[r] - b.displacement[r]).lpNorm<Eigen::Infinity>());
+        for (int r = 0; r < 2; ++r)
+          worst = std::max(worst, (a.displacement[r] - b.displacement[r]).lpNorm<Eigen::Infinity>());
       }
     for (int r = 0; r < 2; ++r) vpeak = std::max(vpeak, peak(2));
-    std::printf("condensed ends: worst rail-node error %.2e of the largest translation, %.2e of the largest rotation; "
-                "beyond the ends %.3f um (vertical peak %.1f um)\n",
-                err.head<3>().maxCoeff() / peak_u, err.tail<3>().maxCoeff() / peak_theta, 1e6 * worst, 1e6 * vpeak);
+    std::printf(
+        "condensed ends: worst rail-node error %.2e of the largest translation, %.2e of the largest rotation; "
+        "beyond the ends %.3f um (vertical peak %.1f um)\n",
+        err.head<3>().maxCoeff() / peak_u, err.tail<3>().maxCoeff() / peak_theta, 1e6 * worst, 1e6 * vpeak);
     EXPECT_LT(worst, 1e-3 * vpeak);
   }
   EXPECT_GT(worst_free, 0.1);
@@ -338,7 +344,9 @@ TEST(TrackWindow, WindowIsTheLineModelRestrictedToItsRange) {
   std::vector<int> to_full(static_cast<std::size_t>(wm.n_free_dofs), -1);
   std::vector<char> end_plane(static_cast<std::size_t>(wm.n_free_dofs), 0);
   auto mapNode = [&](int nw, int nf, bool at_end) {
-    EXPECT_LT((wm.nodes[static_cast<std::size_t>(nw)].p_in_world - fm.nodes[static_cast<std::size_t>(nf)].p_in_world).norm(), 1e-9);
+    EXPECT_LT(
+        (wm.nodes[static_cast<std::size_t>(nw)].p_in_world - fm.nodes[static_cast<std::size_t>(nf)].p_in_world).norm(),
+        1e-9);
     for (int j = 0; j < 6; ++j) {
       to_full[static_cast<std::size_t>(wm.dofIndex(nw, j))] = fm.dofIndex(nf, j);
       end_plane[static_cast<std::size_t>(wm.dofIndex(nw, j))] = at_end;
@@ -352,7 +360,8 @@ TEST(TrackWindow, WindowIsTheLineModelRestrictedToItsRange) {
   for (int k = 0; k < wm.n_sleepers; ++k)
     for (int q = 0; q < 6; ++q)
       mapNode(wm.sleeper_nodes[static_cast<std::size_t>(k)][static_cast<std::size_t>(q)],
-              fm.sleeper_nodes[static_cast<std::size_t>(k + j0)][static_cast<std::size_t>(q)], k == 0 || k == wm.n_sleepers - 1);
+              fm.sleeper_nodes[static_cast<std::size_t>(k + j0)][static_cast<std::size_t>(q)],
+              k == 0 || k == wm.n_sleepers - 1);
   for (int i : to_full) ASSERT_GE(i, 0);
 
   const Eigen::SparseMatrix<double>& Kf = full.model.system.K;
@@ -401,9 +410,10 @@ TEST(TrackWindow, WindowIsTheLineModelRestrictedToItsRange) {
       largest = std::max({largest, std::abs(f.y()), std::abs(f.z())});
       worst_long = std::max(worst_long, std::abs(e.x()));
     }
-  std::printf("self-weight state: largest %.3f um; worst window - line, lateral/vertical %.2e um, longitudinal %.2e um "
-              "(all rail nodes)\n",
-              1e6 * largest, 1e6 * worst, 1e6 * worst_long);
+  std::printf(
+      "self-weight state: largest %.3f um; worst window - line, lateral/vertical %.2e um, longitudinal %.2e um "
+      "(all rail nodes)\n",
+      1e6 * largest, 1e6 * worst, 1e6 * worst_long);
   EXPECT_LT(worst_long, 3e-2 * largest);
   EXPECT_GT(largest, 1e-5);
   EXPECT_LT(worst, 2e-3 * largest);
@@ -448,10 +458,14 @@ TEST(TrackWindow, MoveCarriesTheStateOfSharedNodes) {
       const int mb0 = win.shiftBays(), ne0 = mm.rail_elements_between_sleepers;
       for (int k = mm.n_sleepers - mb0; k < mm.n_sleepers; ++k)
         for (int q = 0; q < 6; ++q)
-          for (int j = 0; j < 6; ++j) entering[static_cast<std::size_t>(mm.dofIndex(mm.sleeper_nodes[static_cast<std::size_t>(k)][static_cast<std::size_t>(q)], j))] = 1;
+          for (int j = 0; j < 6; ++j)
+            entering[static_cast<std::size_t>(
+                mm.dofIndex(mm.sleeper_nodes[static_cast<std::size_t>(k)][static_cast<std::size_t>(q)], j))] = 1;
       for (int r = 0; r < 2; ++r)
-        for (int k = static_cast<int>(mm.rail_nodes[r].size()) - mb0 * ne0; k < static_cast<int>(mm.rail_nodes[r].size()); ++k)
-          for (int j = 0; j < 6; ++j) entering[static_cast<std::size_t>(mm.dofIndex(mm.rail_nodes[r][static_cast<std::size_t>(k)], j))] = 1;
+        for (int k = static_cast<int>(mm.rail_nodes[r].size()) - mb0 * ne0;
+             k < static_cast<int>(mm.rail_nodes[r].size()); ++k)
+          for (int j = 0; j < 6; ++j)
+            entering[static_cast<std::size_t>(mm.dofIndex(mm.rail_nodes[r][static_cast<std::size_t>(k)], j))] = 1;
       for (const Eigen::VectorXd* x : {&win.state().d, &win.state().v, &win.state().a}) {
         Eigen::VectorXd x_c = *x;
         for (int i = 0; i < mm.n_free_dofs; ++i)
@@ -487,7 +501,10 @@ TEST(TrackWindow, MoveCarriesTheStateOfSharedNodes) {
           if (ko < count) {
             const int no = before_mesh.rail_nodes[r][static_cast<std::size_t>(ko)];
             const int io = before_mesh.dofIndex(no, j);
-            EXPECT_LT((m.nodes[static_cast<std::size_t>(nn)].p_in_world - before_mesh.nodes[static_cast<std::size_t>(no)].p_in_world).norm(), 1e-9);
+            EXPECT_LT((m.nodes[static_cast<std::size_t>(nn)].p_in_world -
+                       before_mesh.nodes[static_cast<std::size_t>(no)].p_in_world)
+                          .norm(),
+                      1e-9);
             EXPECT_EQ(after.d(i), before.d(io));
             EXPECT_EQ(after.v(i), before.v(io));
             EXPECT_EQ(after.a(i), before.a(io));

@@ -24,10 +24,10 @@
 #include <thread>
 #include <vector>
 
+#include <rail_core/exit_codes.hpp>
 #include "rail_vehicle_node/cosim_vehicle.hpp"
 #include "rail_vehicle_node/vehicle_run.hpp"
 #include "rail_vehicle_node/vehicle_simulator.hpp"
-#include <rail_core/exit_codes.hpp>
 
 #ifndef RAILSIM_CONFIG_DIR
 #define RAILSIM_CONFIG_DIR "config"
@@ -161,9 +161,9 @@ double range(const std::vector<double>& a) {
   return *hi - *lo;
 }
 
-constexpr double kEnd = 0.3;        // simulated time [s]
-constexpr double kSample = 1e-3;    // sampling interval [s]
-constexpr double kShift = 2e-3;     // initial lateral offset of the vehicle [m]
+constexpr double kEnd = 0.3;      // simulated time [s]
+constexpr double kSample = 1e-3;  // sampling interval [s]
+constexpr double kShift = 2e-3;   // initial lateral offset of the vehicle [m]
 
 TEST(CosimVehicle, ReproducesTheVehicleAloneOnTheRigidTrack) {
   // Standalone: the same scene on the rigid track.

@@ -65,7 +65,10 @@ TEST_P(FreeBody, ConservesEnergyAndMomentaOverManyRevolutions) {
   EXPECT_GT(c.steps, 100);
   EXPECT_EQ(c.projections, 0);
   // The body did tumble: the angular velocity in the body frame changed substantially.
-  EXPECT_GT((integrator.state().segment<3>(model.angularVelocityOffset(0)) - y0.segment<3>(model.angularVelocityOffset(0))).norm(), 0.1);
+  EXPECT_GT(
+      (integrator.state().segment<3>(model.angularVelocityOffset(0)) - y0.segment<3>(model.angularVelocityOffset(0)))
+          .norm(),
+      0.1);
   RecordProperty("max_energy_error", std::to_string(max_energy_error));
   RecordProperty("max_momentum_error", std::to_string(max_momentum_error));
   std::printf("[ free body %s ] steps %ld, rhs %ld, energy drift %.2e, momentum drift %.2e\n",

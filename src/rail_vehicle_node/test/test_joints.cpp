@@ -24,9 +24,9 @@ Eigen::VectorXd flow(const VehicleModel& model, const Eigen::VectorXd& y, double
   Eigen::VectorXd out = y;
   for (int b = 0; b < model.nBodies(); ++b) {
     out.segment<3>(VehicleModel::positionOffset(b)) += h * y.segment<3>(model.velocityOffset(b));
-    out.segment<4>(VehicleModel::eulerOffset(b)) = quaternionProduct(
-        y.segment<4>(VehicleModel::eulerOffset(b)),
-        eulerParametersFromRotationVector(h * y.segment<3>(model.angularVelocityOffset(b))));
+    out.segment<4>(VehicleModel::eulerOffset(b)) =
+        quaternionProduct(y.segment<4>(VehicleModel::eulerOffset(b)),
+                          eulerParametersFromRotationVector(h * y.segment<3>(model.angularVelocityOffset(b))));
   }
   return out;
 }
@@ -43,7 +43,8 @@ TEST_P(JointDerivatives, JacobianAndGammaMatchCentralDifferences) {
   switch (GetParam()) {
     case 0:
       model.addRevoluteJointAt("rev_ab", a, b, Vector3(0.5, -0.1, 0.25), Vector3(0.3, 0.9, -0.2).normalized());
-      model.addRevoluteJointAt("rev_c_ground", c, kGround, Vector3(-0.5, 0.3, 1.0), Vector3(1.0, 0.0, 0.2).normalized());
+      model.addRevoluteJointAt("rev_c_ground", c, kGround, Vector3(-0.5, 0.3, 1.0),
+                               Vector3(1.0, 0.0, 0.2).normalized());
       break;
     case 1:
       model.addSphericalJointAt("sph_bc", b, c, Vector3(0.2, 0.0, 0.6));

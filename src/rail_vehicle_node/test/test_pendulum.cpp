@@ -12,11 +12,11 @@
 namespace rail::vehicle {
 namespace {
 
-constexpr double kMass = 2.0;     // [kg]
-constexpr double kLength = 0.5;   // hinge to centre of mass [m]
-constexpr double kJyy = 0.2;      // about the centre of mass, hinge direction [kg m^2]
+constexpr double kMass = 2.0;    // [kg]
+constexpr double kLength = 0.5;  // hinge to centre of mass [m]
+constexpr double kJyy = 0.2;     // about the centre of mass, hinge direction [kg m^2]
 constexpr double kGravity = 9.81;
-constexpr double kTheta0 = 1.2;   // initial angle from the downward vertical [rad] (large: nonlinear)
+constexpr double kTheta0 = 1.2;  // initial angle from the downward vertical [rad] (large: nonlinear)
 
 VehicleModel makePendulum(KktSolver solver) {
   VehicleModel model;

@@ -70,8 +70,9 @@ TEST(Projection, PerturbedStateReturnsBelow1e10) {
   // the size of the violation, not of the configuration).
   const Eigen::VectorXd y_pert = perturbed(model);
   for (int b = 0; b < model.nBodies(); ++b) {
-    EXPECT_LT((y.segment<3>(VehicleModel::positionOffset(b)) - y_pert.segment<3>(VehicleModel::positionOffset(b))).norm(),
-              0.05);
+    EXPECT_LT(
+        (y.segment<3>(VehicleModel::positionOffset(b)) - y_pert.segment<3>(VehicleModel::positionOffset(b))).norm(),
+        0.05);
   }
 }
 

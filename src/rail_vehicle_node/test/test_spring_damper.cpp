@@ -9,7 +9,7 @@
 namespace rail::vehicle {
 namespace {
 
-constexpr double kMass = 10.0;       // [kg]
+constexpr double kMass = 10.0;         // [kg]
 constexpr double kStiffness = 4000.0;  // [N/m]
 constexpr double kDamping = 40.0;      // [N s/m]  -> zeta = c / (2 sqrt(k m)) = 0.1
 constexpr double kX0 = 0.01;           // initial displacement [m]
@@ -144,9 +144,9 @@ TEST(BumpStop, TableInterpolationAndEnergy) {
   ASSERT_NE(stop, nullptr);
   EXPECT_DOUBLE_EQ(stop->forceAt(0.02), 0.0);
   EXPECT_DOUBLE_EQ(stop->forceAt(0.025), 0.0);
-  EXPECT_NEAR(stop->forceAt(0.0275), 300.0, 1e-9);                         // halfway on the first segment
-  EXPECT_NEAR(stop->forceAt(0.035), 0.5 * (600.0 + 3730.0), 1e-9);         // halfway on the second
-  EXPECT_NEAR(stop->forceAt(0.045), 3730.0 + 313000.0 * 0.005, 1e-6);      // last slope extended
+  EXPECT_NEAR(stop->forceAt(0.0275), 300.0, 1e-9);                     // halfway on the first segment
+  EXPECT_NEAR(stop->forceAt(0.035), 0.5 * (600.0 + 3730.0), 1e-9);     // halfway on the second
+  EXPECT_NEAR(stop->forceAt(0.045), 3730.0 + 313000.0 * 0.005, 1e-6);  // last slope extended
   VehicleData data(model);
   Eigen::VectorXd y = model.referenceState();
   y[1] = -0.035;  // deflection along -y: same magnitude, opposite force
@@ -174,8 +174,8 @@ TEST(BumpStop, ImpactWithClearanceMatchesEnergyBalance) {
   s.max_step = 1e-3;  // resolve the onset of contact (a kink in the force law)
   VehicleIntegrator integrator(model, data, y0, 0.0, s);
   double max_y = 0.0;
-  const double t_contact = c / v0;                                 // 0.05 s
-  const double t_out = t_contact + M_PI * std::sqrt(kMass / k);     // half a period later: 0.0722 s
+  const double t_contact = c / v0;                               // 0.05 s
+  const double t_out = t_contact + M_PI * std::sqrt(kMass / k);  // half a period later: 0.0722 s
   const double t_end = 0.1;  // out of contact, before reaching the opposite stop at 0.05 + 0.0722 + 0.1 s
   ASSERT_GT(t_end, t_out);
   for (int step = 1; step <= 1000; ++step) {

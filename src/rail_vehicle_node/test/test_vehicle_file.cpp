@@ -23,7 +23,7 @@ TEST(PaperCoach, MatchesTable3) {
   const VehicleModel model = loadVehicleModel(kCoach);
   EXPECT_EQ(model.nBodies(), 15);
   EXPECT_EQ(model.joints().size(), 8u);
-  EXPECT_EQ(model.nConstraints(), 8 * 5);  // revolute joints
+  EXPECT_EQ(model.nConstraints(), 8 * 5);         // revolute joints
   EXPECT_NEAR(model.totalMass(), 59480.0, 1e-9);  // Table 3 sum; integers, exact in floating point
   EXPECT_EQ(model.loadPoints().size(), 8u);
   // Spot checks against Table 3.
@@ -137,10 +137,11 @@ TEST(PaperCoach, StaticEquilibriumOnWheelSpringsCarriesOneEighthPerWheel) {
   }
   const double v_max = integrator.state().tail(model.nVelocities()).lpNorm<Eigen::Infinity>();
   const IntegratorCounters c = integrator.counters();
-  std::printf("[ static equilibrium ] t = %.0f s: max wheel-load error %.2e of W/8, sum/W - 1 = %.2e, max |v| %.2e, "
-              "steps %ld, rhs %ld (+%ld for %ld Jacobians), error-test failures %ld, projections %ld\n",
-              t_end, max_share_error, sum / weight - 1.0, v_max, c.steps, c.rhs_evals, c.rhs_evals_jacobian,
-              c.jacobian_evals, c.error_test_failures, c.projections);
+  std::printf(
+      "[ static equilibrium ] t = %.0f s: max wheel-load error %.2e of W/8, sum/W - 1 = %.2e, max |v| %.2e, "
+      "steps %ld, rhs %ld (+%ld for %ld Jacobians), error-test failures %ld, projections %ld\n",
+      t_end, max_share_error, sum / weight - 1.0, v_max, c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
+      c.error_test_failures, c.projections);
   // The vehicle is symmetric (Table 3: bogies at 11.5 -+ 9.5 m, wheelsets at bogie -+ 1.35 m, sides +-y), so
   // at equilibrium every wheel carries exactly W/8 = 72937 N. What remains after 12 s is the decaying
   // transient of the drop; the slowest mode (carbody bounce on the secondary, ~1 Hz, damping ratio ~0.15)
@@ -187,8 +188,8 @@ TEST(VehicleLoader, NamesAnUndefinedBodyOfAJoint) {
 
 // yaml-cpp would keep the first of two equal keys: a key given twice is refused, naming both lines.
 TEST(VehicleLoader, RefusesAKeyGivenTwice) {
-  const std::string top = writeTemp("twice_top.yaml", std::string("gravity: [0, 0, -9.81]\n") + kTwoBodies +
-                                                          "gravity: [0, 0, -9.80]\n");
+  const std::string top =
+      writeTemp("twice_top.yaml", std::string("gravity: [0, 0, -9.81]\n") + kTwoBodies + "gravity: [0, 0, -9.80]\n");
   EXPECT_EQ(loadError(top), top + ": gravity: given twice (lines 1 and 5): remove one");
   const std::string nested = writeTemp("twice_nested.yaml", R"(bodies:
   - name: ws
@@ -237,7 +238,8 @@ TEST(VehicleLoader, RejectsBadBumpStopTableAndNegativeStiffness) {
     axis: [0, 1, 0]
     table: [[0.025, 0], [0.030, 600], [0.028, 900]]
 )");
-  EXPECT_EQ(loadError(table), table + ": forces[0].table[2][0]: deflection not increasing (after 0.030), got 0.028 (line 11)");
+  EXPECT_EQ(loadError(table),
+            table + ": forces[0].table[2][0]: deflection not increasing (after 0.030), got 0.028 (line 11)");
   const std::string negative = writeTemp("negative_k.yaml", std::string(kTwoBodies) + R"(forces:
   - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], stiffness: [1, -2, 3]}
 )");
@@ -258,11 +260,13 @@ TEST(VehicleLoader, RejectsAbsurdMagnitudes) {
   const std::string inertia = writeTemp("inertia.yaml", R"(bodies:
   - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445], inertia: [900, 1e300, 900]}
 )");
-  EXPECT_EQ(loadError(inertia), inertia + ": bodies[0].inertia[1]: magnitude must be <= 1e+08 kg m^2, got 1e300 (line 2)");
+  EXPECT_EQ(loadError(inertia),
+            inertia + ": bodies[0].inertia[1]: magnitude must be <= 1e+08 kg m^2, got 1e300 (line 2)");
   const std::string tiny = writeTemp("tiny_inertia.yaml", R"(bodies:
   - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 1e-300]}
 )");
-  EXPECT_EQ(loadError(tiny), tiny + ": bodies[0].inertia[2]: moment of inertia must be >= 1e-06 kg m^2, got 1e-300 (line 2)");
+  EXPECT_EQ(loadError(tiny),
+            tiny + ": bodies[0].inertia[2]: moment of inertia must be >= 1e-06 kg m^2, got 1e-300 (line 2)");
   const std::string preload = writeTemp("preload.yaml", std::string(kTwoBodies) + R"(forces:
   - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], preload: [-1e300, 0, 0]}
 )");

@@ -46,14 +46,14 @@ core::Scene timedScene(const std::string& file, double start_arc_length, double 
 // Increments: inc_j = max(sqrt(eps) |y_j|, 1e-8), CVODE's rule with unit weights and a 1e-8 floor (with
 // CVODE's own weights the velocities of a vehicle at rest would get increments of ~1e-22, where round-off
 // is all the quotient sees).
-constexpr double kRoundOff = 1e-11;   // [units of f]
+constexpr double kRoundOff = 1e-11;  // [units of f]
 constexpr double kRelative = 1e-6;
 constexpr double kMinIncrement = 1e-8;
 
 struct Comparison {
-  double max_ratio = 0.0;      // max over entries of |J_coloured - J_dense| / tolerance
-  double max_outside = 0.0;    // max |J_dense| / tolerance outside the pattern (where J_coloured = 0)
-  double max_relative = 0.0;   // max |J_coloured - J_dense| / (the column's largest |J_dense|), for the record
+  double max_ratio = 0.0;     // max over entries of |J_coloured - J_dense| / tolerance
+  double max_outside = 0.0;   // max |J_dense| / tolerance outside the pattern (where J_coloured = 0)
+  double max_relative = 0.0;  // max |J_coloured - J_dense| / (the column's largest |J_dense|), for the record
   int evaluations = 0;
   int body_colours = 0;
   bool work_state_kept = false;  // the contact's results and hints unchanged by the Jacobian
@@ -108,9 +108,10 @@ Comparison compare(VehicleSimulator& sim) {
     if (col_max > 0.0) c.max_relative = std::max(c.max_relative, error / col_max);
   }
   for (const auto& e : elements) e->restoreWorkState();
-  std::printf("jacobian: %d nonzeros of %d, %d body colours, %d evaluations; max |coloured - dense| / tolerance "
-              "%.2e (%.2e of the column's largest entry), max dense entry outside the pattern / tolerance %.2e\n",
-              pattern.nonzeros(), n * n, c.body_colours, c.evaluations, c.max_ratio, c.max_relative, c.max_outside);
+  std::printf(
+      "jacobian: %d nonzeros of %d, %d body colours, %d evaluations; max |coloured - dense| / tolerance "
+      "%.2e (%.2e of the column's largest entry), max dense entry outside the pattern / tolerance %.2e\n",
+      pattern.nonzeros(), n * n, c.body_colours, c.evaluations, c.max_ratio, c.max_relative, c.max_outside);
   return c;
 }
 
@@ -135,7 +136,8 @@ TEST(VehicleJacobian, MatchesTheDenseQuotientInTheCurve) {
 TEST(VehicleJacobian, MatchesTheDenseQuotientInFlangeContact) {
   // R 150 m at 50 km/h: after 0.7 s the leading wheelset flanges on the outer (right) rail
   // (test_vehicle_simulator's TightCurveLeadingWheelsetsFlangeOnTheOuterRail).
-  core::Scene scene = timedScene("tight_curve.yaml", 145.0, core::loadSceneFile(kScenes + "tight_curve.yaml").vehicle.speed, 0.7);
+  core::Scene scene =
+      timedScene("tight_curve.yaml", 145.0, core::loadSceneFile(kScenes + "tight_curve.yaml").vehicle.speed, 0.7);
   VehicleSimulator sim(scene);
   ASSERT_EQ(sim.advanceTo(0.7), RunStatus::kFinished) << sim.message();
   ASSERT_TRUE(sim.contacts()[1].contact[rc::kFlange].active);

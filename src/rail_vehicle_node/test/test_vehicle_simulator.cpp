@@ -74,7 +74,6 @@ TEST(VehicleSimulator, SettlesWithEachWheelCarryingItsShareOfTheWeight) {
               sim.settleLift() * 1e3, c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals);
 }
 
-
 // A constant downward force on one body: the axle load of a lone wheelset.
 class AxleLoad : public ForceElement {
  public:
@@ -131,8 +130,7 @@ void shiftBodies(VehicleSimulator& sim, const std::vector<std::string>& names, d
 
 // Rolling radius of the tread contact of both wheels of wheelset 0 with the wheelset shifted laterally by
 // dy (world y, straight track) from the simulator's settled state; no dynamics, geometry only.
-void rollingRadii(VehicleSimulator& sim, double dy, double& r_left, double& r_right, double& y_left,
-                  double& y_right) {
+void rollingRadii(VehicleSimulator& sim, double dy, double& r_left, double& r_right, double& y_left, double& y_right) {
   Eigen::VectorXd y = sim.state();
   y[VehicleModel::positionOffset(sim.wheelsetBodies()[0]) + 1] += dy;
   computeKinematics(sim.model(), y, sim.data());
@@ -212,9 +210,10 @@ TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
   ASSERT_GE(zc.size(), 3u) << "no oscillation: Klingel wavelength " << klingel << " m";
   const double period = 2.0 * (zc.back() - zc.front()) / static_cast<double>(zc.size() - 1);
   const double wavelength = speed * period;
-  std::printf("lone wheelset: r0 %.5f m, e %.4f m, lambda %.4f (table), %.4f (slope), Klingel %.3f m, simulated "
-              "%.3f m (%zu crossings), amplitude at the end %.3f mm\n", r0, e, lambda, lambda_slope, klingel,
-              wavelength, zc.size(), rec.maxAbs(3.0) * 1e3);
+  std::printf(
+      "lone wheelset: r0 %.5f m, e %.4f m, lambda %.4f (table), %.4f (slope), Klingel %.3f m, simulated "
+      "%.3f m (%zu crossings), amplitude at the end %.3f mm\n",
+      r0, e, lambda, lambda_slope, klingel, wavelength, zc.size(), rec.maxAbs(3.0) * 1e3);
   // Klingel's formula is the kinematic (creep-dominated, inertia-free) limit; at 20 m/s the inertia
   // forces m w^2 y are about 2e-3 of the lateral creep forces, so the difference is dominated by the
   // nonlinearity of Delta r over the amplitude and the wheelset's roll and spin creep; the zero crossings
@@ -249,11 +248,12 @@ TEST(VehicleSimulator, WheelsetOffsetDecaysOnStraightTrackBelowCriticalSpeed) {
   const double lambda = sceneConicity(scene, offset, e);
   const double wheelset = 2.0 * M_PI * std::sqrt(scene.vehicle.nominal_radius * e / lambda);
   const double late = rec.maxAbs(2.0);
-  std::printf("coach, 1435 mm gauge, 1356 mm back-to-back, wheelset 1 offset %.1f mm: conicity %.4f at the offset "
-              "(Klingel wavelength %.2f m); zero crossings %zu; max |y| from 0 s %.4f mm, from 1.0 s %.4f mm, from "
-              "2.0 s %.4f mm\n",
-              offset * 1e3, lambda, wheelset, rec.crossings(0.0).size(), rec.maxAbs(0.0) * 1e3, rec.maxAbs(1.0) * 1e3,
-              late * 1e3);
+  std::printf(
+      "coach, 1435 mm gauge, 1356 mm back-to-back, wheelset 1 offset %.1f mm: conicity %.4f at the offset "
+      "(Klingel wavelength %.2f m); zero crossings %zu; max |y| from 0 s %.4f mm, from 1.0 s %.4f mm, from "
+      "2.0 s %.4f mm\n",
+      offset * 1e3, lambda, wheelset, rec.crossings(0.0).size(), rec.maxAbs(0.0) * 1e3, rec.maxAbs(1.0) * 1e3,
+      late * 1e3);
   EXPECT_GE(rec.crossings(0.0).size(), 2u) << "the motion should oscillate, not creep back";
   EXPECT_LT(late, offset / 5.0);
 }
@@ -471,7 +471,8 @@ TEST(VehicleSimulator, FloorAccelerationsNeedMeasurementPointsInTheDataFile) {
     FAIL() << "built without measurement points";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("effects.floor_acceleration_output is on but the vehicle data file"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("measurement_points"), std::string::npos) << e.what();
   }
 }
@@ -496,13 +497,17 @@ TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
     ASSERT_TRUE(status == RunStatus::kRunning || status == RunStatus::kFinished) << sim.message();
     if (sim.time() < 0.7 - 1e-9) continue;
     ++samples;
-    for (int w = 0; w < 4; ++w) lateral_sum[static_cast<std::size_t>(w)] += sim.wheelsets()[static_cast<std::size_t>(w)].lateral;
-    for (int k = 0; k < 8; ++k) flange_count[static_cast<std::size_t>(k)] += sim.contacts()[static_cast<std::size_t>(k)].contact[rc::kFlange].active;
+    for (int w = 0; w < 4; ++w)
+      lateral_sum[static_cast<std::size_t>(w)] += sim.wheelsets()[static_cast<std::size_t>(w)].lateral;
+    for (int k = 0; k < 8; ++k)
+      flange_count[static_cast<std::size_t>(k)] +=
+          sim.contacts()[static_cast<std::size_t>(k)].contact[rc::kFlange].active;
   }
   ASSERT_GT(samples, 0);
   for (int w = 0; w < 4; ++w) {
     std::printf("tight curve: wheelset %d mean lateral %.3f mm, flange contact left %d/%d, right %d/%d\n", w + 1,
-                lateral_sum[static_cast<std::size_t>(w)] / samples * 1e3, flange_count[static_cast<std::size_t>(wheel(w, 0))], samples,
+                lateral_sum[static_cast<std::size_t>(w)] / samples * 1e3,
+                flange_count[static_cast<std::size_t>(wheel(w, 0))], samples,
                 flange_count[static_cast<std::size_t>(wheel(w, 1))], samples);
   }
   for (int w : {0, 2}) {  // leading wheelset of each bogie
@@ -514,7 +519,6 @@ TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
     EXPECT_LT(lateral_sum[static_cast<std::size_t>(w)] / samples, -2e-3) << "wheelset " << w + 1;
   }
 }
-
 
 // ---- Cost of the effects (rail_core/cost_profile.hpp): an effect that is off costs nothing. ----------
 // Each run is 20 ms of the coach on the 200 m straight at 110 km/h with a cost clock attached; the

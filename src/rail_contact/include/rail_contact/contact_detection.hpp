@@ -38,25 +38,25 @@ enum class WheelSurface : int { kTread = 0, kFlange = 1 };
 
 /// Outcome of one detection.
 enum class DetectionStatus : std::uint8_t {
-  kConverged = 0,          ///< Newton from the warm start converged inside the surface bounds
-  kConvergedAfterSearch,   ///< converged after a (fallback or initial) robust search
-  kApproximate,            ///< Newton failed; the search's best point pair is returned (finite, usable)
-  kOutOfBounds,            ///< no contact point inside the surfaces (e.g. wheel far off the rail)
-  kInvalidInput,           ///< non-finite pose: nothing computed
+  kConverged = 0,         ///< Newton from the warm start converged inside the surface bounds
+  kConvergedAfterSearch,  ///< converged after a (fallback or initial) robust search
+  kApproximate,           ///< Newton failed; the search's best point pair is returned (finite, usable)
+  kOutOfBounds,           ///< no contact point inside the surfaces (e.g. wheel far off the rail)
+  kInvalidInput,          ///< non-finite pose: nothing computed
 };
 const char* toString(DetectionStatus status) noexcept;
 
 /// Detection settings (constant after building the detector).
 struct DetectionOptions {
-  int max_iterations = 15;               ///< Newton iterations per attempt
-  double tolerance = 1e-10;              ///< convergence: step below this (m; rad times nominal radius)
-  double max_step_length = 0.01;         ///< Newton step limit on u_w, u_r (m) and s_r (x 5)
-  double max_step_angle = 0.1;           ///< Newton step limit on s_w, rad
-  double max_penetration = 0.005;        ///< larger penetrations are rejected as spurious point pairs, m
-  double min_normal_opposition = 0.9;    ///< -n_w . n_r must exceed this at a valid point pair
-  double search_cell = 0.5e-3;           ///< cell of the rail signed-distance grid, m
-  double search_margin = 0.04;           ///< grid margin around the rail profile, m
-  double search_spacing = 0.5e-3;        ///< spacing of the wheel profile samples in the search, m
+  int max_iterations = 15;             ///< Newton iterations per attempt
+  double tolerance = 1e-10;            ///< convergence: step below this (m; rad times nominal radius)
+  double max_step_length = 0.01;       ///< Newton step limit on u_w, u_r (m) and s_r (x 5)
+  double max_step_angle = 0.1;         ///< Newton step limit on s_w, rad
+  double max_penetration = 0.005;      ///< larger penetrations are rejected as spurious point pairs, m
+  double min_normal_opposition = 0.9;  ///< -n_w . n_r must exceed this at a valid point pair
+  double search_cell = 0.5e-3;         ///< cell of the rail signed-distance grid, m
+  double search_margin = 0.04;         ///< grid margin around the rail profile, m
+  double search_spacing = 0.5e-3;      ///< spacing of the wheel profile samples in the search, m
   /// Each wheel surface is continued across the tread/flange split by this profile arc length (m): a
   /// contact point drifting just past the split stays a converged point of the surface that followed it
   /// instead of a failed Newton (search fallback, grid estimate kApproximate, or no contact), which makes
@@ -97,34 +97,34 @@ std::string describe(const DetectionCounts& counts);
 
 /// Wheel pose for the detection (world frame).
 struct WheelPose {
-  Eigen::Vector3d p_centre_in_world = Eigen::Vector3d::Zero();      ///< wheel centre, m
+  Eigen::Vector3d p_centre_in_world = Eigen::Vector3d::Zero();        ///< wheel centre, m
   Eigen::Matrix3d R_wheelset_to_world = Eigen::Matrix3d::Identity();  ///< A_ws
-  RailSide side = RailSide::kLeft;  ///< wheel side = rail side
-  double s_hint = 0.0;              ///< track arc length near the wheel, m (used by the search)
+  RailSide side = RailSide::kLeft;                                    ///< wheel side = rail side
+  double s_hint = 0.0;  ///< track arc length near the wheel, m (used by the search)
 };
 
 /// Geometry of one detected point pair (world frame).
 struct ContactGeometry {
   DetectionStatus status = DetectionStatus::kOutOfBounds;
-  bool valid = false;             ///< point pair usable (converged or approximate)
-  bool in_contact = false;        ///< valid and penetration > 0 (eq. 5)
-  double s_w = 0.0, u_w = 0.0;    ///< wheel surface parameters, rad and m
-  double s_r = 0.0, u_r = 0.0;    ///< rail surface parameters, m and m
-  double penetration = 0.0;       ///< along the normal, m; > 0 interpenetrating, < 0 gap (finite always)
-  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();   ///< wheel surface point, m
-  Eigen::Vector3d p_rail_in_world = Eigen::Vector3d::Zero();    ///< rail surface point, m
-  Eigen::Vector3d n_in_world = Eigen::Vector3d::UnitZ();        ///< unit normal, from rail into wheel
-  Eigen::Vector3d t_rolling_in_world = Eigen::Vector3d::UnitX();  ///< wheel circumferential unit tangent, forward
+  bool valid = false;           ///< point pair usable (converged or approximate)
+  bool in_contact = false;      ///< valid and penetration > 0 (eq. 5)
+  double s_w = 0.0, u_w = 0.0;  ///< wheel surface parameters, rad and m
+  double s_r = 0.0, u_r = 0.0;  ///< rail surface parameters, m and m
+  double penetration = 0.0;     ///< along the normal, m; > 0 interpenetrating, < 0 gap (finite always)
+  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();           ///< wheel surface point, m
+  Eigen::Vector3d p_rail_in_world = Eigen::Vector3d::Zero();            ///< rail surface point, m
+  Eigen::Vector3d n_in_world = Eigen::Vector3d::UnitZ();                ///< unit normal, from rail into wheel
+  Eigen::Vector3d t_rolling_in_world = Eigen::Vector3d::UnitX();        ///< wheel circumferential unit tangent, forward
   Eigen::Vector3d p_section_centre_in_world = Eigen::Vector3d::Zero();  ///< deformed rail section centre at s_r, m
-  RailSectionMotion rail_motion;  ///< provider's section motion at s_r
-  double wheel_radius = 0.0;      ///< distance from the axle to the wheel point (rolling radius), m
-  double cos_normal_radial = 1.0; ///< |n . radial direction| (for the wheel's rolling curvature)
-  double wheel_curvature = 0.0;   ///< wheel profile curvature at u_w, 1/m (convex > 0)
-  double rail_curvature = 0.0;    ///< rail profile curvature at u_r, 1/m (convex > 0)
+  RailSectionMotion rail_motion;                                        ///< provider's section motion at s_r
+  double wheel_radius = 0.0;            ///< distance from the axle to the wheel point (rolling radius), m
+  double cos_normal_radial = 1.0;       ///< |n . radial direction| (for the wheel's rolling curvature)
+  double wheel_curvature = 0.0;         ///< wheel profile curvature at u_w, 1/m (convex > 0)
+  double rail_curvature = 0.0;          ///< rail profile curvature at u_r, 1/m (convex > 0)
   double wheel_y = 0.0, wheel_z = 0.0;  ///< contact point in the wheel profile frame, m
   double rail_y = 0.0, rail_z = 0.0;    ///< contact point in the rail profile frame, m
-  int iterations = 0;             ///< Newton iterations of this call
-  bool on_own_surface = true;     ///< u_w inside the surface itself, not in its continuation past the split
+  int iterations = 0;                   ///< Newton iterations of this call
+  bool on_own_surface = true;           ///< u_w inside the surface itself, not in its continuation past the split
 };
 
 /// Detector for one wheel profile on one rail profile. Constant after building; shared by all wheels
@@ -140,8 +140,8 @@ class ContactDetector {
 
   /// Detects the point pair of one wheel surface on its rail. No allocation, no exception.
   template <class Deformation>
-  void detect(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
-              const Deformation& deformation, DetectionWork& work, ContactGeometry& out) const noexcept;
+  void detect(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
+              DetectionWork& work, ContactGeometry& out) const noexcept;
 
   const ProfileCurve& wheelCurve(WheelSurface s) const { return s == WheelSurface::kTread ? tread_ : flange_; }
   const ProfileCurve& railCurve() const { return rail_; }
@@ -177,9 +177,8 @@ class ContactDetector {
   std::vector<float> grid_dist_, grid_u_;
 
   template <class Deformation>
-  bool search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
-              const Deformation& deformation, Eigen::Vector4d& x_seed, double& distance,
-              Eigen::Vector3d& p_wheel_seed) const noexcept;
+  bool search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
+              Eigen::Vector4d& x_seed, double& distance, Eigen::Vector3d& p_wheel_seed) const noexcept;
 };
 
 }  // namespace contact

@@ -24,12 +24,12 @@ namespace contact {
 
 /// Wheelset and track data of the table.
 struct WheelsetTrackSpec {
-  double track_gauge = 1.435;     ///< m, between the gauge points (gauge_depth below the rail tops)
-  double gauge_depth = 0.014;     ///< m, EN 13848-1 measuring depth
-  double back_to_back = 1.360;    ///< m, distance between the flange back faces
+  double track_gauge = 1.435;   ///< m, between the gauge points (gauge_depth below the rail tops)
+  double gauge_depth = 0.014;   ///< m, EN 13848-1 measuring depth
+  double back_to_back = 1.360;  ///< m, distance between the flange back faces
   /// m, flange back face to taping line (the wheel profile frame's origin), whatever the profile's extent
   double taping_line_from_flange_back = kTapingLineFromFlangeBack;
-  double nominal_radius = 0.46;   ///< m, r0 at the taping line
+  double nominal_radius = 0.46;  ///< m, r0 at the taping line
   /// Rail section centre in the rail profile frame (only for rail wrenches), m; NaN: railSectionCentre
   /// of the rail at the UIC60 centroid depth.
   Eigen::Vector2d rail_section_centre_yz = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
@@ -39,9 +39,9 @@ struct WheelsetTrackSpec {
 /// wheel carries wheel_load vertically, and with free_rolling its pitch rate so that the contact forces
 /// have no net moment about the axle (a wheelset without traction or braking torque).
 struct LoadCase {
-  double wheel_load = 0.0;  ///< vertical load Q per wheel, N
-  double speed = 0.0;       ///< forward speed, m/s
-  bool free_rolling = true; ///< false: pitch rate fixed at V / r0 (pure rolling of the nominal circle)
+  double wheel_load = 0.0;   ///< vertical load Q per wheel, N
+  double speed = 0.0;        ///< forward speed, m/s
+  bool free_rolling = true;  ///< false: pitch rate fixed at V / r0 (pure rolling of the nominal circle)
 };
 
 /// One wheel's contact in a row. kind: 0 tread, 1 flange, -1 none found.
@@ -54,24 +54,24 @@ struct ContactGeometryWheel {
   double rolling_radius = 0.0;          ///< m
   double flange_gap = 0.0;              ///< gap between flange and rail along the flange normal, m (< 0: contact)
   // Loaded columns (zero without a load case):
-  double N = 0.0, a = 0.0, b = 0.0;               ///< N, m, m
-  double nu_x = 0.0, nu_y = 0.0, phi = 0.0;       ///< -, -, 1/m
-  double F_long = 0.0, F_lat = 0.0;               ///< N
+  double N = 0.0, a = 0.0, b = 0.0;          ///< N, m, m
+  double nu_x = 0.0, nu_y = 0.0, phi = 0.0;  ///< -, -, 1/m
+  double F_long = 0.0, F_lat = 0.0;          ///< N
 };
 
 /// One row of the table.
 struct ContactGeometryRow {
-  bool ok = false;          ///< both wheels in contact and the position solved
-  bool loaded_ok = false;   ///< the load case (if any) solved too; else its columns are NaN
-  std::string failure;      ///< why the row is not ok or its loaded columns are empty: which solve, which wheel
-  double y = 0.0;           ///< lateral displacement of the wheelset, m
-  double yaw = 0.0;         ///< rad
-  double z = 0.0;           ///< height of the wheelset centre (rigid solution), m
-  double roll = 0.0;        ///< roll angle (rigid solution), rad
-  double delta_r = 0.0;     ///< r_left - r_right, m
-  double z_loaded = 0.0;    ///< height of the wheelset centre under the load case, m
-  double roll_loaded = 0.0; ///< roll angle under the load case, rad
-  double pitch_rate = 0.0;  ///< wheelset angular velocity about its axle under the load case, rad/s
+  bool ok = false;           ///< both wheels in contact and the position solved
+  bool loaded_ok = false;    ///< the load case (if any) solved too; else its columns are NaN
+  std::string failure;       ///< why the row is not ok or its loaded columns are empty: which solve, which wheel
+  double y = 0.0;            ///< lateral displacement of the wheelset, m
+  double yaw = 0.0;          ///< rad
+  double z = 0.0;            ///< height of the wheelset centre (rigid solution), m
+  double roll = 0.0;         ///< roll angle (rigid solution), rad
+  double delta_r = 0.0;      ///< r_left - r_right, m
+  double z_loaded = 0.0;     ///< height of the wheelset centre under the load case, m
+  double roll_loaded = 0.0;  ///< roll angle under the load case, rad
+  double pitch_rate = 0.0;   ///< wheelset angular velocity about its axle under the load case, rad/s
   ContactGeometryWheel left, right;
 };
 
@@ -106,8 +106,7 @@ class ContactGeometryTable {
   void place(double y, double yaw, double z, double roll, double speed, double omega, WheelState& left,
              WheelState& right) const;
   double wheelGap(const ContactGeometry* g, int& kind) const;
-  void detectBoth(double y, double yaw, double z, double roll, ContactGeometry (&left)[2],
-                  ContactGeometry (&right)[2]);
+  void detectBoth(double y, double yaw, double z, double roll, ContactGeometry (&left)[2], ContactGeometry (&right)[2]);
 
   WheelsetTrackSpec spec_;
   std::unique_ptr<TrackGeometry> track_;

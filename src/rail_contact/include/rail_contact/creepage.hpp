@@ -36,15 +36,13 @@ double regularisedSpeed(double V, const CreepageOptions& options) noexcept;
 /// w.r.t. the rail about the contact normal [rad/s], and the rolling speed V [m/s]:
 ///   nu_x = v_rel_x / V_ref, nu_y = v_rel_y / V_ref, phi = omega_rel_n / V_ref.
 Creepages computeCreepages(const Eigen::Vector3d& v_rel_in_contact, double omega_rel_normal, double V,
-                            const CreepageOptions& options) noexcept;
+                           const CreepageOptions& options) noexcept;
 
 /// Same, from world-frame velocities of the two material points and angular velocities of the
 /// two bodies; R_contact_to_world has columns (t_rolling, t_lateral, n) in world coordinates.
-Creepages computeCreepages(const Eigen::Vector3d& v_wheel_point_in_world,
-                            const Eigen::Vector3d& v_rail_point_in_world,
-                            const Eigen::Vector3d& omega_wheel_in_world,
-                            const Eigen::Vector3d& omega_rail_in_world,
-                            const Eigen::Matrix3d& R_contact_to_world, double V,
-                            const CreepageOptions& options) noexcept;
+Creepages computeCreepages(const Eigen::Vector3d& v_wheel_point_in_world, const Eigen::Vector3d& v_rail_point_in_world,
+                           const Eigen::Vector3d& omega_wheel_in_world, const Eigen::Vector3d& omega_rail_in_world,
+                           const Eigen::Matrix3d& R_contact_to_world, double V,
+                           const CreepageOptions& options) noexcept;
 
 }  // namespace rail::contact

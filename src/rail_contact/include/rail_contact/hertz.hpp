@@ -53,11 +53,11 @@ struct HertzOptions {
 /// Flags raised by compute_hertz (bitwise OR).
 enum HertzFlag : std::uint32_t {
   kHertzOk = 0u,
-  kHertzCircular = 1u << 0,           ///< A ~ B, treated as circular contact
+  kHertzCircular = 1u << 0,              ///< A ~ B, treated as circular contact
   kHertzNonPositiveCurvature = 1u << 1,  ///< A or B <= 0 (conformal/convex-concave): clamped
-  kHertzRatioClamped = 1u << 2,       ///< max(A,B)/min(A,B) above max_curvature_ratio: clamped
-  kHertzBadInput = 1u << 3,           ///< non-finite curvature or E* <= 0: unit-less fallback
-  kHertzWidthClamped = 1u << 4,       ///< near-conformal: B raised so b stays within the patch width limit
+  kHertzRatioClamped = 1u << 2,          ///< max(A,B)/min(A,B) above max_curvature_ratio: clamped
+  kHertzBadInput = 1u << 3,              ///< non-finite curvature or E* <= 0: unit-less fallback
+  kHertzWidthClamped = 1u << 4,          ///< near-conformal: B raised so b stays within the patch width limit
 };
 
 /// Load-independent Hertz solution for one contact geometry. With N the normal load [N]:
@@ -66,14 +66,14 @@ enum HertzFlag : std::uint32_t {
 ///   delta = delta_coeff N^(2/3)  (approach of distant points) [m]
 ///   N = K delta^1.5, K = delta_coeff^(-3/2) [N/m^1.5]
 struct HertzGeometry {
-  double A = 0.0;            ///< relative curvature coefficient along x, gap = A x^2 + B y^2 [1/m]
-  double B = 0.0;            ///< relative curvature coefficient along y [1/m]
-  double eccentricity = 0.0; ///< e = sqrt(1 - (minor/major)^2) of the contact ellipse
-  double a_coeff = 0.0;      ///< [m N^-1/3]
-  double b_coeff = 0.0;      ///< [m N^-1/3]
-  double delta_coeff = 0.0;  ///< [m N^-2/3]
-  double K = 0.0;            ///< Hertz stiffness [N m^-1.5]
-  double E_star = 0.0;       ///< contact modulus used [Pa]
+  double A = 0.0;             ///< relative curvature coefficient along x, gap = A x^2 + B y^2 [1/m]
+  double B = 0.0;             ///< relative curvature coefficient along y [1/m]
+  double eccentricity = 0.0;  ///< e = sqrt(1 - (minor/major)^2) of the contact ellipse
+  double a_coeff = 0.0;       ///< [m N^-1/3]
+  double b_coeff = 0.0;       ///< [m N^-1/3]
+  double delta_coeff = 0.0;   ///< [m N^-2/3]
+  double K = 0.0;             ///< Hertz stiffness [N m^-1.5]
+  double E_star = 0.0;        ///< contact modulus used [Pa]
   std::uint32_t flags = kHertzOk;
 
   /// Semi-axis along rolling direction for load N [m]; 0 for N <= 0.
@@ -92,7 +92,7 @@ struct HertzGeometry {
 /// lateral semi-axis at the elastic load K delta^1.5 is within max_b; otherwise the geometry with B raised
 /// (bisection, A kept) until it is max_b, flagged kHertzWidthClamped. No allocation.
 HertzGeometry limitLateralWidth(const HertzGeometry& hz, double delta, double max_b,
-                                  const HertzOptions& options = {}) noexcept;
+                                const HertzOptions& options = {}) noexcept;
 
 /// Relative curvature coefficients A = (k_wx + k_rx)/2, B = (k_wy + k_ry)/2 [1/m].
 void relativeCurvatures(const PrincipalCurvatures& k, double& A, double& B) noexcept;
@@ -104,13 +104,12 @@ void relativeCurvatures(const PrincipalCurvatures& k, double& A, double& B) noex
 HertzGeometry computeHertz(double A, double B, double E_star, const HertzOptions& options = {}) noexcept;
 
 /// Same, from principal curvatures.
-HertzGeometry computeHertz(const PrincipalCurvatures& k, double E_star,
-                            const HertzOptions& options = {}) noexcept;
+HertzGeometry computeHertz(const PrincipalCurvatures& k, double E_star, const HertzOptions& options = {}) noexcept;
 
 /// Parameters of the damped normal force (paper eq. 9, Lankarani-Nikravesh form).
 struct NormalDampingParams {
-  double restitution = 0.5;   ///< e in [0,1]; application-dependent, no published default implied
-  double exponent = 1.5;      ///< n, 1.5 for Hertzian metal contact
+  double restitution = 0.5;  ///< e in [0,1]; application-dependent, no published default implied
+  double exponent = 1.5;     ///< n, 1.5 for Hertzian metal contact
   /// Floor on the impact (onset) penetration velocity [m/s]: the damping term divides by
   /// max(delta_dot_impact, floor), so a contact that begins at zero penetration rate (rolling
   /// wheel) gets a finite damping coefficient 3(1-e^2)/4 K delta^n / floor.
@@ -125,7 +124,7 @@ void validate(const NormalDampingParams& params);
 /// K [N/m^n], delta penetration [m] (> 0 in contact), delta_dot [m/s] (> 0 approaching),
 /// delta_dot_impact the penetration rate when this contact started [m/s].
 double dampedNormalForce(double K, double delta, double delta_dot, double delta_dot_impact,
-                           const NormalDampingParams& params) noexcept;
+                         const NormalDampingParams& params) noexcept;
 
 /// Per-contact memory of the impact velocity (caller-owned, one per contact pair).
 ///

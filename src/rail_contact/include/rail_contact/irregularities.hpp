@@ -37,8 +37,14 @@ enum class IrregularityChannel { kAlignment = 0, kVerticalLevel = 1, kCrossLevel
 
 /// Published track-irregularity spectra (see psdValue for formulas and sources).
 enum class PsdSpectrum {
-  kFraClass1, kFraClass2, kFraClass3, kFraClass4, kFraClass5, kFraClass6,  // US FRA track classes
-  kGermanLow, kGermanHigh,  // German / ERRI low- and high-disturbance spectra
+  kFraClass1,
+  kFraClass2,
+  kFraClass3,
+  kFraClass4,
+  kFraClass5,
+  kFraClass6,  // US FRA track classes
+  kGermanLow,
+  kGermanHigh,  // German / ERRI low- and high-disturbance spectra
 };
 
 /// "fra_class_1" .. "fra_class_6", "german_low", "german_high" -> spectrum; throws std::runtime_error
@@ -116,12 +122,8 @@ class Irregularities {
 
   /// PSD realisation: the harmonic frequencies (rad/m) and, per channel, amplitudes (m) and phases (rad).
   const std::vector<double>& harmonicFrequencies() const { return Omega_; }
-  const std::vector<double>& harmonicAmplitudes(IrregularityChannel c) const {
-    return amplitude_[static_cast<int>(c)];
-  }
-  const std::vector<double>& harmonicPhases(IrregularityChannel c) const {
-    return phase_[static_cast<int>(c)];
-  }
+  const std::vector<double>& harmonicAmplitudes(IrregularityChannel c) const { return amplitude_[static_cast<int>(c)]; }
+  const std::vector<double>& harmonicPhases(IrregularityChannel c) const { return phase_[static_cast<int>(c)]; }
 
  private:
   enum class Kind { kNone, kTable, kHarmonics };

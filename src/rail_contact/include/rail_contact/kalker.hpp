@@ -13,10 +13,10 @@ namespace rail::contact {
 
 /// Kalker coefficients (dimensionless) for one contact.
 struct KalkerCoefficients {
-  double c11 = 0.0;  ///< longitudinal creepage coefficient
-  double c22 = 0.0;  ///< lateral creepage coefficient
-  double c23 = 0.0;  ///< lateral creepage / spin coupling coefficient
-  double c33 = 0.0;  ///< spin coefficient
+  double c11 = 0.0;         ///< longitudinal creepage coefficient
+  double c22 = 0.0;         ///< lateral creepage coefficient
+  double c23 = 0.0;         ///< lateral creepage / spin coupling coefficient
+  double c33 = 0.0;         ///< spin coefficient
   std::uint32_t flags = 0;  ///< KalkerFlag bits
 };
 

@@ -36,15 +36,15 @@ constexpr double kPolach2005WetMu0 = 0.30;
 
 /// Inputs for one contact (SI units).
 struct PolachInput {
-  double nu_x = 0.0;  ///< longitudinal creepage [-]
-  double nu_y = 0.0;  ///< lateral creepage [-]
-  double phi = 0.0;   ///< spin creepage [1/m]
-  double N = 0.0;     ///< normal load [N]
-  double a = 0.0;     ///< contact ellipse semi-axis along rolling direction [m]
-  double b = 0.0;     ///< contact ellipse semi-axis along lateral direction [m]
-  double G = 0.0;     ///< combined shear modulus [Pa]
-  double mu0 = 0.0;   ///< maximum (zero slip velocity) friction coefficient [-]
-  double V = 0.0;     ///< reference (rolling) speed [m/s], used for the slip velocity w = nu_C V
+  double nu_x = 0.0;     ///< longitudinal creepage [-]
+  double nu_y = 0.0;     ///< lateral creepage [-]
+  double phi = 0.0;      ///< spin creepage [1/m]
+  double N = 0.0;        ///< normal load [N]
+  double a = 0.0;        ///< contact ellipse semi-axis along rolling direction [m]
+  double b = 0.0;        ///< contact ellipse semi-axis along lateral direction [m]
+  double G = 0.0;        ///< combined shear modulus [Pa]
+  double mu0 = 0.0;      ///< maximum (zero slip velocity) friction coefficient [-]
+  double V = 0.0;        ///< reference (rolling) speed [m/s], used for the slip velocity w = nu_C V
   KalkerCoefficients c;  ///< Kalker coefficients at a/b and nu
 };
 

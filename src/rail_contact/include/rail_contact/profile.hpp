@@ -50,7 +50,7 @@ struct ProfileCurveOptions {
 /// evaluation is allocation-free. Outside [u_min, u_max] the curve continues along the end tangents
 /// (zero curvature), so that a Newton step may leave the range without a jump.
 class ProfileCurve {
-public:
+ public:
   ProfileCurve() = default;  ///< empty curve: assign a built one before evaluating
   /// Builds the curve through points_yz (at least 4 distinct consecutive points, m). Throws
   /// std::invalid_argument on fewer points, repeated points or non-finite values.
@@ -85,7 +85,7 @@ public:
   /// Node points of the resampled spline (uniform arc-length spacing), e.g. for plotting or export.
   ProfilePoints nodes() const;
 
-private:
+ private:
   // Segment k covers u in [k h, (k+1) h]; with t = u - k h: p(t) = a + b t + c t^2 + d t^3.
   struct Segment {
     Eigen::Vector2d a, b, c, d;
@@ -102,15 +102,15 @@ private:
 
 /// Section data of the 60E1 rail (EN 13674-1), SI units.
 namespace uic60 {
-constexpr double kHeight = 0.172;          ///< rail height, m
-constexpr double kHeadWidth = 0.072;       ///< head width (at the R13 / flank tangent points), m
-constexpr double kFootWidth = 0.150;       ///< foot width, m
-constexpr double kWebThickness = 0.0165;   ///< web thickness, m
-constexpr double kHeadDepth = 0.051;       ///< head depth (top to the head fishing-surface line), m
-constexpr double kFootDepth = 0.0315;      ///< foot depth (bottom to the foot fishing-surface line), m
-constexpr double kArea = 76.70e-4;         ///< cross-section area, m^2
-constexpr double kIyy = 3038.3e-8;         ///< second moment of area about the horizontal axis, m^4
-constexpr double kIzz = 512.3e-8;          ///< second moment of area about the vertical axis, m^4
+constexpr double kHeight = 0.172;                 ///< rail height, m
+constexpr double kHeadWidth = 0.072;              ///< head width (at the R13 / flank tangent points), m
+constexpr double kFootWidth = 0.150;              ///< foot width, m
+constexpr double kWebThickness = 0.0165;          ///< web thickness, m
+constexpr double kHeadDepth = 0.051;              ///< head depth (top to the head fishing-surface line), m
+constexpr double kFootDepth = 0.0315;             ///< foot depth (bottom to the foot fishing-surface line), m
+constexpr double kArea = 76.70e-4;                ///< cross-section area, m^2
+constexpr double kIyy = 3038.3e-8;                ///< second moment of area about the horizontal axis, m^4
+constexpr double kIzz = 512.3e-8;                 ///< second moment of area about the vertical axis, m^4
 constexpr double kSectionModulusHead = 333.6e-6;  ///< elastic section modulus, head side, m^3
 constexpr double kSectionModulusFoot = 375.5e-6;  ///< elastic section modulus, foot side, m^3
 /// Depth of the centroid (neutral axis) below the head top = kIyy / kSectionModulusHead, m (~91.1 mm).
@@ -206,12 +206,12 @@ double flangeThickness(const WheelProfile& wheel, double height = 0.010);
 
 /// Malformed profile file; what() reads "<file>:<line>: <what> (<offending value>)".
 class ProfileFileError : public std::runtime_error {
-public:
+ public:
   ProfileFileError(const std::string& file, int line, const std::string& what);
   const std::string& file() const { return file_; }
   int line() const { return line_; }
 
-private:
+ private:
   std::string file_;
   int line_;
 };
@@ -256,8 +256,7 @@ ProfileCurve loadRailProfile(const std::string& path, const ProfileFileOptions& 
                              const ProfileCurveOptions& curve_options = {}, double inclination = 0.0);
 /// Reads a wheel profile and splits it (points reordered field -> flange if needed).
 WheelProfile loadWheelProfile(const std::string& path, const ProfileFileOptions& options = {},
-                              double split_angle = kDefaultSplitAngle,
-                              const ProfileCurveOptions& curve_options = {});
+                              double split_angle = kDefaultSplitAngle, const ProfileCurveOptions& curve_options = {});
 
 /// Writers (library frame in, each format's convention out; mm in the files). Throw std::runtime_error
 /// if the file cannot be written.

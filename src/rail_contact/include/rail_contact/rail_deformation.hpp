@@ -34,7 +34,12 @@ struct RailSectionMotion {
   Eigen::Vector3d u_dot = Eigen::Vector3d::Zero();      ///< velocity of the section centre, m/s
   Eigen::Vector3d theta_dot = Eigen::Vector3d::Zero();  ///< angular velocity of the section, rad/s
   void setZero() noexcept {
-    u.setZero(); theta.setZero(); du_ds.setZero(); dtheta_ds.setZero(); u_dot.setZero(); theta_dot.setZero();
+    u.setZero();
+    theta.setZero();
+    du_ds.setZero();
+    dtheta_ds.setZero();
+    u_dot.setZero();
+    theta_dot.setZero();
   }
 };
 
@@ -55,7 +60,7 @@ class RailDeformation {
 
 /// One rail beam element: chord length and local frame (columns: local x from node i to node j, y, z).
 struct RailBeamElement {
-  double length = 0.0;                                        ///< m
+  double length = 0.0;  ///< m
   Eigen::Matrix3d R_local_to_world = Eigen::Matrix3d::Identity();
 };
 
@@ -71,8 +76,7 @@ class BeamRailDeformation {
 
   /// elements[side] lists the elements of that rail in order of s. Throws std::runtime_error on a
   /// non-positive spacing or element length, or an empty rail.
-  BeamRailDeformation(double s_start, double element_arc_length,
-                      std::array<std::vector<RailBeamElement>, 2> elements);
+  BeamRailDeformation(double s_start, double element_arc_length, std::array<std::vector<RailBeamElement>, 2> elements);
 
   int numNodes(RailSide side) const { return static_cast<int>(elements_[idx(side)].size()) + 1; }
   double sStart() const { return s_start_; }
@@ -83,8 +87,12 @@ class BeamRailDeformation {
   /// Contiguous nodal velocity array of a rail (6 * numNodes doubles).
   double* nodalVelocities(RailSide side) { return qdot_[idx(side)].data(); }
   /// Typed access to node k's 6 displacement / velocity values (world axes).
-  Eigen::Map<Vector6d> nodeDisplacement(RailSide side, int k) { return Eigen::Map<Vector6d>(q_[idx(side)].data() + 6 * k); }
-  Eigen::Map<Vector6d> nodeVelocity(RailSide side, int k) { return Eigen::Map<Vector6d>(qdot_[idx(side)].data() + 6 * k); }
+  Eigen::Map<Vector6d> nodeDisplacement(RailSide side, int k) {
+    return Eigen::Map<Vector6d>(q_[idx(side)].data() + 6 * k);
+  }
+  Eigen::Map<Vector6d> nodeVelocity(RailSide side, int k) {
+    return Eigen::Map<Vector6d>(qdot_[idx(side)].data() + 6 * k);
+  }
   /// Zeroes all nodal values.
   void setZero();
 

@@ -37,8 +37,7 @@ inline void refuseOptions(int argc, char** argv, const char* usage) {
 
 /// Positional argument i (1-based) as a number, fallback when absent; a value that is not a finite
 /// number, or below min_value, exits 2 with the program's name, the argument and the usage.
-inline double positionalNumber(int argc, char** argv, int i, double fallback, double min_value,
-                               const char* usage) {
+inline double positionalNumber(int argc, char** argv, int i, double fallback, double min_value, const char* usage) {
   if (i >= argc) return fallback;
   const char* text = argv[i];
   char* end = nullptr;

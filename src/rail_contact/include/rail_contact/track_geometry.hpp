@@ -103,8 +103,7 @@ class TrackGeometry {
   /// Point of the rail surface at (s_r, u_r) for a profile point (y, z) given in the rail frame's
   /// cross-section (y toward the track centre, z along b_r; m) with dy_du, dz_du its derivatives with
   /// respect to the profile parameter u_r: r = p_origin + lateral_sign y n_r + z b_r.
-  RailSurfacePoint railSurface(RailSide side, double s_r, double y, double z, double dy_du,
-                               double dz_du) const;
+  RailSurfacePoint railSurface(RailSide side, double s_r, double y, double z, double dy_du, double dz_du) const;
   /// Same for an already evaluated rail point (saves the table lookup when several profile points share
   /// one s_r).
   static RailSurfacePoint railSurface(const RailPoint& rail, double y, double z, double dy_du, double dz_du);

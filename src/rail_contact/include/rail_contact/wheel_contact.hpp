@@ -28,17 +28,17 @@ enum class CreepLaw : std::uint8_t { kPolach = 0 };
 
 /// Scene effects and material data (constant after building the model).
 struct WheelContactOptions {
-  bool flange_contact = true;          ///< false: the flange search is not run at all
-  bool spin = true;                    ///< spin creepage in the creep forces (Polach's F_yS, nu_C)
+  bool flange_contact = true;  ///< false: the flange search is not run at all
+  bool spin = true;            ///< spin creepage in the creep forces (Polach's F_yS, nu_C)
   CreepLaw creep_law = CreepLaw::kPolach;
-  double friction = 0.3;               ///< mu0, maximum friction coefficient [-] (scene value; no default implied)
-  PolachOptions polach;                ///< kA, kS, A, B (its `spin` field is overridden by `spin`)
-  ElasticMaterial wheel_material;      ///< E, nu of the wheel
-  ElasticMaterial rail_material;       ///< E, nu of the rail
-  NormalDampingParams damping;         ///< restitution e, exponent n, impact-velocity floor (eq. 9)
-  CreepageOptions creepage;            ///< speed regularisation at standstill
-  HertzOptions hertz;                  ///< degenerate-geometry clamps
-  DetectionOptions detection;          ///< Newton and search settings
+  double friction = 0.3;           ///< mu0, maximum friction coefficient [-] (scene value; no default implied)
+  PolachOptions polach;            ///< kA, kS, A, B (its `spin` field is overridden by `spin`)
+  ElasticMaterial wheel_material;  ///< E, nu of the wheel
+  ElasticMaterial rail_material;   ///< E, nu of the rail
+  NormalDampingParams damping;     ///< restitution e, exponent n, impact-velocity floor (eq. 9)
+  CreepageOptions creepage;        ///< speed regularisation at standstill
+  HertzOptions hertz;              ///< degenerate-geometry clamps
+  DetectionOptions detection;      ///< Newton and search settings
   /// Largest lateral semi-axis b of a contact ellipse [m] (limit_lateral_width, hertz.hpp); 0 = no limit.
   /// Hertz's theory needs the patch small against the profile arcs around it; at the flange root those
   /// are the UIC60 gauge-corner arc (R 13 mm, EN 13674-1) and the S1002 throat, so a near-conformal patch
@@ -69,39 +69,39 @@ constexpr int kFlange = 1;
 
 /// One contact (what rail_msgs/ContactPoint carries, plus the force vectors and the detection details).
 struct ContactPointResult {
-  bool active = false;             ///< surfaces interpenetrate and N > 0 is evaluated
+  bool active = false;  ///< surfaces interpenetrate and N > 0 is evaluated
   DetectionStatus status = DetectionStatus::kOutOfBounds;
-  bool searched = false;           ///< false: the search was not run (flange contact off)
-  bool merged = false;             ///< in contact but merged into the other surface's contact (see merge_distance)
-  double s_r = 0.0;                ///< rail arc length of the contact, m
-  Eigen::Vector3d p_contact_in_world = Eigen::Vector3d::Zero();  ///< midpoint of wheel and rail points, m
-  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();    ///< wheel surface point, m
-  Eigen::Vector3d p_rail_in_world = Eigen::Vector3d::Zero();     ///< rail surface point, m
-  Eigen::Vector3d normal_in_world = Eigen::Vector3d::UnitZ();    ///< unit normal, rail into wheel
+  bool searched = false;  ///< false: the search was not run (flange contact off)
+  bool merged = false;    ///< in contact but merged into the other surface's contact (see merge_distance)
+  double s_r = 0.0;       ///< rail arc length of the contact, m
+  Eigen::Vector3d p_contact_in_world = Eigen::Vector3d::Zero();      ///< midpoint of wheel and rail points, m
+  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();        ///< wheel surface point, m
+  Eigen::Vector3d p_rail_in_world = Eigen::Vector3d::Zero();         ///< rail surface point, m
+  Eigen::Vector3d normal_in_world = Eigen::Vector3d::UnitZ();        ///< unit normal, rail into wheel
   Eigen::Matrix3d R_contact_to_world = Eigen::Matrix3d::Identity();  ///< columns t_rolling, t_lateral, n
-  double N = 0.0;                  ///< normal force, N (>= 0)
-  double F_long = 0.0;             ///< creep force along t_rolling on the wheel, N
-  double F_lat = 0.0;              ///< creep force along t_lateral on the wheel, N
-  double nu_x = 0.0, nu_y = 0.0;   ///< longitudinal and lateral creepages, -
-  double phi = 0.0;                ///< spin creepage, 1/m (0 with spin off)
-  double a = 0.0, b = 0.0;         ///< contact ellipse semi-axes (rolling, lateral), m
-  double penetration = 0.0;        ///< delta, m (> 0 in contact; finite gap otherwise)
-  double penetration_rate = 0.0;   ///< d delta / dt, m/s (> 0 approaching)
-  double rolling_radius = 0.0;     ///< wheel radius at the contact, m
-  double contact_angle = 0.0;      ///< normal's inclination to the plane normal to the axle, toward the track centre, rad
-                                   ///< (to the track plane: add the wheelset's roll toward this wheel)
+  double N = 0.0;                                                    ///< normal force, N (>= 0)
+  double F_long = 0.0;                                               ///< creep force along t_rolling on the wheel, N
+  double F_lat = 0.0;                                                ///< creep force along t_lateral on the wheel, N
+  double nu_x = 0.0, nu_y = 0.0;                                     ///< longitudinal and lateral creepages, -
+  double phi = 0.0;                                                  ///< spin creepage, 1/m (0 with spin off)
+  double a = 0.0, b = 0.0;        ///< contact ellipse semi-axes (rolling, lateral), m
+  double penetration = 0.0;       ///< delta, m (> 0 in contact; finite gap otherwise)
+  double penetration_rate = 0.0;  ///< d delta / dt, m/s (> 0 approaching)
+  double rolling_radius = 0.0;    ///< wheel radius at the contact, m
+  double contact_angle = 0.0;  ///< normal's inclination to the plane normal to the axle, toward the track centre, rad
+                               ///< (to the track plane: add the wheelset's roll toward this wheel)
   Eigen::Vector3d force_on_wheel_in_world = Eigen::Vector3d::Zero();  ///< eq. 12, N
-  RailWrench rail_wrench;          ///< eq. 15 for this contact alone, about its own section centre at s_r
+  RailWrench rail_wrench;  ///< eq. 15 for this contact alone, about its own section centre at s_r
   Eigen::Vector3d p_section_centre_in_world = Eigen::Vector3d::Zero();  ///< rail section centre at s_r, m
-  std::uint32_t hertz_flags = 0;   ///< HertzFlag bits of the contact geometry
+  std::uint32_t hertz_flags = 0;                                        ///< HertzFlag bits of the contact geometry
 };
 
 /// Output of one wheel's evaluation.
 struct WheelContactResult {
-  ContactPointResult contact[2];   ///< [kTread], [kFlange]
-  WheelsetWrench wheel_centre;     ///< eq. 13: force (world) and moment about the wheel centre (wheelset frame)
-  RailWrench rail_section;         ///< eq. 15: both contacts about the section centre at rail_section_s
-  double rail_section_s = 0.0;     ///< s_r of that section (tread contact if active, else flange), m
+  ContactPointResult contact[2];  ///< [kTread], [kFlange]
+  WheelsetWrench wheel_centre;    ///< eq. 13: force (world) and moment about the wheel centre (wheelset frame)
+  RailWrench rail_section;        ///< eq. 15: both contacts about the section centre at rail_section_s
+  double rail_section_s = 0.0;    ///< s_r of that section (tread contact if active, else flange), m
 };
 
 /// Caller-owned per-wheel work state: detection warm starts and impact memories of both contacts.

@@ -28,17 +28,17 @@ struct RailWrench {
 /// s_*_from_wheel_centre_in_wheelset: contact point minus wheel centre, wheelset frame;
 /// R_wheelset_to_world: A_ws.
 WheelsetWrench wheelCentreWrench(const Eigen::Vector3d& f_tread_on_wheel_in_world,
-                                   const Eigen::Vector3d& f_flange_on_wheel_in_world,
-                                   const Eigen::Vector3d& s_tread_from_wheel_centre_in_wheelset,
-                                   const Eigen::Vector3d& s_flange_from_wheel_centre_in_wheelset,
-                                   const Eigen::Matrix3d& R_wheelset_to_world) noexcept;
+                                 const Eigen::Vector3d& f_flange_on_wheel_in_world,
+                                 const Eigen::Vector3d& s_tread_from_wheel_centre_in_wheelset,
+                                 const Eigen::Vector3d& s_flange_from_wheel_centre_in_wheelset,
+                                 const Eigen::Matrix3d& R_wheelset_to_world) noexcept;
 
 /// Eq. 14: a wheel-centre wrench to the wheelset mass centre.
 ///   f_ws = f_wheel,  n'_ws = s'_w x (A_ws^T f_wheel) + n'_wheel
 /// s_wheel_centre_from_wheelset_centre_in_wheelset: s'_w.
 WheelsetWrench wheelsetCentreWrench(const WheelsetWrench& wheel_centre,
-                                      const Eigen::Vector3d& s_wheel_centre_from_wheelset_centre_in_wheelset,
-                                      const Eigen::Matrix3d& R_wheelset_to_world) noexcept;
+                                    const Eigen::Vector3d& s_wheel_centre_from_wheelset_centre_in_wheelset,
+                                    const Eigen::Matrix3d& R_wheelset_to_world) noexcept;
 
 /// Adds `w` to `sum` (both about the same point, same frames): sums left and right wheels.
 void accumulate(WheelsetWrench& sum, const WheelsetWrench& w) noexcept;
@@ -48,20 +48,20 @@ void accumulate(WheelsetWrench& sum, const WheelsetWrench& w) noexcept;
 /// f_*_on_rail_in_world are the forces on the rail (opposite to those on the wheel);
 /// s_*_from_section_centre_in_world: contact point minus section centre, world frame.
 RailWrench railSectionWrench(const Eigen::Vector3d& f_tread_on_rail_in_world,
-                               const Eigen::Vector3d& f_flange_on_rail_in_world,
-                               const Eigen::Vector3d& s_tread_from_section_centre_in_world,
-                               const Eigen::Vector3d& s_flange_from_section_centre_in_world) noexcept;
+                             const Eigen::Vector3d& f_flange_on_rail_in_world,
+                             const Eigen::Vector3d& s_tread_from_section_centre_in_world,
+                             const Eigen::Vector3d& s_flange_from_section_centre_in_world) noexcept;
 
 /// Eq. 15 helper: position given in rail cross-section coordinates to world: s = A_r s'.
 inline Eigen::Vector3d sectionOffsetToWorld(const Eigen::Matrix3d& R_section_to_world,
-                                               const Eigen::Vector3d& s_in_section) noexcept {
+                                            const Eigen::Vector3d& s_in_section) noexcept {
   return R_section_to_world * s_in_section;
 }
 
 /// Contact force on the wheel from its contact-frame components (paper eq. 12):
 ///   f = N n + F_long t_rolling + F_lat t_lateral, R_contact_to_world = [t_rolling t_lateral n].
-inline Eigen::Vector3d contactForceInWorld(const Eigen::Matrix3d& R_contact_to_world, double F_long,
-                                              double F_lat, double N) noexcept {
+inline Eigen::Vector3d contactForceInWorld(const Eigen::Matrix3d& R_contact_to_world, double F_long, double F_lat,
+                                           double N) noexcept {
   return R_contact_to_world * Eigen::Vector3d(F_long, F_lat, N);
 }
 

@@ -24,17 +24,17 @@ namespace rail::core {
 //   publish             > rail_deflection, pad_forces, contact_point_output, markers, energy_output (track side)
 struct CostClock {
   enum Part {
-    kVehicleRhs,           // vehicle right-hand sides for the integrator's steps (contact on the rigid track inside)
-    kVehicleJacobian,      // right-hand sides of CVODE's difference-quotient Jacobians (BDF)
-    kTrackRhs,             // Newmark right-hand side M x1 + C x2 + f and the step's completion (vector work)
-    kTrackSolve,           // Newmark K_eff solve (CHOLMOD), one per step
-    kWindowMoves,          // track window moves (model build or reuse, state carry-over, rail arrays)
-    kFloorAccelerations,   // effects.floor_acceleration_output: accelerometer readings
-    kPadForces,            // effects.pad_force_output: pad forces under the train
-    kMarkers,              // effects.rviz_markers: building and publishing markers
-    kRailDeflection,       // effects.rail_deflection_output: section deflections
-    kContactPointOutput,   // effects.contact_point_output: building and publishing contact points
-    kEnergyOutput,         // effects.energy_output: vehicle (in its outputs) or FE track (publish) energy
+    kVehicleRhs,          // vehicle right-hand sides for the integrator's steps (contact on the rigid track inside)
+    kVehicleJacobian,     // right-hand sides of CVODE's difference-quotient Jacobians (BDF)
+    kTrackRhs,            // Newmark right-hand side M x1 + C x2 + f and the step's completion (vector work)
+    kTrackSolve,          // Newmark K_eff solve (CHOLMOD), one per step
+    kWindowMoves,         // track window moves (model build or reuse, state carry-over, rail arrays)
+    kFloorAccelerations,  // effects.floor_acceleration_output: accelerometer readings
+    kPadForces,           // effects.pad_force_output: pad forces under the train
+    kMarkers,             // effects.rviz_markers: building and publishing markers
+    kRailDeflection,      // effects.rail_deflection_output: section deflections
+    kContactPointOutput,  // effects.contact_point_output: building and publishing contact points
+    kEnergyOutput,        // effects.energy_output: vehicle (in its outputs) or FE track (publish) energy
     kPartCount
   };
   enum Count {
@@ -59,7 +59,8 @@ struct CostClock {
       if (clock_ != nullptr) t0_ = std::chrono::steady_clock::now();
     }
     ~Scope() {
-      if (clock_ != nullptr) clock_->add(p_, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count());
+      if (clock_ != nullptr)
+        clock_->add(p_, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count());
     }
     Scope(const Scope&) = delete;
     Scope& operator=(const Scope&) = delete;
@@ -133,10 +134,10 @@ class CostProfile {
   // clock: the finer split (nested in the components as CostClock says), with per parent "other" =
   // parent - its parts, so that the shares add up at each level; null: none.
   std::string toYaml(const std::string& node, const Scene& scene, double loop_wall, double simulated,
-                      const CostClock* clock = nullptr) const;
+                     const CostClock* clock = nullptr) const;
   // The same as a few console lines.
   std::string toText(const std::string& node, double loop_wall, double simulated,
-                      const CostClock* clock = nullptr) const;
+                     const CostClock* clock = nullptr) const;
 
   // One line of the finer split: name, seconds, calls and the coarse component it is part of.
   struct FinerLine {

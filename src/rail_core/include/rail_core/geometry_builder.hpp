@@ -1,7 +1,7 @@
 // Scene -> rail_contact: the track geometry (the GeometrySpec of segments, cant base, rail spacing and
 // inclination; the irregularities; the TrackGeometry built from them), the profiles and the contact options,
-// built here once for both sides of a co-simulation. ROS-free; used at build time only. Errors of the geometry, profile or irregularity code come back as SceneError naming the scene file
-// and the field.
+// built here once for both sides of a co-simulation. ROS-free; used at build time only. Errors of the geometry, profile
+// or irregularity code come back as SceneError naming the scene file and the field.
 #pragma once
 
 #include <rail_contact/irregularities.hpp>
@@ -32,7 +32,7 @@ rail::contact::WheelContactOptions contactOptions(const Scene& scene, rail::cont
 // z normal to the track plane (m). The profile is tilted by the inclination (rad) first, so "below the
 // running surface" is measured normal to the track plane.
 Eigen::Vector2d gaugePointInTrackPlane(const rail::contact::ProfileCurve& rail_own_frame, double inclination,
-                                           double depth);
+                                       double depth);
 
 // Centre line to each rail's profile origin, in the track plane (m), such that the two gauge points are
 // `gauge` apart: gauge / 2 + y of the gauge point (gauge_point_in_track_plane).

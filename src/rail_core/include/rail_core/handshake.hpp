@@ -10,11 +10,11 @@
 namespace rail::core {
 
 struct HandshakeInfo {
-  std::string node;            // ROS node name
-  std::string scene_file;      // scene file it loaded
+  std::string node;        // ROS node name
+  std::string scene_file;  // scene file it loaded
   std::uint64_t scene_hash = 0;
   std::uint32_t wheel_count = 0;
-  double track_step = 0.0;     // [s]
+  double track_step = 0.0;  // [s]
   std::string transport;
   // The vehicle's first to last wheel centre at rest, from its model [m]: how long the track window must be.
   // Not compared; 0 from the track side.

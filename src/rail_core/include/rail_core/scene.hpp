@@ -38,16 +38,16 @@ struct DataFile {
 // One piece of the track's centre line.
 struct Segment {
   SegmentType type = SegmentType::kStraight;
-  double length = 0.0;             // [m]
+  double length = 0.0;                     // [m]
   Direction direction = Direction::kNone;  // curving to the left or right; none on a straight
-  double radius = 0.0;             // circular: [m]
-  double radius_start = 0.0;       // transition: radius at its start [m], 0 = straight (infinite)
-  double radius_end = 0.0;         // transition: radius at its end [m], 0 = straight (infinite)
-  double cant = 0.0;               // straight, circular: superelevation of the outer rail [m]
-  double cant_start = 0.0;         // transition: cant at its start [m]
-  double cant_end = 0.0;           // transition: cant at its end [m]
-  double gradient = 0.0;           // rise over run [-]
-  bool jump_allowed = false;       // the scene accepts a curvature or cant jump at this segment's start
+  double radius = 0.0;                     // circular: [m]
+  double radius_start = 0.0;               // transition: radius at its start [m], 0 = straight (infinite)
+  double radius_end = 0.0;                 // transition: radius at its end [m], 0 = straight (infinite)
+  double cant = 0.0;                       // straight, circular: superelevation of the outer rail [m]
+  double cant_start = 0.0;                 // transition: cant at its start [m]
+  double cant_end = 0.0;                   // transition: cant at its end [m]
+  double gradient = 0.0;                   // rise over run [-]
+  bool jump_allowed = false;               // the scene accepts a curvature or cant jump at this segment's start
 
   // Signed values used by the geometry: curvature > 0 curves left; cant > 0 raises the right rail.
   double curvatureAtStart() const;
@@ -58,11 +58,11 @@ struct Segment {
 
 struct Irregularities {
   IrregularitySource source = IrregularitySource::kNone;
-  DataFile file;                   // source: file; CSV of s, alignment, level, cross level, gauge [m]
-  std::string psd;                 // source: psd; a published spectrum, e.g. "fra_class_4"
-  std::uint64_t seed = 1;          // source: psd; realisation seed
-  double wavelength_min = 1.0;     // source: psd; shortest wavelength generated [m]
-  double wavelength_max = 120.0;   // source: psd; longest wavelength generated [m]
+  DataFile file;                  // source: file; CSV of s, alignment, level, cross level, gauge [m]
+  std::string psd;                // source: psd; a published spectrum, e.g. "fra_class_4"
+  std::uint64_t seed = 1;         // source: psd; realisation seed
+  double wavelength_min = 1.0;    // source: psd; shortest wavelength generated [m]
+  double wavelength_max = 120.0;  // source: psd; longest wavelength generated [m]
 };
 
 struct Track {
@@ -74,115 +74,115 @@ struct Track {
   double rail_inclination = 0.05;        // tan of the rails' tilt toward the track centre (1/20)
   double sleeper_spacing = 0.6;          // [m]
   int rail_elements_between_sleepers = 6;
-  double start_arc_length = 0.0;         // s at the start of the first segment [m]
-  DataFile data;                         // track materials (Tables 1 and 2 of the paper)
+  double start_arc_length = 0.0;  // s at the start of the first segment [m]
+  DataFile data;                  // track materials (Tables 1 and 2 of the paper)
   std::vector<Segment> segments;
   Irregularities irregularities;
 
-  double length() const;                 // sum of the segment lengths [m]
+  double length() const;  // sum of the segment lengths [m]
   double endArcLength() const { return start_arc_length + length(); }
 };
 
 struct Vehicle {
-  DataFile data;                         // bodies, joints and suspension
-  double start_arc_length = 0.0;         // s of the leading wheelset at t = 0 [m]
-  double speed = 0.0;                    // forward speed [m/s]
-  std::string wheel_profile = "s1002";   // a built-in profile name or a profile file
-  DataFile wheel_profile_file;           // set when wheel_profile names a file
-  double nominal_radius = 0.445;         // nominal rolling radius r0 [m]
-  double back_to_back = 1.360;           // distance between the wheels' inner (back) faces [m]
-  int wheelsets = 4;                     // must match the vehicle data file
+  DataFile data;                        // bodies, joints and suspension
+  double start_arc_length = 0.0;        // s of the leading wheelset at t = 0 [m]
+  double speed = 0.0;                   // forward speed [m/s]
+  std::string wheel_profile = "s1002";  // a built-in profile name or a profile file
+  DataFile wheel_profile_file;          // set when wheel_profile names a file
+  double nominal_radius = 0.445;        // nominal rolling radius r0 [m]
+  double back_to_back = 1.360;          // distance between the wheels' inner (back) faces [m]
+  int wheelsets = 4;                    // must match the vehicle data file
 };
 
 // Standalone track scenario: prescribed loads travelling along the track (no vehicle).
 struct MovingLoad {
-  double offset = 0.0;                   // behind the first load [m]
+  double offset = 0.0;  // behind the first load [m]
   LoadRail rail = LoadRail::kBoth;
-  double vertical = 0.0;                 // [N] per rail, downward positive
-  double lateral = 0.0;                  // [N] per rail, toward the field side positive
+  double vertical = 0.0;  // [N] per rail, downward positive
+  double lateral = 0.0;   // [N] per rail, toward the field side positive
 };
 struct MovingLoads {
   bool present = false;
-  double start_arc_length = 0.0;         // s of the first load at t = 0 [m]
-  double speed = 0.0;                    // [m/s], >= 0 (0 = static load)
+  double start_arc_length = 0.0;  // s of the first load at t = 0 [m]
+  double speed = 0.0;             // [m/s], >= 0 (0 = static load)
   std::vector<MovingLoad> loads;
 };
 
 // Wheel-rail interface data a user varies between runs (rail condition, contact damping). The rest of the
 // contact data (materials, Polach's reduction factors, detection settings) is rail_contact's.
 struct Contact {
-  double friction = 0.3;                 // mu0, maximum friction coefficient [-] (dry rail 0.3-0.4, wet 0.1-0.2)
-  double restitution = 0.5;              // e of the Hertz normal damping (paper eq. 9) [-], 0..1
-  double impact_velocity_floor = 0.01;   // floor on the impact penetration rate in eq. 9 [m/s]
+  double friction = 0.3;                // mu0, maximum friction coefficient [-] (dry rail 0.3-0.4, wet 0.1-0.2)
+  double restitution = 0.5;             // e of the Hertz normal damping (paper eq. 9) [-], 0..1
+  double impact_velocity_floor = 0.01;  // floor on the impact penetration rate in eq. 9 [m/s]
 };
 
 // What is simulated. An effect that is off is not built and costs nothing.
 struct Effects {
   TrackModel track_model = TrackModel::kFlexible;
-  bool irregularities = false;           // apply track.irregularities to the rails
-  bool flange_contact = true;            // flange-rail contact searched besides tread-rail
-  bool spin_creepage = true;             // spin in the creep forces
+  bool irregularities = false;  // apply track.irregularities to the rails
+  bool flange_contact = true;   // flange-rail contact searched besides tread-rail
+  bool spin_creepage = true;    // spin in the creep forces
   CreepLaw creep_law = CreepLaw::kPolach;
-  bool track_damping = true;             // Rayleigh damping of the beams and the dampers of pads/ballast
-  bool absorbing_ends = true;            // dashpots at both track ends
-  bool rail_deflection_output = true;    // publish rail deflections at output.deflection_sections
-  bool contact_point_output = true;      // publish contact points
-  bool rviz_markers = false;             // publish visualization markers
+  bool track_damping = true;               // Rayleigh damping of the beams and the dampers of pads/ballast
+  bool absorbing_ends = true;              // dashpots at both track ends
+  bool rail_deflection_output = true;      // publish rail deflections at output.deflection_sections
+  bool contact_point_output = true;        // publish contact points
+  bool rviz_markers = false;               // publish visualization markers
   bool floor_acceleration_output = false;  // carbody floor accelerations at the vehicle's measurement points
-  bool pad_force_output = false;         // rail-pad forces and rail displacements under the train (flexible)
-  bool energy_output = false;            // mechanical energy of the vehicle (and of the flexible track)
+  bool pad_force_output = false;           // rail-pad forces and rail displacements under the train (flexible)
+  bool energy_output = false;              // mechanical energy of the vehicle (and of the flexible track)
 };
 
 struct End {
   EndKind kind = EndKind::kArcLength;
-  double value = 0.0;                    // [s] or [m]; arc length 0 in the file = track end
+  double value = 0.0;  // [s] or [m]; arc length 0 in the file = track end
 };
 
 // The flexible track integrated over a window that moves with the vehicle (rail_track_node
 // doc/track_window.md): its cost per step no longer grows with the track's length. Off: the whole track.
 struct TrackWindow {
-  bool enabled = false;                  // off: the full-length FE track (the reference)
-  double behind = 5.0;                   // kept behind the last wheel [m]
-  double ahead = 5.0;                    // kept ahead of the first wheel [m]
-  double shift = 3.0;                    // distance of one move [m], whole sleeper bays
-  double length = 0.0;                   // window length [m]; 0 = the minimum the vehicle and margins need
+  bool enabled = false;  // off: the full-length FE track (the reference)
+  double behind = 5.0;   // kept behind the last wheel [m]
+  double ahead = 5.0;    // kept ahead of the first wheel [m]
+  double shift = 3.0;    // distance of one move [m], whole sleeper bays
+  double length = 0.0;   // window length [m]; 0 = the minimum the vehicle and margins need
 };
 
 struct Solver {
-  double track_step = 2.0e-5;            // Newmark fixed step [s] (the paper's converged value)
-  double vehicle_rtol = 1.0e-6;          // CVODE relative tolerance
-  double vehicle_atol = 1.0e-8;          // CVODE absolute tolerance
-  double vehicle_max_step = 2.0e-5;      // CVODE maximum step [s]; <= track_step in co-simulation
+  double track_step = 2.0e-5;        // Newmark fixed step [s] (the paper's converged value)
+  double vehicle_rtol = 1.0e-6;      // CVODE relative tolerance
+  double vehicle_atol = 1.0e-8;      // CVODE absolute tolerance
+  double vehicle_max_step = 2.0e-5;  // CVODE maximum step [s]; <= track_step in co-simulation
   VehicleMethod vehicle_method = VehicleMethod::kAuto;
   Transport transport = Transport::kShm;
-  double exchange_timeout = 10.0;        // longest wait for the peer during a run [s]
-  double handshake_timeout = 30.0;       // longest wait for the peer to appear [s]
+  double exchange_timeout = 10.0;   // longest wait for the peer during a run [s]
+  double handshake_timeout = 30.0;  // longest wait for the peer to appear [s]
   End end;
-  TrackWindow track_window;              // flexible track only
+  TrackWindow track_window;  // flexible track only
 };
 
 struct Output {
-  std::string bag;                       // bag file; empty = no bag; relative = under the run's output dir
-  double rate = 1000.0;                  // publishing rate of the outputs [Hz]
-  std::vector<std::string> topics;       // which topics go to the bag (see kKnownTopics)
+  std::string bag;                          // bag file; empty = no bag; relative = under the run's output dir
+  double rate = 1000.0;                     // publishing rate of the outputs [Hz]
+  std::vector<std::string> topics;          // which topics go to the bag (see kKnownTopics)
   std::vector<double> deflection_sections;  // arc lengths where rail deflections are published [m]
-  double pad_force_margin = 3.0;         // pad forces from this far behind the last wheelset to ahead of the first [m]
+  double pad_force_margin = 3.0;  // pad forces from this far behind the last wheelset to ahead of the first [m]
 };
 
 // The resolved scene.
 struct Scene {
-  std::string file;                      // the scene file as given (names it in messages)
-  std::string name;                      // scene.name, or the file's stem
+  std::string file;  // the scene file as given (names it in messages)
+  std::string name;  // scene.name, or the file's stem
   std::string description;
   Track track;
   bool has_vehicle = false;
   Vehicle vehicle;
   MovingLoads moving_loads;
-  Contact contact;                       // with a vehicle only
+  Contact contact;  // with a vehicle only
   Effects effects;
   Solver solver;
   Output output;
-  std::uint64_t hash = 0;                // of the resolved scene and the contents of its data files
+  std::uint64_t hash = 0;  // of the resolved scene and the contents of its data files
 
   int wheelCount() const { return has_vehicle ? 2 * vehicle.wheelsets : 0; }
   bool cosimulation() const { return has_vehicle && effects.track_model != TrackModel::kRigid; }

@@ -34,12 +34,11 @@ Scene loadSceneFile(const std::string& path, const SceneOverrides& overrides = {
 // The same from the file's text (e.g. handed over the ROS parameter server): `file` names the scene in
 // messages and `base_dir` is where relative data-file paths start.
 Scene loadSceneText(const std::string& text, const std::string& file, const std::string& base_dir,
-                      const SceneOverrides& overrides = {});
+                    const SceneOverrides& overrides = {});
 
 // The same, for a scene handed over as text with the path it was read from (relative data files are taken
 // from that path's directory).
-Scene loadSceneHandedOver(const std::string& text, const std::string& file,
-                             const SceneOverrides& overrides = {});
+Scene loadSceneHandedOver(const std::string& text, const std::string& file, const SceneOverrides& overrides = {});
 
 // The fully resolved scene as YAML (every default filled in). Loading this text again gives the same
 // scene (same hash).

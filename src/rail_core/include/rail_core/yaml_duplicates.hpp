@@ -10,7 +10,7 @@
 namespace rail::core {
 
 struct DuplicateKey {
-  std::string field;  // dotted path with list indices, e.g. "bodies[2].mass"
+  std::string field;    // dotted path with list indices, e.g. "bodies[2].mass"
   int first_line = 0;   // 1-based
   int second_line = 0;  // 1-based
 

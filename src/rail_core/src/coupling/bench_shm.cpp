@@ -14,10 +14,10 @@
 #include <thread>
 #include <vector>
 
+#include "rail_contact/tool_args.hpp"
 #include "rail_core/coupling/loopback_transport.hpp"
 #include "rail_core/coupling/protocol.hpp"
 #include "rail_core/coupling/shm_transport.hpp"
-#include "rail_contact/tool_args.hpp"
 
 using namespace rail::core::coupling;
 

@@ -8,8 +8,7 @@ namespace rail::core::coupling {
 namespace {
 int checkedCapacity(int capacity, const char* what) {
   if (capacity < 0)
-    throw std::runtime_error(std::string(what) + ": wheel capacity " + std::to_string(capacity) +
-                             " is negative");
+    throw std::runtime_error(std::string(what) + ": wheel capacity " + std::to_string(capacity) + " is negative");
   return capacity;
 }
 
@@ -26,8 +25,7 @@ bool copyImpl(const Frame& src, Frame& dst) {
 WheelStateFrame::WheelStateFrame(int capacity)
     : wheels(static_cast<std::size_t>(checkedCapacity(capacity, "WheelStateFrame"))) {}
 
-WrenchFrame::WrenchFrame(int capacity)
-    : wheels(static_cast<std::size_t>(checkedCapacity(capacity, "WrenchFrame"))) {}
+WrenchFrame::WrenchFrame(int capacity) : wheels(static_cast<std::size_t>(checkedCapacity(capacity, "WrenchFrame"))) {}
 
 bool copyFrame(const WheelStateFrame& src, WheelStateFrame& dst) { return copyImpl(src, dst); }
 bool copyFrame(const WrenchFrame& src, WrenchFrame& dst) { return copyImpl(src, dst); }

@@ -24,8 +24,8 @@ LoopbackLink::LoopbackLink(int wheel_capacity, const std::atomic<bool>* interrup
 // Wait on the condition variable until pred() holds or something ends the wait. Called with the lock held.
 template <class Pred>
 static Result waitFor(std::unique_lock<std::mutex>& lock, std::condition_variable& cv, Pred pred,
-                       const std::atomic<bool>* interrupt, const bool& own_closed,
-                       const bool& peer_closed, Deadline deadline) {
+                      const std::atomic<bool>* interrupt, const bool& own_closed, const bool& peer_closed,
+                      Deadline deadline) {
   for (;;) {
     if (own_closed) return {Status::kError, "this end is closed"};
     if (pred()) return {};
@@ -42,7 +42,8 @@ Result LoopbackLink::put(Mailbox<Frame>& box, const Frame& frame, Role writer, D
   std::unique_lock<std::mutex> lock(mutex_);
   const bool& own = writer == Role::kVehicle ? vehicle_closed_ : track_closed_;
   const bool& peer = writer == Role::kVehicle ? track_closed_ : vehicle_closed_;
-  Result r = waitFor(lock, changed_, [&] { return !box.full; }, interrupt_, own, peer, deadline);
+  Result r = waitFor(
+      lock, changed_, [&] { return !box.full; }, interrupt_, own, peer, deadline);
   if (!r) return r;
   if (!copyFrame(frame, box.frame))
     return {Status::kError, "frame of " + std::to_string(frame.count) + " wheels exceeds the capacity " +
@@ -58,11 +59,12 @@ Result LoopbackLink::take(Mailbox<Frame>& box, Frame& frame, Role reader, Deadli
   std::unique_lock<std::mutex> lock(mutex_);
   const bool& own = reader == Role::kVehicle ? vehicle_closed_ : track_closed_;
   const bool& peer = reader == Role::kVehicle ? track_closed_ : vehicle_closed_;
-  Result r = waitFor(lock, changed_, [&] { return box.full; }, interrupt_, own, peer, deadline);
+  Result r = waitFor(
+      lock, changed_, [&] { return box.full; }, interrupt_, own, peer, deadline);
   if (!r) return r;
   if (!copyFrame(box.frame, frame))
-    return {Status::kError, "frame of " + std::to_string(box.frame.count) +
-                                " wheels exceeds the receiving capacity " + std::to_string(frame.capacity())};
+    return {Status::kError, "frame of " + std::to_string(box.frame.count) + " wheels exceeds the receiving capacity " +
+                                std::to_string(frame.capacity())};
   box.full = false;
   lock.unlock();
   changed_.notify_all();

@@ -25,8 +25,7 @@ void checkConfig(const CouplingConfig& c) {
   if (!(c.track_step > 0.0) || !std::isfinite(c.track_step))
     throw std::runtime_error("coupling: solver.track_step must be > 0 s (got " + num(c.track_step) + ")");
   if (!(c.exchange_timeout > 0.0) || !std::isfinite(c.exchange_timeout))
-    throw std::runtime_error("coupling: solver.exchange_timeout must be > 0 s (got " +
-                             num(c.exchange_timeout) + ")");
+    throw std::runtime_error("coupling: solver.exchange_timeout must be > 0 s (got " + num(c.exchange_timeout) + ")");
   if (c.wheel_count <= 0)
     throw std::runtime_error("coupling: wheel count must be > 0 (got " + std::to_string(c.wheel_count) + ")");
 }
@@ -54,9 +53,15 @@ Result fail(const Result& r, Role self, const char* doing, std::uint64_t step, c
       what = std::string("the ") + peer + " did not answer within " + num(budget.seconds) + " s" +
              (budget.is_exchange_timeout ? " (solver.exchange_timeout)" : "");
       break;
-    case Status::kPeerClosed: what = std::string("the ") + peer + " closed the connection"; break;
-    case Status::kInterrupted: what = "interrupted"; break;
-    default: what = toString(r.status); break;
+    case Status::kPeerClosed:
+      what = std::string("the ") + peer + " closed the connection";
+      break;
+    case Status::kInterrupted:
+      what = "interrupted";
+      break;
+    default:
+      what = toString(r.status);
+      break;
   }
   std::string msg = std::string(toString(self)) + ": " + doing + " step " + u64(step) + ": " + what;
   if (!r.message.empty()) msg += " (" + r.message + ")";
@@ -65,8 +70,8 @@ Result fail(const Result& r, Role self, const char* doing, std::uint64_t step, c
 
 // Check a received stamp against the expected step, its time, the wheel count and the scene hash. `what`
 // names the frame. Messages are only built on a refusal.
-Result checkStamp(const FrameStamp& got, std::uint32_t count, const CouplingConfig& c, std::uint64_t step,
-                   Role self, const char* what) {
+Result checkStamp(const FrameStamp& got, std::uint32_t count, const CouplingConfig& c, std::uint64_t step, Role self,
+                  const char* what) {
   const double t = static_cast<double>(step) * c.track_step;
   const bool hash_ok = got.scene_hash == c.scene_hash;
   const bool step_ok = got.step == step;
@@ -79,12 +84,12 @@ Result checkStamp(const FrameStamp& got, std::uint32_t count, const CouplingConf
   if (!hash_ok) {
     msg += "scene hash " + hex(got.scene_hash) + " received, " + hex(c.scene_hash) + " expected";
   } else if (!step_ok) {
-    const char* kind = got.step > step ? "step skipped"
-                                       : (got.step + 1 == step ? "step repeated" : "step out of order");
+    const char* kind =
+        got.step > step ? "step skipped" : (got.step + 1 == step ? "step repeated" : "step out of order");
     msg += "step " + u64(got.step) + " received, " + u64(step) + " expected (" + kind + ")";
   } else if (!time_ok) {
-    msg += "time " + num(got.time) + " s received, " + num(t) + " s expected (step " + u64(step) +
-           " x track_step " + num(c.track_step) + " s)";
+    msg += "time " + num(got.time) + " s received, " + num(t) + " s expected (step " + u64(step) + " x track_step " +
+           num(c.track_step) + " s)";
   } else {
     msg += std::to_string(count) + " wheels received, " + std::to_string(c.wheel_count) + " expected";
   }
@@ -120,13 +125,9 @@ VehicleCoupling::VehicleCoupling(const CouplingConfig& config, FrameTransport& t
   }
 }
 
-double VehicleCoupling::nextExchangeTime() const {
-  return static_cast<double>(next_step_) * config_.track_step;
-}
+double VehicleCoupling::nextExchangeTime() const { return static_cast<double>(next_step_) * config_.track_step; }
 
-bool VehicleCoupling::exchangeDue(double t) const {
-  return t >= nextExchangeTime() - 1e-9 * config_.track_step;
-}
+bool VehicleCoupling::exchangeDue(double t) const { return t >= nextExchangeTime() - 1e-9 * config_.track_step; }
 
 Result VehicleCoupling::exchange() { return exchangeUntil(deadlineAfter(config_.exchange_timeout), true); }
 Result VehicleCoupling::exchange(Deadline deadline) { return exchangeUntil(deadline, false); }
@@ -213,8 +214,8 @@ Result TrackCoupling::receiveUntil(Deadline deadline, bool default_deadline) {
   if (failed_) return alreadyFailed(Role::kTrack);
   const Budget budget = budgetUntil(deadline, config_, default_deadline);
   if (awaiting_send_)
-    return {Status::kError, "track: receive() called twice for step " + u64(next_step_ - 1) +
-                                " without send() in between"};
+    return {Status::kError,
+            "track: receive() called twice for step " + u64(next_step_ - 1) + " without send() in between"};
   const std::uint64_t k = next_step_;
   Result r = transport_.receiveStates(incoming_, deadline);
   if (!r) {
@@ -238,8 +239,7 @@ Result TrackCoupling::send(Deadline deadline) { return sendUntil(deadline, false
 Result TrackCoupling::sendUntil(Deadline deadline, bool default_deadline) {
   if (failed_) return alreadyFailed(Role::kTrack);
   const Budget budget = budgetUntil(deadline, config_, default_deadline);
-  if (!awaiting_send_)
-    return {Status::kError, "track: send() called before receive() for step " + u64(next_step_)};
+  if (!awaiting_send_) return {Status::kError, "track: send() called before receive() for step " + u64(next_step_)};
   const std::uint64_t k = states_.step;
   wrenches_.step = k;
   wrenches_.time = static_cast<double>(k) * config_.track_step;

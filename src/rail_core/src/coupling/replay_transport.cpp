@@ -16,23 +16,23 @@ std::string seconds(double t) {
 
 }  // namespace
 
-ReplayTransport::ReplayTransport(RecordedStates recording, double track_step, std::uint64_t scene_hash,
-                                 double t_end)
+ReplayTransport::ReplayTransport(RecordedStates recording, double track_step, std::uint64_t scene_hash, double t_end)
     : recording_(std::move(recording)), h_(track_step), hash_(scene_hash) {
   const std::string& src = recording_.source;
   if (recording_.frames.size() != recording_.times.size()) {
     throw std::runtime_error(src + ": the recording's times and frames differ in number");
   }
   if (recording_.frames.empty()) throw std::runtime_error(src + ": no wheel states recorded (needed to replay a run)");
-  if (recording_.frames.size() < 2) throw std::runtime_error(src + ": the wheel states have one instant; a replay needs two");
+  if (recording_.frames.size() < 2)
+    throw std::runtime_error(src + ": the wheel states have one instant; a replay needs two");
   if (recording_.times.front() > 0.5 * h_) {
     throw std::runtime_error(src + ": the wheel states start at t = " + seconds(recording_.times.front()) +
                              " s; a replay starts at t = 0");
   }
   for (std::size_t i = 1; i < recording_.times.size(); ++i) {
     if (!(recording_.times[i] > recording_.times[i - 1])) {
-      throw std::runtime_error(src + ": the wheel states' times do not increase at t = " + seconds(recording_.times[i]) +
-                               " s");
+      throw std::runtime_error(
+          src + ": the wheel states' times do not increase at t = " + seconds(recording_.times[i]) + " s");
     }
     if (recording_.frames[i].count != recording_.frames[0].count) {
       throw std::runtime_error(src + ": the wheel states at t = " + seconds(recording_.times[i]) + " s have " +

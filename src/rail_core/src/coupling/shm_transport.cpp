@@ -45,8 +45,10 @@ std::string sysError(const std::string& what) { return what + ": " + std::strerr
 
 const char* kindName(std::uint32_t k) {
   switch (static_cast<FrameKind>(k)) {
-    case FrameKind::kWheelStates: return "wheel states";
-    case FrameKind::kWrenches: return "wrenches";
+    case FrameKind::kWheelStates:
+      return "wheel states";
+    case FrameKind::kWrenches:
+      return "wrenches";
   }
   return "unknown";
 }
@@ -140,8 +142,7 @@ bool creatorAlive(const ShmHeader& h) { return shmProcessAlive(h.creator_pid, h.
 
 }  // namespace
 
-std::string shmRegionName(const std::string& prefix, std::uint64_t scene_hash, const std::string& run_id,
-                            Role writer) {
+std::string shmRegionName(const std::string& prefix, std::uint64_t scene_hash, const std::string& run_id, Role writer) {
   return "/" + prefix + "_" + hex(scene_hash) + "_" + run_id + (writer == Role::kVehicle ? "_v2t" : "_t2v");
 }
 
@@ -151,7 +152,7 @@ bool shmProcessAlive(std::int64_t pid, std::uint64_t start_time) {
   char state = 0;
   std::uint64_t start = 0;
   if (!readProcStat(pid, state, start)) return true;  // exists; /proc not readable: trust kill()
-  if (state == 'Z' || state == 'X') return false;       // ended, not yet reaped
+  if (state == 'Z' || state == 'X') return false;     // ended, not yet reaped
   return start_time == 0 || start == start_time;
 }
 
@@ -290,8 +291,8 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
   const std::string host = thisHost();
   std::string last_seen;  // why the last region found was not taken, for the timeout message
   auto refuse = [&](const std::string& field, const std::string& here, const std::string& there) {
-    return CouplingError(Status::kRefused, "shm transport: region " + spec.name + " refused: " + field + " " +
-                                               here + " expected, " + there + " in the region");
+    return CouplingError(Status::kRefused, "shm transport: region " + spec.name + " refused: " + field + " " + here +
+                                               " expected, " + there + " in the region");
   };
   for (;;) {
     const int fd = shm_open(spec.name.c_str(), O_RDWR, 0);
@@ -323,8 +324,8 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
             const std::string their_host(h.creator_host, strnlen(h.creator_host, kShmHostNameSize));
             if (!sameHost(host, their_host))
               throw CouplingError(Status::kRefused,
-                                  "shm transport: region " + spec.name + " refused: created on host '" +
-                                      their_host + "', this is host '" + host +
+                                  "shm transport: region " + spec.name + " refused: created on host '" + their_host +
+                                      "', this is host '" + host +
                                       "'; the shm transport needs both nodes on one host (use transport "
                                       "service or topic)");
             if (h.header_size != kShmPayloadOffset)
@@ -334,12 +335,10 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
               throw refuse("payload size",
                            std::to_string(shmPayloadSize(spec.kind, spec.wheel_capacity)) + " bytes (" +
                                std::to_string(spec.wheel_capacity) + " wheels)",
-                           std::to_string(h.payload_size) + " bytes (" + std::to_string(h.wheel_capacity) +
-                               " wheels)");
+                           std::to_string(h.payload_size) + " bytes (" + std::to_string(h.wheel_capacity) + " wheels)");
             if (size != expected_size)
               throw refuse("size", std::to_string(expected_size) + " bytes", std::to_string(size) + " bytes");
-            if (h.scene_hash != spec.scene_hash)
-              throw refuse("scene hash", hex(spec.scene_hash), hex(h.scene_hash));
+            if (h.scene_hash != spec.scene_hash) throw refuse("scene hash", hex(spec.scene_hash), hex(h.scene_hash));
             return r;
           }
         } else if (magic != 0) {
@@ -353,9 +352,8 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
       throw CouplingError(Status::kInterrupted, "shm transport: interrupted while waiting for the " +
                                                     std::string(toString(peer)) + "'s region " + spec.name);
     if (Clock::now() >= deadline)
-      throw CouplingError(Status::kTimeout, "shm transport: the " + std::string(toString(peer)) +
-                                                "'s region " + spec.name + " did not appear within " +
-                                                num(timeout_s) + " s" +
+      throw CouplingError(Status::kTimeout, "shm transport: the " + std::string(toString(peer)) + "'s region " +
+                                                spec.name + " did not appear within " + num(timeout_s) + " s" +
                                                 (last_seen.empty() ? "" : " (" + last_seen + ")"));
     std::this_thread::sleep_for(kAttachPoll);
   }
@@ -369,8 +367,7 @@ ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
     throw std::runtime_error("shm transport: wheel capacity must be > 0 (got " +
                              std::to_string(options.wheel_capacity) + ")");
   if (!(options.attach_timeout >= 0.0))
-    throw std::runtime_error("shm transport: attach timeout must be >= 0 s (got " + num(options.attach_timeout) +
-                             ")");
+    throw std::runtime_error("shm transport: attach timeout must be >= 0 s (got " + num(options.attach_timeout) + ")");
   if (options.spin_iterations < 0)
     throw std::runtime_error("shm transport: spin iterations must be >= 0 (got " +
                              std::to_string(options.spin_iterations) + ")");
@@ -379,8 +376,8 @@ ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
   const std::string host = thisHost();
   if (!options.peer_host.empty() && !sameHost(host, options.peer_host))
     throw CouplingError(Status::kRefused, std::string("shm transport: the ") + toString(peerOf(options.role)) +
-                                              " runs on host '" + options.peer_host + "', this " + self +
-                                              " on host '" + host +
+                                              " runs on host '" + options.peer_host + "', this " + self + " on host '" +
+                                              host +
                                               "'; the shm transport needs both nodes on one host (use transport "
                                               "service or topic)");
 
@@ -388,9 +385,8 @@ ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
   const bool vehicle = options.role == Role::kVehicle;
   ShmRegion::Spec mine{shmRegionName(options.name_prefix, options.scene_hash, options.run_id, options.role),
                        vehicle ? FrameKind::kWheelStates : FrameKind::kWrenches, cap, options.scene_hash};
-  ShmRegion::Spec theirs{
-      shmRegionName(options.name_prefix, options.scene_hash, options.run_id, peerOf(options.role)),
-      vehicle ? FrameKind::kWrenches : FrameKind::kWheelStates, cap, options.scene_hash};
+  ShmRegion::Spec theirs{shmRegionName(options.name_prefix, options.scene_hash, options.run_id, peerOf(options.role)),
+                         vehicle ? FrameKind::kWrenches : FrameKind::kWheelStates, cap, options.scene_hash};
   const Deadline deadline =
       Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.attach_timeout));
   write_ = ShmRegion::create(mine);
@@ -431,7 +427,7 @@ Result ShmTransport::misuse(const char* call) const {
 }
 
 Result ShmTransport::waitTurn(ShmRegion& region, bool want_reader_turn, std::uint32_t peer_closed_bit,
-                               Deadline deadline) {
+                              Deadline deadline) {
   std::atomic<std::uint32_t>& word = region.header().state;
   auto ready = [&](std::uint32_t s) { return ((s & kTurnReader) != 0) == want_reader_turn; };
   for (int i = 0; i < options_.spin_iterations; ++i) {
@@ -445,15 +441,13 @@ Result ShmTransport::waitTurn(ShmRegion& region, bool want_reader_turn, std::uin
     std::uint32_t s = word.load(std::memory_order_acquire);
     if (ready(s)) return {};
     if (s & peer_closed_bit) return {Status::kPeerClosed, {}};
-    if (options_.interrupt && options_.interrupt->load(std::memory_order_relaxed))
-      return {Status::kInterrupted, {}};
+    if (options_.interrupt && options_.interrupt->load(std::memory_order_relaxed)) return {Status::kInterrupted, {}};
     const auto now = Clock::now();
     if (now >= deadline) return {Status::kTimeout, {}};
     if (slept_a_slice && !shmProcessAlive(peer_pid_, peer_start_time_))
       return {Status::kPeerClosed, "its process " + std::to_string(peer_pid_) + " ended without closing"};
     if (!(s & kWaiters)) {
-      if (!word.compare_exchange_weak(s, s | kWaiters, std::memory_order_acq_rel, std::memory_order_acquire))
-        continue;
+      if (!word.compare_exchange_weak(s, s | kWaiters, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
       s |= kWaiters;
     }
     // Sleeps only while the word still equals s: any turn or closed change in between returns at once.

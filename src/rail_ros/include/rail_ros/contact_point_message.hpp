@@ -4,14 +4,14 @@
 
 #include <cstdint>
 
-#include <rail_contact/wheel_contact.hpp>
 #include <rail_msgs/ContactPoint.h>
+#include <rail_contact/wheel_contact.hpp>
 
 namespace rail::ros_glue {
 
 // Contact k (rail::contact::kTread or kFlange) of wheel `wheel_id` on rail `side` (WheelState::SIDE_*).
 inline void toMessage(const rail::contact::ContactPointResult& c, int wheel_id, int side, int k,
-                       rail_msgs::ContactPoint& p) {
+                      rail_msgs::ContactPoint& p) {
   p.wheel_id = static_cast<std::uint8_t>(wheel_id);
   p.side = static_cast<std::uint8_t>(side);
   p.kind = k == rail::contact::kTread ? rail_msgs::ContactPoint::KIND_TREAD : rail_msgs::ContactPoint::KIND_FLANGE;

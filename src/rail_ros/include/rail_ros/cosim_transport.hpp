@@ -10,9 +10,9 @@
 #include <rail_core/coupling/protocol.hpp>
 #include <rail_core/coupling/shm_transport.hpp>
 #include <rail_core/coupling/transport.hpp>
+#include <rail_core/scene.hpp>
 #include <rail_ros/service_transport.hpp>
 #include <rail_ros/topic_transport.hpp>
-#include <rail_core/scene.hpp>
 
 #include <atomic>
 #include <cstdint>
@@ -32,8 +32,8 @@ inline std::string shmRunId(ros::NodeHandle& pnh) {
   if (!pnh.getParam("run_id", id) && !ros::param::get("/railsim/run_id", id)) id = "run";
   bool ok = !id.empty() && id.size() <= 48;
   for (const char c : id) {
-    const bool allowed = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
-                         c == '.' || c == '-';
+    const bool allowed =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
     ok = ok && allowed;
   }
   if (ok) return id;
@@ -50,9 +50,11 @@ inline std::string shmRunId(ros::NodeHandle& pnh) {
 // Opens this end of the scene's transport. peer_node: the peer's node name from the handshake. Waits up to
 // solver.handshake_timeout for the peer. Throws rail::core::coupling::CouplingError (timeout, refused) or
 // std::runtime_error (bad options).
-inline std::unique_ptr<rail::core::coupling::FrameTransport> makeTransport(
-    const rail::core::Scene& scene, rail::core::coupling::Role role, ros::NodeHandle& nh, ros::NodeHandle& pnh,
-    const std::string& peer_node, const std::atomic<bool>* interrupt) {
+inline std::unique_ptr<rail::core::coupling::FrameTransport> makeTransport(const rail::core::Scene& scene,
+                                                                           rail::core::coupling::Role role,
+                                                                           ros::NodeHandle& nh, ros::NodeHandle& pnh,
+                                                                           const std::string& peer_node,
+                                                                           const std::atomic<bool>* interrupt) {
   using namespace rail::core;
   switch (scene.solver.transport) {
     case Transport::kShm: {

@@ -39,17 +39,15 @@ coupling::Result toMessage(const coupling::WrenchFrame& frame, rail_msgs::Contac
 void makeCloseMarker(rail_msgs::WheelStates& msg);
 void makeCloseMarker(rail_msgs::ContactWrenches& msg);
 inline bool isCloseMarker(const rail_msgs::WheelStates& m) { return m.step == kCloseStep && m.wheels.empty(); }
-inline bool isCloseMarker(const rail_msgs::ContactWrenches& m) {
-  return m.step == kCloseStep && m.wrenches.empty();
-}
+inline bool isCloseMarker(const rail_msgs::ContactWrenches& m) { return m.step == kCloseStep && m.wrenches.empty(); }
 
 // Message -> frame: step, scene hash, count and wheels; time = step * track_step [s] (track_step > 0).
 // kRefused (frame unchanged) when the message has more wheels than the frame's capacity or its stamp
 // differs from step * track_step by more than 1 ns (the stamp's rounding). `source` names the topic or
 // service for the message.
-coupling::Result fromMessage(const rail_msgs::WheelStates& msg, double track_step,
-                              coupling::WheelStateFrame& frame, const char* source);
-coupling::Result fromMessage(const rail_msgs::ContactWrenches& msg, double track_step,
-                              coupling::WrenchFrame& frame, const char* source);
+coupling::Result fromMessage(const rail_msgs::WheelStates& msg, double track_step, coupling::WheelStateFrame& frame,
+                             const char* source);
+coupling::Result fromMessage(const rail_msgs::ContactWrenches& msg, double track_step, coupling::WrenchFrame& frame,
+                             const char* source);
 
 }  // namespace rail::ros_glue

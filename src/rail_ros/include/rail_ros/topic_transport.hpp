@@ -26,7 +26,7 @@ namespace rail::ros_glue {
 namespace coupling = rail::core::coupling;
 
 struct TopicTransportOptions : RosTransportOptions {
-  std::string states_topic = "/railsim/wheel_states_exchange";      // vehicle -> track (WheelStates)
+  std::string states_topic = "/railsim/wheel_states_exchange";        // vehicle -> track (WheelStates)
   std::string wrenches_topic = "/railsim/contact_wrenches_exchange";  // track -> vehicle (ContactWrenches)
   // Construction waits (up to attach_timeout) until this end's topic has a subscriber: the peer node when
   // peer_node is given, any subscriber otherwise. false for a track driven by a bag.

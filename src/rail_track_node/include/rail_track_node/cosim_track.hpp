@@ -67,8 +67,8 @@ struct CosimTrackOptions {
   /// spin_creepage, creep_law) and contact section (friction, restitution, impact-velocity floor) override
   /// its fields, as on the vehicle side.
   rail::contact::WheelContactOptions contact;
-  SceneTrackOptions track;         ///< rail height and gravity of the FE track (flexible only)
-  bool include_gravity = true;     ///< track self-weight f_g in every Newmark step and in the initial state
+  SceneTrackOptions track;      ///< rail height and gravity of the FE track (flexible only)
+  bool include_gravity = true;  ///< track self-weight f_g in every Newmark step and in the initial state
   CosimCoupling coupling = CosimCoupling::kSemiImplicit;  ///< flexible only
   /// kSemiImplicit: an influence column K_eff^{-1} e_j is stored over the DOF window where it exceeds this
   /// fraction of its largest entry (the DOFs are numbered plane by plane along the track).
@@ -200,7 +200,7 @@ class CosimTrack {
   NewmarkState& st() noexcept { return window_ ? window_->mutableState() : state_; }
   const NewmarkState& st() const noexcept { return window_ ? window_->state() : state_; }
   const TrackMesh& feMesh() const noexcept { return window_ ? window_->mesh() : fe_->model.mesh; }
-  void buildRails();  // deformation_ and rail_dofs_ on feMesh() (set-up, window move)
+  void buildRails();    // deformation_ and rail_dofs_ on feMesh() (set-up, window move)
   void onWindowMove();  // after a move: rails, influence cache (allocates)
   void fillDeformation() noexcept;
   void fillPredictedDeformation() noexcept;
@@ -215,10 +215,10 @@ class CosimTrack {
   void solveColumn(int dof, int& lo, int& len) noexcept;
 
   std::unique_ptr<rail::contact::TrackGeometry> rigid_geometry_;  // rigid_fe: the geometry alone
-  std::unique_ptr<SceneTrack> fe_;                                 // flexible full-length: geometry + FE model
-  std::unique_ptr<TrackWindow> window_;                            // flexible windowed
-  mutable std::unique_ptr<PadForceProbe> pad_probe_;               // padForces(): pads of the current mesh
-  mutable int pad_probe_moves_ = -1;                               // window moves when it was built
+  std::unique_ptr<SceneTrack> fe_;                                // flexible full-length: geometry + FE model
+  std::unique_ptr<TrackWindow> window_;                           // flexible windowed
+  mutable std::unique_ptr<PadForceProbe> pad_probe_;              // padForces(): pads of the current mesh
+  mutable int pad_probe_moves_ = -1;                              // window moves when it was built
   const rail::contact::TrackGeometry* geometry_ = nullptr;
   rail::contact::WheelProfile wheel_profile_;
   rail::contact::ProfileCurve rail_profile_;
@@ -230,8 +230,8 @@ class CosimTrack {
   std::unique_ptr<NewmarkIntegrator> integrator_;
   NewmarkState state_;
   std::unique_ptr<NodalLoads> loads_;
-  Eigen::VectorXd d_static_;                             // full-length: self-weight equilibrium (energy zero)
-  mutable Eigen::VectorXd energy_scratch_, energy_dd_;   // energy() work vectors
+  Eigen::VectorXd d_static_;                            // full-length: self-weight equilibrium (energy zero)
+  mutable Eigen::VectorXd energy_scratch_, energy_dd_;  // energy() work vectors
   std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
   std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
   std::vector<Section> sections_;
@@ -239,11 +239,11 @@ class CosimTrack {
   std::unique_ptr<Implicit> implicit_;
   long newmark_steps_ = 0;
   long frames_ = 0;
-  int seen_rebuilds_ = 0;      // window rebuilds already handled by onWindowMove
+  int seen_rebuilds_ = 0;  // window rebuilds already handled by onWindowMove
   int cache_drops_ = 0;
   double window_move_s_ = 0.0;
-  rail::core::CostClock* cost_ = nullptr;                     // CosimTrackOptions::cost
-  rail::contact::ContactCost* contact_cost_ = nullptr;        // &cost_->contact, or null
+  rail::core::CostClock* cost_ = nullptr;               // CosimTrackOptions::cost
+  rail::contact::ContactCost* contact_cost_ = nullptr;  // &cost_->contact, or null
 };
 
 }  // namespace track

@@ -51,8 +51,8 @@ class CosimTrackRun {
   // Tells the vehicle the track is done (its next receive returns kPeerClosed).
   void close();
 
-  double time() const;                 // t_k of the step exchanged last [s] (0 before the first)
-  std::uint64_t steps() const;         // steps exchanged so far
+  double time() const;          // t_k of the step exchanged last [s] (0 before the first)
+  std::uint64_t steps() const;  // steps exchanged so far
   double trackStep() const { return h_; }
   const core::coupling::WheelStateFrame& states() const { return coupling_.states(); }
   int exitCode() const { return exit_code_; }

@@ -19,13 +19,13 @@ using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 /// Cross-section and material of a beam (paper Table 1 symbols in brackets).
 struct BeamSection {
-  double E = 0.0;        ///< Young's modulus [E], Pa
-  double G = 0.0;        ///< shear modulus [G], Pa
-  double A = 0.0;        ///< area [A], m^2
-  double J = 0.0;        ///< torsion constant used in G J [J_xixi], m^4
-  double I_y = 0.0;      ///< second moment about local y [I_etaeta]: bending in the x-z plane, m^4
-  double I_z = 0.0;      ///< second moment about local z [I_zetazeta]: bending in the x-y plane, m^4
-  double rho = 0.0;      ///< density [rho], kg/m^3
+  double E = 0.0;               ///< Young's modulus [E], Pa
+  double G = 0.0;               ///< shear modulus [G], Pa
+  double A = 0.0;               ///< area [A], m^2
+  double J = 0.0;               ///< torsion constant used in G J [J_xixi], m^4
+  double I_y = 0.0;             ///< second moment about local y [I_etaeta]: bending in the x-z plane, m^4
+  double I_z = 0.0;             ///< second moment about local z [I_zetazeta]: bending in the x-y plane, m^4
+  double rho = 0.0;             ///< density [rho], kg/m^3
   double rayleigh_alpha = 0.0;  ///< mass-proportional Rayleigh coefficient, 1/s (C = alpha M + beta K)
   double rayleigh_beta = 0.0;   ///< stiffness-proportional Rayleigh coefficient, s
 };

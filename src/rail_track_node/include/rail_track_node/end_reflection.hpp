@@ -15,21 +15,21 @@ namespace rail {
 namespace track {
 
 struct EndReflectionOptions {
-  double frequency = 500.0;      ///< centre frequency of the burst, Hz
-  int cycles = 5;                ///< periods under the Hann window
-  bool lateral = false;          ///< false: vertical force and velocity (world z); true: lateral (world y)
-  double length = 30.0;          ///< short track at least, m (lengthened, in whole bays, until its left end's
-                                 ///< echo arrives after the window)
-  double load_from_end = 9.6;    ///< load to the short track's right end, m
-  double observe_from_end = 2.4; ///< observation point to the right end, m (a few wavelengths: no near field)
-  double dt = 2e-5;              ///< Newmark step, s
+  double frequency = 500.0;       ///< centre frequency of the burst, Hz
+  int cycles = 5;                 ///< periods under the Hann window
+  bool lateral = false;           ///< false: vertical force and velocity (world z); true: lateral (world y)
+  double length = 30.0;           ///< short track at least, m (lengthened, in whole bays, until its left end's
+                                  ///< echo arrives after the window)
+  double load_from_end = 9.6;     ///< load to the short track's right end, m
+  double observe_from_end = 2.4;  ///< observation point to the right end, m (a few wavelengths: no near field)
+  double dt = 2e-5;               ///< Newmark step, s
 };
 
 struct EndReflectionResult {
-  double reflected_energy_fraction = 0.0;  ///< sum (v_short - v_ref)^2 / sum v_ref^2
-  double group_velocity = 0.0;             ///< of the beam on the smeared foundation at `frequency`, m/s
-  double cut_off_frequency = 0.0;          ///< below it no flexural wave propagates, Hz
-  double window = 0.0;                     ///< recorded time, s
+  double reflected_energy_fraction = 0.0;             ///< sum (v_short - v_ref)^2 / sum v_ref^2
+  double group_velocity = 0.0;                        ///< of the beam on the smeared foundation at `frequency`, m/s
+  double cut_off_frequency = 0.0;                     ///< below it no flexural wave propagates, Hz
+  double window = 0.0;                                ///< recorded time, s
   double short_length = 0.0, reference_length = 0.0;  ///< m
   int free_dofs_short = 0, free_dofs_reference = 0;
 };

@@ -95,7 +95,7 @@ class NewmarkIntegrator {
   const LinearSystem& sys_;
   double dt_;
   bool include_gravity_;
-  bool damped_;           // C has entries
+  bool damped_;  // C has entries
   rail::core::CostClock* cost_;
   int end_dashpots_;
   std::unique_ptr<SparseCholesky> factor_;

@@ -23,16 +23,16 @@ struct SpringDamperData {
 
 /// Cross-track geometry of the rails and sleepers.
 struct TrackLayout {
-  double rail_lateral_offset = 0.0;     ///< lateral distance centre line -> rail centroid / rail seat, m
-  double pad_thickness = 0.0;           ///< m
-  double rail_centroid_height = 0.0;    ///< height of the rail centroid above the rail foot, m
-  double rail_inclination = 0.0;        ///< rail cant towards the track centre, rad
-  double sleeper_spacing = 0.0;         ///< m
+  double rail_lateral_offset = 0.0;   ///< lateral distance centre line -> rail centroid / rail seat, m
+  double pad_thickness = 0.0;         ///< m
+  double rail_centroid_height = 0.0;  ///< height of the rail centroid above the rail foot, m
+  double rail_inclination = 0.0;      ///< rail cant towards the track centre, rad
+  double sleeper_spacing = 0.0;       ///< m
   int rail_elements_between_sleepers = 6;
-  double sleeper_length = 0.0;          ///< m
-  double sleeper_height = 0.0;          ///< m (rail seat to sleeper bottom)
+  double sleeper_length = 0.0;             ///< m
+  double sleeper_height = 0.0;             ///< m (rail seat to sleeper bottom)
   double sleeper_inner_node_offset = 0.0;  ///< |y| of the two inner sleeper nodes, m
-  std::vector<int> ballast_nodes;       ///< sleeper nodes (0..5, right to left) resting on the ballast
+  std::vector<int> ballast_nodes;          ///< sleeper nodes (0..5, right to left) resting on the ballast
 
   /// Height of the rail centroid above the rail seat (pad thickness + centroid height), m.
   double railCentroidAboveSeat() const { return pad_thickness + rail_centroid_height; }

@@ -37,14 +37,14 @@ enum RailSide : int { kLeftRail = 0, kRightRail = 1 };
 struct Node {
   Eigen::Vector3d p_in_world;  ///< undeformed position, m
   NodeKind kind;
-  bool fixed;                  ///< all 6 DOFs fixed (foundation)
+  bool fixed;  ///< all 6 DOFs fixed (foundation)
 };
 
 struct BeamElement {
   int node_i, node_j;
   BeamKind kind;
-  double length;                        ///< m
-  Eigen::Matrix3d R_local_to_world;     ///< columns: local x (i -> j), y, z
+  double length;                     ///< m
+  Eigen::Matrix3d R_local_to_world;  ///< columns: local x (i -> j), y, z
 };
 
 /// 6-DOF spring-damper (see springDamperMatrix). node_b = -1: grounded.
@@ -74,23 +74,21 @@ struct TrackMesh {
   std::vector<BeamElement> beams;
   std::vector<SpringDamperElement> springs;
   std::vector<PointMass> masses;
-  std::vector<int> dof_index;                  ///< size 6 * nodes.size()
+  std::vector<int> dof_index;  ///< size 6 * nodes.size()
   int n_free_dofs = 0;
   int n_sleepers = 0;
-  double s_start = 0.0;                        ///< m
-  double sleeper_spacing = 0.0;                ///< m
+  double s_start = 0.0;          ///< m
+  double sleeper_spacing = 0.0;  ///< m
   int rail_elements_between_sleepers = 0;
-  std::array<std::vector<int>, 2> rail_nodes;  ///< per rail (RailSide), ordered along s
-  std::array<std::vector<int>, 2> rail_beams;  ///< per rail, ordered along s; beam k spans s_k .. s_k+1
+  std::array<std::vector<int>, 2> rail_nodes;     ///< per rail (RailSide), ordered along s
+  std::array<std::vector<int>, 2> rail_beams;     ///< per rail, ordered along s; beam k spans s_k .. s_k+1
   std::vector<std::array<int, 6>> sleeper_nodes;  ///< per sleeper, right (y < 0) to left
 
   /// Free DOF index of (node, dof) with dof in 0..5, or -1 if fixed.
   int dofIndex(int node, int dof) const { return dof_index[6 * node + dof]; }
 
   /// Centre-line arc length of rail node k (same for both rails), m.
-  double railNodeS(int k) const {
-    return s_start + k * sleeper_spacing / rail_elements_between_sleepers;
-  }
+  double railNodeS(int k) const { return s_start + k * sleeper_spacing / rail_elements_between_sleepers; }
 
   /// Rail beam containing arc length s and the element coordinate xi = (s - s_i) / (s_j - s_i) in [0, 1].
   /// Returns false if s is outside the rails. O(1).

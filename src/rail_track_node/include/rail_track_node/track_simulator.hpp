@@ -46,10 +46,10 @@ struct RailSectionDeflection {
 
 /// Prescribed loads and integration settings of a run.
 struct SimulatorSettings {
-  double dt = 2e-5;            ///< Newmark step, s
-  double t_end = 0.0;          ///< end of the run, s
-  bool include_gravity = true; ///< f_g in every step (and in the initial static equilibrium)
-  double rail_height = 0.172;  ///< rail foot to head top, m (moment arm of the loads: height - centroid)
+  double dt = 2e-5;             ///< Newmark step, s
+  double t_end = 0.0;           ///< end of the run, s
+  bool include_gravity = true;  ///< f_g in every step (and in the initial static equilibrium)
+  double rail_height = 0.172;   ///< rail foot to head top, m (moment arm of the loads: height - centroid)
   rail::core::MovingLoads loads;
   /// Optional cost clock (must outlive the simulator): the Newmark integrator's parts and counts, and
   /// sectionDeflection() into kRailDeflection. null = no timing.
@@ -93,7 +93,7 @@ class TrackSimulator {
 
  private:
   struct RailProbe {
-    std::array<int, 12> dofs;  // world DOFs of the element, -1 fixed
+    std::array<int, 12> dofs;                   // world DOFs of the element, -1 fixed
     Eigen::Matrix<double, 3, 12> P_u, P_theta;  // element world DOFs -> track-frame displacement / rotation
   };
   struct Section {
@@ -121,8 +121,8 @@ class TrackSimulator {
 /// the top of the rail head, head_arm (m) above the rail centroid along the inclined rail axis.
 /// inclination: rail inclination (rad) of the mesh. Returns false if s is off the rails (nothing added)
 /// or the load vector is full. No allocation.
-bool addRailHeadLoad(const TrackMesh& mesh, double inclination, double head_arm, int rail, double s,
-                     double vertical, double lateral, NodalLoads& loads);
+bool addRailHeadLoad(const TrackMesh& mesh, double inclination, double head_arm, int rail, double s, double vertical,
+                     double lateral, NodalLoads& loads);
 
 /// End time of a moving-load scene (s): solver.end.time, or the time the first load reaches
 /// solver.end.arc_length at moving_loads.speed.

@@ -50,7 +50,7 @@ struct TrackWindowSettings {
   /// Window length, m, rounded up to whole sleeper bays; 0 = the minimum,
   /// vehicle_length + behind + ahead + shift. A shorter window is refused.
   double length = 0.0;
-  double dt = 0.0;              ///< Newmark step, s; 0 = the scene's solver.track_step
+  double dt = 0.0;  ///< Newmark step, s; 0 = the scene's solver.track_step
   /// Entering nodes start at the static continuation of the carried-over w, w', w'' (K_ee x_e = -K_ec x_c);
   /// false: at rest (x_e = 0).
   bool entering_static = true;
@@ -59,20 +59,20 @@ struct TrackWindowSettings {
   /// follows the end plane quasi-statically instead of being cut off. false: the window ends are free.
   bool condensed_ends = true;
   double boundary_length = 120.0;  ///< m of track condensed at each artificial end
-  bool end_dashpots = true;     ///< absorbing dashpots at the rail ends of every artificial end
-  bool include_gravity = true;  ///< d_g (self-weight static state) in the rails' and sections' output
-  SceneTrackOptions track;      ///< rail height and gravity
+  bool end_dashpots = true;        ///< absorbing dashpots at the rail ends of every artificial end
+  bool include_gravity = true;     ///< d_g (self-weight static state) in the rails' and sections' output
+  SceneTrackOptions track;         ///< rail height and gravity
   /// Optional cost clock of the window's Newmark integrators (NewmarkIntegrator); must outlive the window.
   rail::core::CostClock* cost = nullptr;
 };
 
 /// Figures of the window since construction.
 struct TrackWindowStats {
-  long steps = 0;            ///< Newmark steps
-  int shifts = 0;            ///< moves of the window
-  int rebuilds = 0;          ///< moves that built new matrices and factors (the others reused them)
-  double last_shift_s = 0.0; ///< wall time of the last move, s
-  double total_shift_s = 0.0;///< wall time of all moves, s
+  long steps = 0;              ///< Newmark steps
+  int shifts = 0;              ///< moves of the window
+  int rebuilds = 0;            ///< moves that built new matrices and factors (the others reused them)
+  double last_shift_s = 0.0;   ///< wall time of the last move, s
+  double total_shift_s = 0.0;  ///< wall time of all moves, s
 };
 
 class TrackWindow {
@@ -177,14 +177,14 @@ class TrackWindow {
   };
   struct Section {
     double s = 0.0;
-    bool inside = false;                        // on the current window's rails
+    bool inside = false;  // on the current window's rails
     std::array<RailProbe, 2> rail;
     // Beyond a condensed window end (within boundary_length): end-plane DOFs and the maps from their
     // values to the section's track-frame displacement / rotation through the static shapes.
     bool beyond = false;
     std::array<int, 48> plane_dofs;
     std::array<Eigen::Matrix<double, 3, 48>, 2> Q_u, Q_theta;
-    RailSectionDeflection static_value;         // self-weight static state at s
+    RailSectionDeflection static_value;  // self-weight static state at s
   };
 
   std::unique_ptr<Window> buildWindow(int first_sleeper) const;
@@ -197,20 +197,20 @@ class TrackWindow {
 
   TrackWindowSettings settings_;
   rail::contact::TrackGeometry geometry_;
-  TrackData data_;               // scene applied, absorbing ends off (the window adds its own)
+  TrackData data_;  // scene applied, absorbing ends off (the window adds its own)
   bool line_ends_absorb_ = false;
-  Vector6d c_end_;               // window-end dashpots (rail local frame)
+  Vector6d c_end_;                         // window-end dashpots (rail local frame)
   std::array<CondensedEnd, 2> condensed_;  // [0] rear end (line behind), [1] front end (line ahead)
   double seat_below_centre_ = 0.0;
   double dt_ = 0.0;
-  double s_line_ = 0.0;          // arc length of the line's first sleeper, m
-  int line_bays_ = 0;            // sleeper bays of the whole line
+  double s_line_ = 0.0;  // arc length of the line's first sleeper, m
+  int line_bays_ = 0;    // sleeper bays of the whole line
   int window_bays_ = 0;
   int shift_bays_ = 0;
   double min_length_ = 0.0;
   std::unique_ptr<Window> window_;
-  NewmarkState state_;           // w, w', w''
-  mutable Eigen::VectorXd energy_scratch_;  // dynamicEnergy(): M w', K w
+  NewmarkState state_;                         // w, w', w''
+  mutable Eigen::VectorXd energy_scratch_;     // dynamicEnergy(): M w', K w
   std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
   std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
   std::vector<Section> sections_;

@@ -41,8 +41,8 @@ using Vector12d = rc::Vector12d;
 // a wheel needs the 2 nodes of each contact element, so 4 slots per wheel are never short; a slot is
 // reused least-recently-used when a wheel reaches a node not cached.
 struct CosimTrack::Implicit {
-  int n = 0;           // free DOFs
-  int window = 0;      // column capacity, entries
+  int n = 0;       // free DOFs
+  int window = 0;  // column capacity, entries
   double tolerance = 1e-12;
   int slots = 0;
   std::vector<double> values;                 // slot-major: (slot * 6 + j) * window
@@ -61,15 +61,15 @@ struct CosimTrack::Implicit {
     Eigen::Matrix<double, 12, 3> W;  // nodal loads of unit world forces at the rail contact point; W' d_e = u
     Eigen::Matrix3d R_contact_to_world;
     Eigen::Vector3d v_wheel, v_rail_p, omega_wheel, omega_rail_p;  // material-point / body velocities
-    double V_p = 0.0;                // rolling speed of the evaluation, m/s
-    double K = 0.0, a_coeff = 0.0, b_coeff = 0.0;  // N = K delta^n (1 + ...); a = a_coeff N^(1/3)
+    double V_p = 0.0;                                              // rolling speed of the evaluation, m/s
+    double K = 0.0, a_coeff = 0.0, b_coeff = 0.0;                  // N = K delta^n (1 + ...); a = a_coeff N^(1/3)
     rail::contact::KalkerCoefficients kalker;
     double v_impact = 0.0, delta_p = 0.0;
     Eigen::Vector3d u_p, u0, base_dot;  // W'd_p; W'x0; u_dot = (2/h) u - base_dot
-    Eigen::Vector3d f_p, f;          // force on the rail at the prediction (its loads are in x0) and now, N
-    Eigen::Vector3d u, u_start, du;  // Newton iterate of the rail contact-point displacement, m
-    Eigen::Vector3d F_wheel, R;      // law's force on the wheel at u; residual of u, m
-    Eigen::Matrix3d J;               // d F_wheel / d u (Newmark velocity included), N/m
+    Eigen::Vector3d f_p, f;             // force on the rail at the prediction (its loads are in x0) and now, N
+    Eigen::Vector3d u, u_start, du;     // Newton iterate of the rail contact-point displacement, m
+    Eigen::Vector3d F_wheel, R;         // law's force on the wheel at u; residual of u, m
+    Eigen::Matrix3d J;                  // d F_wheel / d u (Newmark velocity included), N/m
   };
   // Contact law at rail contact-point displacement u (eq. 9, creepages, Polach), results into out.
   struct LawOut {
@@ -77,9 +77,9 @@ struct CosimTrack::Implicit {
     double N = 0.0, F_long = 0.0, F_lat = 0.0, a = 0.0, b = 0.0, delta = 0.0, delta_dot = 0.0;
     double nu_x = 0.0, nu_y = 0.0, phi = 0.0;
   };
-  std::vector<Link> links;       // capacity 2 per wheel
+  std::vector<Link> links;              // capacity 2 per wheel
   std::vector<Eigen::Vector3d> memory;  // per (wheel, contact): K, a_coeff, b_coeff last seen with N > 0
-  Eigen::MatrixXd G, S;          // W_c' K_eff^{-1} W_e (3 x 3 blocks) and the Newton matrix, 6 per wheel
+  Eigen::MatrixXd G, S;                 // W_c' K_eff^{-1} W_e (3 x 3 blocks) and the Newton matrix, 6 per wheel
   Eigen::VectorXd rhs;
   std::vector<int> pivot;
   rail::contact::PolachOptions polach;
@@ -98,10 +98,12 @@ struct CosimTrack::Implicit {
 
 CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     : cost_(options.cost), contact_cost_(options.cost != nullptr ? &options.cost->contact : nullptr) {
-  if (!scene.has_vehicle) throw SceneError(scene.file + ": the co-simulation track needs a vehicle (none in the scene)");
+  if (!scene.has_vehicle)
+    throw SceneError(scene.file + ": the co-simulation track needs a vehicle (none in the scene)");
   if (!scene.needsTrackNode())
-    throw SceneError(scene.file + ": effects.track_model: rigid runs the vehicle alone; the track side needs "
-                                  "rigid_fe or flexible");
+    throw SceneError(scene.file +
+                     ": effects.track_model: rigid runs the vehicle alone; the track side needs "
+                     "rigid_fe or flexible");
   const int n_wheels = scene.wheelCount();
   if (n_wheels <= 0) {
     std::ostringstream os;
@@ -148,9 +150,9 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   wheel_profile_ = rail::core::wheelProfile(scene);
   rail_profile_ = rail::core::railProfileCurve(scene);
   const rc::WheelContactOptions contact = rail::core::contactOptions(scene, options.contact);
-  contact_model_ = std::make_unique<rc::WheelContactModel>(wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
-                                                           rc::railSectionCentre(rail_profile_, section_depth),
-                                                           contact);
+  contact_model_ =
+      std::make_unique<rc::WheelContactModel>(wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
+                                              rc::railSectionCentre(rail_profile_, section_depth), contact);
   work_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactWork());
   result_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactResult());
   seen_.assign(static_cast<std::size_t>(n_wheels), 0);
@@ -161,11 +163,10 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   // on its self-weight state d_g, the same start).
   if (fe_) {
     const TrackModel& model = fe_->model;
-    integrator_ =
-        std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity,
-                                            options.cost, countEndDashpots(model.mesh));
-    Eigen::VectorXd d0 = options.include_gravity ? staticGravityDeflection(model.system)
-                                                 : Eigen::VectorXd::Zero(model.system.size());
+    integrator_ = std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity,
+                                                      options.cost, countEndDashpots(model.mesh));
+    Eigen::VectorXd d0 =
+        options.include_gravity ? staticGravityDeflection(model.system) : Eigen::VectorXd::Zero(model.system.size());
     state_ = integrator_->initialState(d0);
     d_static_ = d0;  // the zero of energy(): the self-weight equilibrium
     energy_scratch_.resize(d0.size());
@@ -374,8 +375,8 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
         const rc::ContactPointResult& cp = res.contact[c];
         if (!cp.active) continue;
         // Eq. 15 for this contact about its own section centre, then eq. 16 onto the element's nodes.
-        addRailPointLoad(feMesh(), rail, cp.s_r, cp.rail_wrench.force_in_world,
-                         cp.rail_wrench.moment_in_world, *loads_);
+        addRailPointLoad(feMesh(), rail, cp.s_r, cp.rail_wrench.force_in_world, cp.rail_wrench.moment_in_world,
+                         *loads_);
       }
     } else {
       contact_model_->evaluate(ws, side, *geometry_, rc::RigidRailDeformation(), work_[id], res, contact_cost_);
@@ -527,8 +528,8 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
   const double cbrt_N = std::cbrt(o.N);
   o.a = L.a_coeff * cbrt_N;
   o.b = L.b_coeff * cbrt_N;
-  const rc::Creepages cr = rc::computeCreepages(L.v_wheel, v_rail, L.omega_wheel, L.omega_rail_p,
-                                                 L.R_contact_to_world, L.V_p - dv_rail.dot(t_w), opt.creepage);
+  const rc::Creepages cr = rc::computeCreepages(L.v_wheel, v_rail, L.omega_wheel, L.omega_rail_p, L.R_contact_to_world,
+                                                L.V_p - dv_rail.dot(t_w), opt.creepage);
   o.nu_x = cr.nu_x;
   o.nu_y = cr.nu_y;
   o.phi = opt.spin ? cr.phi : 0.0;
@@ -589,8 +590,8 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
       const double factor = 1.0 + D * cp.penetration_rate;
       if (cp.N > 0.0 && factor > 0.0 && cp.a > 0.0 && cp.b > 0.0) {
         const double cbrt_N = std::cbrt(cp.N);
-        memory = Eigen::Vector3d(cp.N / (std::pow(cp.penetration, damping.exponent) * factor), cp.a / cbrt_N,
-                                 cp.b / cbrt_N);
+        memory =
+            Eigen::Vector3d(cp.N / (std::pow(cp.penetration, damping.exponent) * factor), cp.a / cbrt_N, cp.b / cbrt_N);
       }
       if (!(memory(0) > 0.0)) continue;
       int beam = 0;
@@ -784,8 +785,7 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     cp.penetration_rate = lo.delta_dot;
     cp.force_on_wheel_in_world = lo.F_wheel;  // = -f, the force the rails carry
     cp.rail_wrench = rc::railSectionWrench(Lc.f, Eigen::Vector3d::Zero(),
-                                             cp.p_rail_in_world - cp.p_section_centre_in_world,
-                                             Eigen::Vector3d::Zero());
+                                           cp.p_rail_in_world - cp.p_section_centre_in_world, Eigen::Vector3d::Zero());
     const Eigen::Matrix<double, 12, 1> df = Lc.W * (Lc.f - Lc.f_p);
     for (int j = 0; j < 12; ++j) {
       if (df(j) == 0.0) continue;
@@ -807,20 +807,18 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     const rc::ContactPointResult& fl = res.contact[rc::kFlange];
     const Eigen::Matrix3d& A = ws.R_wheelset_to_world;
     res.wheel_centre = rc::wheelCentreWrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
-                                               A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
-                                               A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
+                                             A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
+                                             A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
     const rc::ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
     res.rail_section_s = ref.s_r;
     res.rail_section = rc::railSectionWrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
-                                               tr.p_rail_in_world - ref.p_section_centre_in_world,
-                                               fl.p_rail_in_world - ref.p_section_centre_in_world);
+                                             tr.p_rail_in_world - ref.p_section_centre_in_world,
+                                             fl.p_rail_in_world - ref.p_section_centre_in_world);
     writeWrench(Le.frame_index, ws, res, out);
   }
 }
 
-int CosimTrack::sectionCount() const {
-  return window_ ? window_->sectionCount() : static_cast<int>(sections_.size());
-}
+int CosimTrack::sectionCount() const { return window_ ? window_->sectionCount() : static_cast<int>(sections_.size()); }
 
 int CosimTrack::addSection(double s) {
   if (window_) return window_->addSection(s);
@@ -882,8 +880,9 @@ void CosimTrack::sectionDeflection(int i, RailSectionDeflection& out) const {
 
 void CosimTrack::sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const {
   if (window_)
-    throw std::runtime_error("CosimTrack::sectionDeflection(i, d, out): not available with a track window (its "
-                             "DOFs change at every move); use sectionDeflection(i, out)");
+    throw std::runtime_error(
+        "CosimTrack::sectionDeflection(i, d, out): not available with a track window (its "
+        "DOFs change at every move); use sectionDeflection(i, out)");
   const Section& sec = sections_[static_cast<std::size_t>(i)];
   out.s = sec.s;
   for (int r = 0; r < 2; ++r) {

@@ -22,12 +22,16 @@ cc::FrameTransport& timedOrPlain(std::unique_ptr<cc::TimedTransport>& timed, cc:
 
 const char* describe(CosimStepStatus status) {
   switch (status) {
-    case CosimStepStatus::kOk: return "accepted";
-    case CosimStepStatus::kWrongWheelCount: return "wrong wheel count";
-    case CosimStepStatus::kBadWheelId: return "bad wheel id";
+    case CosimStepStatus::kOk:
+      return "accepted";
+    case CosimStepStatus::kWrongWheelCount:
+      return "wrong wheel count";
+    case CosimStepStatus::kBadWheelId:
+      return "bad wheel id";
     case CosimStepStatus::kWheelOutsideWindow:
       return "a wheel is outside the track window (solver.track_window: margins too small?)";
-    case CosimStepStatus::kWindowMoveFailed: return "the track window could not move";
+    case CosimStepStatus::kWindowMoveFailed:
+      return "the track window could not move";
   }
   return "?";
 }

@@ -25,7 +25,7 @@ void placeBar(Matrix12d& out, double diag, double off, int i, int j) {
 Eigen::Matrix4d hermiteStiffness(double EI, double L) {
   const double L2 = L * L, L3 = L2 * L;
   Eigen::Matrix4d k;
-  k << 12.0 / L3, 6.0 / L2, -12.0 / L3, 6.0 / L2,  //
+  k << 12.0 / L3, 6.0 / L2, -12.0 / L3, 6.0 / L2,   //
       6.0 / L2, 4.0 / L, -6.0 / L2, 2.0 / L,        //
       -12.0 / L3, -6.0 / L2, 12.0 / L3, -6.0 / L2,  //
       6.0 / L2, 2.0 / L, -6.0 / L2, 4.0 / L;
@@ -35,9 +35,9 @@ Eigen::Matrix4d hermiteStiffness(double EI, double L) {
 Eigen::Matrix4d hermiteMass(double rhoA, double L) {
   const double L2 = L * L;
   Eigen::Matrix4d m;
-  m << 156.0, 22.0 * L, 54.0, -13.0 * L,  //
+  m << 156.0, 22.0 * L, 54.0, -13.0 * L,        //
       22.0 * L, 4.0 * L2, 13.0 * L, -3.0 * L2,  //
-      54.0, 13.0 * L, 156.0, -22.0 * L,  //
+      54.0, 13.0 * L, 156.0, -22.0 * L,         //
       -13.0 * L, -3.0 * L2, -22.0 * L, 4.0 * L2;
   return (rhoA * L / 420.0) * m;
 }

@@ -18,7 +18,8 @@ PadForceProbe::PadForceProbe(const TrackMesh& mesh) {
       const auto it = std::find(nodes.begin(), nodes.end(), e.node_a);
       if (it == nodes.end()) continue;
       const auto k = static_cast<int>(it - nodes.begin());
-      if (k % n_e == 0 && k / n_e < mesh.n_sleepers) pad_[static_cast<std::size_t>(k / n_e)][static_cast<std::size_t>(r)] = static_cast<int>(i);
+      if (k % n_e == 0 && k / n_e < mesh.n_sleepers)
+        pad_[static_cast<std::size_t>(k / n_e)][static_cast<std::size_t>(r)] = static_cast<int>(i);
     }
   }
   for (std::size_t k = 0; k < pad_.size(); ++k) {
@@ -56,8 +57,8 @@ int PadForceProbe::evaluate(const TrackMesh& mesh, const rail::contact::TrackGeo
                             double s_from, double s_to, PadForceSample* out, int capacity) const noexcept {
   if (mesh.sleeper_spacing <= 0.0 || !(s_to >= s_from)) return 0;
   const int k0 = std::max(0, static_cast<int>(std::ceil((s_from - mesh.s_start) / mesh.sleeper_spacing - 1e-9)));
-  const int k1 = std::min(sleeperCount() - 1,
-                          static_cast<int>(std::floor((s_to - mesh.s_start) / mesh.sleeper_spacing + 1e-9)));
+  const int k1 =
+      std::min(sleeperCount() - 1, static_cast<int>(std::floor((s_to - mesh.s_start) / mesh.sleeper_spacing + 1e-9)));
   int n = 0;
   rail::contact::TrackPoint tp;
   for (int k = k0; k <= k1 && n < capacity; ++k, ++n) {
@@ -65,10 +66,13 @@ int PadForceProbe::evaluate(const TrackMesh& mesh, const rail::contact::TrackGeo
     o.s = mesh.s_start + k * mesh.sleeper_spacing;
     geometry.centre(o.s, tp);
     for (int r = 0; r < 2; ++r) {
-      const SpringDamperElement& e = mesh.springs[static_cast<std::size_t>(pad_[static_cast<std::size_t>(k)][static_cast<std::size_t>(r)])];
+      const SpringDamperElement& e =
+          mesh.springs[static_cast<std::size_t>(pad_[static_cast<std::size_t>(k)][static_cast<std::size_t>(r)])];
       const Eigen::Vector3d& P = e.p_point_in_world;
-      const Eigen::Vector3d delta = pointMotion(mesh, e.node_b, P, d, d_static) - pointMotion(mesh, e.node_a, P, d, d_static);
-      const Eigen::Vector3d delta_dot = pointMotion(mesh, e.node_b, P, v, nullptr) - pointMotion(mesh, e.node_a, P, v, nullptr);
+      const Eigen::Vector3d delta =
+          pointMotion(mesh, e.node_b, P, d, d_static) - pointMotion(mesh, e.node_a, P, d, d_static);
+      const Eigen::Vector3d delta_dot =
+          pointMotion(mesh, e.node_b, P, v, nullptr) - pointMotion(mesh, e.node_a, P, v, nullptr);
       const Eigen::Vector3d local = e.R_local_to_world.transpose() * delta;
       const Eigen::Vector3d local_dot = e.R_local_to_world.transpose() * delta_dot;
       const Eigen::Vector3d f_local = -(e.k.head<3>().cwiseProduct(local) + e.c.head<3>().cwiseProduct(local_dot));

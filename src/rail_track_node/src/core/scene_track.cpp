@@ -37,8 +37,7 @@ TrackData sceneTrackData(const Scene& scene, const rc::GeometrySpec& geometry, c
   if (!(L.rail_lateral_offset < 0.5 * L.sleeper_length))
     throw SceneError(scene.file + ": track.gauge: the rail seats (" + std::to_string(L.rail_lateral_offset) +
                      " m from the centre) lie beyond the sleeper ends (track.data: " + scene.track.data.path +
-                     ": layout.sleeper_length " +
-                     std::to_string(L.sleeper_length) + " m)");
+                     ": layout.sleeper_length " + std::to_string(L.sleeper_length) + " m)");
   if (!scene.effects.track_damping) removeTrackDamping(data);
   data.absorbing_ends.enabled = scene.effects.absorbing_ends;
   return data;

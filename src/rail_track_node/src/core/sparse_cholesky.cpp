@@ -12,10 +12,10 @@ namespace track {
 struct SparseCholesky::Impl {
   cholmod_common common;
   cholmod_factor* L = nullptr;
-  cholmod_dense B;               // header over the caller's right-hand side (no copy)
-  cholmod_dense* X = nullptr;    // solution buffer, reused
-  cholmod_dense* Y = nullptr;    // workspace, reused
-  cholmod_dense* E = nullptr;    // workspace, reused
+  cholmod_dense B;             // header over the caller's right-hand side (no copy)
+  cholmod_dense* X = nullptr;  // solution buffer, reused
+  cholmod_dense* Y = nullptr;  // workspace, reused
+  cholmod_dense* E = nullptr;  // workspace, reused
   int n = 0;
 };
 

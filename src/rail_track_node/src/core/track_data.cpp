@@ -136,19 +136,19 @@ class MapReader {
 
 // Upper bounds of the track data, refused above (inf included). They are far beyond any real track
 // component, so they only catch mistyped or corrupted values before they reach the FE model.
-constexpr double kMaxModulus = 1e13;          // Pa, E and G (diamond: E = 1.2e12 Pa)
-constexpr double kMaxArea = 1.0;              // m^2, beam cross-section (a 1 m x 1 m section)
-constexpr double kMaxSecondMoment = 1.0;      // m^4, J, I_y, I_z (1 m x 1 m section: I = 0.083 m^4)
-constexpr double kMaxDensity = 1e5;           // kg/m^3 (densest element, osmium: 2.26e4)
-constexpr double kMaxRayleighAlpha = 1e4;     // 1/s, mass-proportional damping coefficient
-constexpr double kMaxRayleighBeta = 10.0;     // s, stiffness-proportional damping coefficient
-constexpr double kMaxStiffness = 1e12;        // N/m (translational) and N m/rad (k_roll)
-constexpr double kMaxDamping = 1e12;          // N s/m
-constexpr double kMaxLumpedMass = 1e5;        // kg, ballast mass per sleeper node
-constexpr double kMaxTrackLength = 10.0;      // m, sleeper spacing / length, rail lateral offset
-constexpr double kMaxSectionHeight = 2.0;     // m, pad thickness, rail centroid height, sleeper height
+constexpr double kMaxModulus = 1e13;       // Pa, E and G (diamond: E = 1.2e12 Pa)
+constexpr double kMaxArea = 1.0;           // m^2, beam cross-section (a 1 m x 1 m section)
+constexpr double kMaxSecondMoment = 1.0;   // m^4, J, I_y, I_z (1 m x 1 m section: I = 0.083 m^4)
+constexpr double kMaxDensity = 1e5;        // kg/m^3 (densest element, osmium: 2.26e4)
+constexpr double kMaxRayleighAlpha = 1e4;  // 1/s, mass-proportional damping coefficient
+constexpr double kMaxRayleighBeta = 10.0;  // s, stiffness-proportional damping coefficient
+constexpr double kMaxStiffness = 1e12;     // N/m (translational) and N m/rad (k_roll)
+constexpr double kMaxDamping = 1e12;       // N s/m
+constexpr double kMaxLumpedMass = 1e5;     // kg, ballast mass per sleeper node
+constexpr double kMaxTrackLength = 10.0;   // m, sleeper spacing / length, rail lateral offset
+constexpr double kMaxSectionHeight = 2.0;  // m, pad thickness, rail centroid height, sleeper height
 constexpr int kMaxElementsBetweenSleepers = 1000;
-constexpr double kMaxDesignFrequency = 1e5;   // Hz, absorbing-end tuning frequency
+constexpr double kMaxDesignFrequency = 1e5;  // Hz, absorbing-end tuning frequency
 
 BeamSection readBeam(MapReader r) {
   BeamSection s;

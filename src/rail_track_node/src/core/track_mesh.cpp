@@ -101,8 +101,8 @@ TrackMesh buildTrackMesh(const TrackData& data, const MeshOptions& options, cons
        << options.track_length;
     throw std::runtime_error(os.str());
   }
-  if (n_e < 1) throw std::runtime_error("buildTrackMesh: rail_elements_between_sleepers must be >= 1, got " +
-                                        std::to_string(n_e));
+  if (n_e < 1)
+    throw std::runtime_error("buildTrackMesh: rail_elements_between_sleepers must be >= 1, got " + std::to_string(n_e));
   const int n_bays = static_cast<int>(std::floor(options.track_length / a + 1e-9));
   const int n_sleepers = n_bays + 1;
 
@@ -112,8 +112,8 @@ TrackMesh buildTrackMesh(const TrackData& data, const MeshOptions& options, cons
   mesh.sleeper_spacing = a;
   mesh.rail_elements_between_sleepers = n_e;
 
-  const double y_sleeper[6] = {-0.5 * L.sleeper_length, -L.rail_lateral_offset, -L.sleeper_inner_node_offset,
-                               L.sleeper_inner_node_offset, L.rail_lateral_offset, 0.5 * L.sleeper_length};
+  const double y_sleeper[6] = {-0.5 * L.sleeper_length,     -L.rail_lateral_offset, -L.sleeper_inner_node_offset,
+                               L.sleeper_inner_node_offset, L.rail_lateral_offset,  0.5 * L.sleeper_length};
   const int seat_node[2] = {4, 1};  // sleeper node under the left / right rail
   const double h_rail = L.railCentroidAboveSeat();
 
@@ -145,9 +145,9 @@ TrackMesh buildTrackMesh(const TrackData& data, const MeshOptions& options, cons
           F.p_centre_in_world + F.R_track_to_world * Eigen::Vector3d(0.0, y_sleeper[n], -0.5 * L.sleeper_height),
           NodeKind::Sleeper, false);
     for (int n : L.ballast_nodes)
-      foundation_nodes[k].push_back(addNode(
-          F.p_centre_in_world + F.R_track_to_world * Eigen::Vector3d(0.0, y_sleeper[n], -L.sleeper_height),
-          NodeKind::Foundation, true));
+      foundation_nodes[k].push_back(
+          addNode(F.p_centre_in_world + F.R_track_to_world * Eigen::Vector3d(0.0, y_sleeper[n], -L.sleeper_height),
+                  NodeKind::Foundation, true));
     addRailNodes(F);
     if (k + 1 < n_sleepers) {
       for (int m = 1; m < n_e; ++m) {
@@ -214,8 +214,8 @@ TrackMesh buildTrackMesh(const TrackData& data, const MeshOptions& options, cons
     for (int n : L.ballast_nodes) {
       const int na = mesh.sleeper_nodes[k][n], nb = mesh.sleeper_nodes[k + 1][n];
       const Eigen::Vector3d mid = 0.5 * (mesh.nodes[na].p_in_world + mesh.nodes[nb].p_in_world);
-      mesh.springs.push_back(SpringDamperElement{SpringKind::SleeperInteraction, na, nb, mid,
-                                                 F_mid.R_track_to_world, k_int, c_int});
+      mesh.springs.push_back(
+          SpringDamperElement{SpringKind::SleeperInteraction, na, nb, mid, F_mid.R_track_to_world, k_int, c_int});
     }
   }
 

@@ -57,8 +57,8 @@ void TrackSimulator::setProgressCallback(ProgressCallback cb, double interval_s)
   progress_interval_ = interval_s;
 }
 
-bool addRailHeadLoad(const TrackMesh& mesh, double inclination, double head_arm, int rail, double s,
-                     double vertical, double lateral, NodalLoads& loads) {
+bool addRailHeadLoad(const TrackMesh& mesh, double inclination, double head_arm, int rail, double s, double vertical,
+                     double lateral, NodalLoads& loads) {
   int beam = 0;
   double xi = 0.0;
   if (!mesh.locateRail(rail, s, beam, xi)) return false;

@@ -109,13 +109,14 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
   if (!(S.shift > 0.0) || !std::isfinite(S.shift)) refuse("shift", "must be finite and > 0 m", S.shift);
   if (!(S.vehicle_length >= 0.0) || !std::isfinite(S.vehicle_length))
     refuse("vehicle_length", "must be finite and >= 0 m", S.vehicle_length);
-  if (!(S.length >= 0.0) || !std::isfinite(S.length)) refuse("length", "must be finite and >= 0 m (0: minimum)", S.length);
+  if (!(S.length >= 0.0) || !std::isfinite(S.length))
+    refuse("length", "must be finite and >= 0 m (0: minimum)", S.length);
   dt_ = S.dt > 0.0 ? S.dt : scene.solver.track_step;
   if (!(dt_ > 0.0) || !std::isfinite(dt_)) refuse("dt", "must be finite and > 0 s", dt_);
   if (!(s_front >= s_rear) || !std::isfinite(s_rear) || !std::isfinite(s_front)) {
     std::ostringstream os;
-    os << scene.file << ": track window: the first wheel (s = " << s_front << " m) must not be behind the last one (s = "
-       << s_rear << " m)";
+    os << scene.file << ": track window: the first wheel (s = " << s_front
+       << " m) must not be behind the last one (s = " << s_rear << " m)";
     throw std::runtime_error(os.str());
   }
 
@@ -126,16 +127,19 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
     double k_lat = 0.0, k_vert = 0.0;
     foundationModuli(data_, k_lat, k_vert);
     if (!(data_.absorbing_ends.design_frequency > 0.0))
-      throw SceneError(scene.file + ": track.data: absorbing_ends.design_frequency must be > 0 Hz for the window's "
-                                    "absorbing ends, got " + fmt(data_.absorbing_ends.design_frequency));
+      throw SceneError(scene.file +
+                       ": track.data: absorbing_ends.design_frequency must be > 0 Hz for the window's "
+                       "absorbing ends, got " +
+                       fmt(data_.absorbing_ends.design_frequency));
     c_end_ = absorbingEndDashpots(data_.rail, k_lat, k_vert, 2.0 * kPi * data_.absorbing_ends.design_frequency);
   }
   data_.absorbing_ends.enabled = false;  // the window places its own end dashpots (buildWindow)
   seat_below_centre_ = seatPlaneBelowCentreLine(data_, S.track.rail_height);
   if (S.condensed_ends) {
     if (!(S.boundary_length >= data_.layout.sleeper_spacing) || !std::isfinite(S.boundary_length))
-      refuse("boundary_length", "must be finite and at least one sleeper bay (" + fmt(data_.layout.sleeper_spacing) +
-                                    " m)", S.boundary_length);
+      refuse("boundary_length",
+             "must be finite and at least one sleeper bay (" + fmt(data_.layout.sleeper_spacing) + " m)",
+             S.boundary_length);
     const int nb = baysFor(S.boundary_length, data_.layout.sleeper_spacing);
     condensed_[0] = condenseEnd(data_, nb, false);
     condensed_[1] = condenseEnd(data_, nb, true);
@@ -155,9 +159,10 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
     bays = baysFor(S.length, a);
     if (bays < min_bays) {
       std::ostringstream os;
-      os << scene.file << ": track window: length " << S.length << " m is shorter than the vehicle (" << S.vehicle_length
-         << " m) + behind (" << S.behind << " m) + ahead (" << S.ahead << " m) + shift (" << shift_bays_ * a
-         << " m); it needs at least " << min_length_ << " m (" << min_bays << " sleeper bays of " << a << " m)";
+      os << scene.file << ": track window: length " << S.length << " m is shorter than the vehicle ("
+         << S.vehicle_length << " m) + behind (" << S.behind << " m) + ahead (" << S.ahead << " m) + shift ("
+         << shift_bays_ * a << " m); it needs at least " << min_length_ << " m (" << min_bays << " sleeper bays of "
+         << a << " m)";
       throw std::runtime_error(os.str());
     }
   }
@@ -210,7 +215,8 @@ std::unique_ptr<TrackWindow::Window> TrackWindow::buildWindow(int first_sleeper)
   }
   // Same shape as the current window (straight line: a translated copy): its matrices, factor and static
   // state are those of the current window; the caller moves them over.
-  if (window_ && window_->rear_cut == rear_cut && window_->front_cut == front_cut && sameShape(window_->model.mesh, mesh))
+  if (window_ && window_->rear_cut == rear_cut && window_->front_cut == front_cut &&
+      sameShape(window_->model.mesh, mesh))
     return w;
   w->model.system = assembleLinearSystem(mesh, data_, settings_.track.g_in_world);
   if (settings_.condensed_ends) {
@@ -229,7 +235,8 @@ namespace {
 // The 8 free nodes of sleeper plane k (6 sleeper nodes right to left, left rail node, right rail node).
 std::array<int, 8> planeNodes(const TrackMesh& mesh, int k) {
   std::array<int, 8> p;
-  for (int q = 0; q < 6; ++q) p[static_cast<std::size_t>(q)] = mesh.sleeper_nodes[static_cast<std::size_t>(k)][static_cast<std::size_t>(q)];
+  for (int q = 0; q < 6; ++q)
+    p[static_cast<std::size_t>(q)] = mesh.sleeper_nodes[static_cast<std::size_t>(k)][static_cast<std::size_t>(q)];
   for (int r = 0; r < 2; ++r)
     p[static_cast<std::size_t>(6 + r)] =
         mesh.rail_nodes[r][static_cast<std::size_t>(k * mesh.rail_elements_between_sleepers)];
@@ -252,10 +259,13 @@ TrackWindow::CondensedEnd TrackWindow::condenseEnd(const TrackData& data, int ba
   // Nodes of the plane itself (its foundation nodes are fixed): elements among them belong to the window.
   std::vector<char> in_plane(mesh.nodes.size(), 0);
   for (int nd : plane) in_plane[static_cast<std::size_t>(nd)] = 1;
-  auto own = [&](int nd) { return nd < 0 || in_plane[static_cast<std::size_t>(nd)] || mesh.nodes[static_cast<std::size_t>(nd)].fixed; };
+  auto own = [&](int nd) {
+    return nd < 0 || in_plane[static_cast<std::size_t>(nd)] || mesh.nodes[static_cast<std::size_t>(nd)].fixed;
+  };
   std::vector<BeamElement> beams;
   for (const BeamElement& b : mesh.beams)
-    if (!(in_plane[static_cast<std::size_t>(b.node_i)] && in_plane[static_cast<std::size_t>(b.node_j)])) beams.push_back(b);
+    if (!(in_plane[static_cast<std::size_t>(b.node_i)] && in_plane[static_cast<std::size_t>(b.node_j)]))
+      beams.push_back(b);
   std::vector<SpringDamperElement> springs;
   for (const SpringDamperElement& sp : mesh.springs)
     if (!(in_plane[static_cast<std::size_t>(sp.node_a)] && own(sp.node_b))) springs.push_back(sp);
@@ -271,7 +281,8 @@ TrackWindow::CondensedEnd TrackWindow::condenseEnd(const TrackData& data, int ba
   const int n = mesh.n_free_dofs, nb = 48, ni = n - nb;
   std::vector<int> pos(static_cast<std::size_t>(n), -1);  // b: 0..47; i: 48..n-1
   for (int q = 0; q < 8; ++q)
-    for (int j = 0; j < 6; ++j) pos[static_cast<std::size_t>(mesh.dofIndex(plane[static_cast<std::size_t>(q)], j))] = 6 * q + j;
+    for (int j = 0; j < 6; ++j)
+      pos[static_cast<std::size_t>(mesh.dofIndex(plane[static_cast<std::size_t>(q)], j))] = 6 * q + j;
   int next = nb;
   for (int i = 0; i < n; ++i)
     if (pos[static_cast<std::size_t>(i)] < 0) pos[static_cast<std::size_t>(i)] = next++;
@@ -287,7 +298,8 @@ TrackWindow::CondensedEnd TrackWindow::condenseEnd(const TrackData& data, int ba
   const Eigen::MatrixXd K_ib = Eigen::MatrixXd(K.bottomLeftCorner(ni, nb));
   Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> llt(K_ii);
   if (llt.info() != Eigen::Success)
-    throw std::runtime_error("track window: the track beyond a window end is not supported (K_ii not positive definite)");
+    throw std::runtime_error(
+        "track window: the track beyond a window end is not supported (K_ii not positive definite)");
   // Static shapes: the interior's static response to each boundary DOF, x = [I; Phi].
   Eigen::MatrixXd X(n, nb);
   X.topRows(nb).setIdentity();
@@ -325,14 +337,16 @@ void TrackWindow::addCondensedEnd(Window& w, bool front) const {
   for (int q = 0; q < 16; ++q) B.block<3, 3>(3 * q, 3 * q) = R;
   std::array<int, 48> dofs;
   for (int q = 0; q < 8; ++q)
-    for (int j = 0; j < 6; ++j) dofs[static_cast<std::size_t>(6 * q + j)] = mesh.dofIndex(plane[static_cast<std::size_t>(q)], j);
+    for (int j = 0; j < 6; ++j)
+      dofs[static_cast<std::size_t>(6 * q + j)] = mesh.dofIndex(plane[static_cast<std::size_t>(q)], j);
   auto add = [&](Eigen::SparseMatrix<double>& A, const Eigen::MatrixXd& local) {
     const Eigen::MatrixXd world = B * local * B.transpose();
     std::vector<Eigen::Triplet<double>> t;
     t.reserve(48 * 48);
     for (int r = 0; r < 48; ++r)
       for (int c = 0; c < 48; ++c)
-        if (world(r, c) != 0.0) t.emplace_back(dofs[static_cast<std::size_t>(r)], dofs[static_cast<std::size_t>(c)], world(r, c));
+        if (world(r, c) != 0.0)
+          t.emplace_back(dofs[static_cast<std::size_t>(r)], dofs[static_cast<std::size_t>(c)], world(r, c));
     Eigen::SparseMatrix<double> S(A.rows(), A.cols());
     S.setFromTriplets(t.begin(), t.end());
     A += S;
@@ -377,7 +391,8 @@ void TrackWindow::moveTo(int first_sleeper) {
     for (int k = 0; k < count; ++k) {
       const int k_old = k + m * n_e;
       if (k_old >= 0 && k_old < count)
-        copyNode(new_mesh.rail_nodes[r][static_cast<std::size_t>(k)], old_mesh.rail_nodes[r][static_cast<std::size_t>(k_old)]);
+        copyNode(new_mesh.rail_nodes[r][static_cast<std::size_t>(k)],
+                 old_mesh.rail_nodes[r][static_cast<std::size_t>(k_old)]);
     }
   }
   const int n_s = new_mesh.n_sleepers;
@@ -574,7 +589,8 @@ void evalProbe(const std::array<Probe, 2>& probes, const Eigen::VectorXd& d, Rai
   for (int r = 0; r < 2; ++r) {
     const Probe& p = probes[static_cast<std::size_t>(r)];
     Eigen::Matrix<double, 12, 1> d_e;
-    for (int k = 0; k < 12; ++k) d_e(k) = p.dofs[static_cast<std::size_t>(k)] >= 0 ? d(p.dofs[static_cast<std::size_t>(k)]) : 0.0;
+    for (int k = 0; k < 12; ++k)
+      d_e(k) = p.dofs[static_cast<std::size_t>(k)] >= 0 ? d(p.dofs[static_cast<std::size_t>(k)]) : 0.0;
     out.displacement[static_cast<std::size_t>(r)].noalias() = p.P_u * d_e;
     out.rotation[static_cast<std::size_t>(r)].noalias() = p.P_theta * d_e;
   }
@@ -586,7 +602,8 @@ void TrackWindow::placeSection(Section& sec) const {
   rc::TrackPoint tp;
   geometry_.centre(sec.s, tp);
   const TrackMesh& mesh = window_->model.mesh;
-  sec.inside = sec.s >= sBegin() - kSlack && sec.s <= sEnd() + kSlack && makeProbe(mesh, tp.R_track_to_world, sec.s, sec.rail);
+  sec.inside =
+      sec.s >= sBegin() - kSlack && sec.s <= sEnd() + kSlack && makeProbe(mesh, tp.R_track_to_world, sec.s, sec.rail);
   sec.beyond = false;
   if (sec.inside || !settings_.condensed_ends) return;
   const bool front = sec.s > sEnd();
@@ -594,14 +611,15 @@ void TrackWindow::placeSection(Section& sec) const {
   const CondensedEnd& e = condensed_[front ? 1 : 0];
   const double piece_length = e.piece.n_sleepers > 0 ? (e.piece.n_sleepers - 1) * e.piece.sleeper_spacing : 0.0;
   const double x = front ? sec.s - sEnd() : sBegin() - sec.s;  // distance beyond the end plane, m
-  if (!(x <= piece_length)) return;                              // beyond the condensed piece: at rest
+  if (!(x <= piece_length)) return;                            // beyond the condensed piece: at rest
   std::array<RailProbe, 2> piece_probe;
   if (!makeProbe(e.piece, Eigen::Matrix3d::Identity(), front ? x : piece_length - x, piece_probe)) return;
   // End plane of the window, its track frame, and the rotation from it to the frame at the section.
   const int k = front ? mesh.n_sleepers - 1 : 0;
   const std::array<int, 8> plane = planeNodes(mesh, k);
   for (int q = 0; q < 8; ++q)
-    for (int j = 0; j < 6; ++j) sec.plane_dofs[static_cast<std::size_t>(6 * q + j)] = mesh.dofIndex(plane[static_cast<std::size_t>(q)], j);
+    for (int j = 0; j < 6; ++j)
+      sec.plane_dofs[static_cast<std::size_t>(6 * q + j)] = mesh.dofIndex(plane[static_cast<std::size_t>(q)], j);
   rc::TrackPoint end;
   geometry_.centre(mesh.s_start + k * mesh.sleeper_spacing, end);
   const Eigen::Matrix3d R_end_to_section = tp.R_track_to_world.transpose() * end.R_track_to_world;
@@ -635,7 +653,8 @@ int TrackWindow::addSection(double s, double static_half_length) {
   }
   if (!(static_half_length > 0.0)) {
     std::ostringstream os;
-    os << "track window: static_half_length of the section at s = " << s << " m must be > 0 m, got " << static_half_length;
+    os << "track window: static_half_length of the section at s = " << s << " m must be > 0 m, got "
+       << static_half_length;
     throw std::runtime_error(os.str());
   }
   Section sec;

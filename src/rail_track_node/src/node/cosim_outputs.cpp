@@ -51,8 +51,8 @@ CosimTrackOutputs::CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, 
   if (markers_on_) {
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("/markers", 2, true);
     if (track.trackWindow() == nullptr) {
-      markers_ = std::make_unique<TrackMarkers>(track.sceneTrack()->model, marker_frame_, marker_scale_,
-                                                marker_colour_range_);
+      markers_ =
+          std::make_unique<TrackMarkers>(track.sceneTrack()->model, marker_frame_, marker_scale_, marker_colour_range_);
     }
     marker_period_ = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
   }
@@ -162,7 +162,8 @@ void CosimTrackOutputs::close(const std::string& node, const CosimTrackRun& run,
   }
   ROS_INFO_STREAM(cost_.toText(node, wall, run.time(), &clock_));
   bag_.close(node);
-  bag_.writeBeside(node, ".cost.yaml", cost_.toYaml(node, scene_, wall, run.time(), &clock_));  // <stem>.track.cost.yaml
+  bag_.writeBeside(node, ".cost.yaml",
+                   cost_.toYaml(node, scene_, wall, run.time(), &clock_));  // <stem>.track.cost.yaml
   ROS_INFO("%s: %s after %llu steps (t = %.4f s), %ld Newmark steps, %.2f s wall", node.c_str(),
            exit_code == core::kExitOk ? "finished" : "stopped", static_cast<unsigned long long>(run.steps()),
            run.time(), track_.newmarkSteps(), wall);

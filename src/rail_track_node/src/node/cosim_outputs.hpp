@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include <rail_core/cost_profile.hpp>
-#include <rail_core/coupling/frames.hpp>
-#include <rail_core/scene.hpp>
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/Energy.h>
 #include <rail_msgs/RailDeflection.h>
 #include <rail_msgs/RailPadForces.h>
+#include <rail_core/cost_profile.hpp>
+#include <rail_core/coupling/frames.hpp>
+#include <rail_core/scene.hpp>
 #include <rail_ros/run_output.hpp>
 
 #include "rail_track_node/cosim_track.hpp"

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <memory>
 
-#include <rail_core/exit_codes.hpp>
 #include <rail_msgs/RailDeflection.h>
+#include <rail_core/exit_codes.hpp>
 #include <rail_ros/master_watch.hpp>
 #include <rail_ros/node_scaffold.hpp>
 #include <rail_ros/run_output.hpp>
@@ -80,8 +80,9 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   double marker_period = 0.0;
   if (scene.effects.rviz_markers) {
     marker_pub = nh.advertise<visualization_msgs::MarkerArray>("/markers", 2, true);
-    markers = std::make_unique<TrackMarkers>(model, pnh.param<std::string>("frame_id", "world"),
-                                             pnh.param("marker_scale", 200.0), pnh.param("marker_colour_range", 1.0e-3));
+    markers =
+        std::make_unique<TrackMarkers>(model, pnh.param<std::string>("frame_id", "world"),
+                                       pnh.param("marker_scale", 200.0), pnh.param("marker_colour_range", 1.0e-3));
     marker_period = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
   }
 
@@ -102,9 +103,9 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   const double wait = pnh.param("wait_for_subscribers", 0.0);
   if (wait > 0.0) {
     const ros::WallTime until = ros::WallTime::now() + ros::WallDuration(wait);
-    while (!stop.requested && ros::ok() && ros::WallTime::now() < until &&
-           ((deflections && deflection_pub.getNumSubscribers() == 0) ||
-            (markers && marker_pub.getNumSubscribers() == 0)))
+    while (
+        !stop.requested && ros::ok() && ros::WallTime::now() < until &&
+        ((deflections && deflection_pub.getNumSubscribers() == 0) || (markers && marker_pub.getNumSubscribers() == 0)))
       ros::WallDuration(0.02).sleep();
   }
 

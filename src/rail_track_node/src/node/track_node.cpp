@@ -39,8 +39,8 @@ namespace {
 
 // The track side of a co-simulation after the handshake (peer: the vehicle node; wheel_span: its first to
 // last wheel, m), or of a replay of `replay_bag`. Returns the exit code.
-int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer,
-             double wheel_span, const std::string& replay_bag = "") {
+int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer, double wheel_span,
+             const std::string& replay_bag = "") {
   const std::string me = ros::this_node::getName();
   ros_glue::NodeStop& stop = ros_glue::nodeStop();
   ros_glue::MasterWatch master_watch(stop.requested);  // a lost master stops the run like a signal
@@ -85,8 +85,8 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   try {
     if (!transport) transport = ros_glue::makeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &stop.requested);
   } catch (const cc::CouplingError& e) {
-    ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), toString(scene.solver.transport),
-              peer.c_str(), e.what());
+    ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), toString(scene.solver.transport), peer.c_str(),
+              e.what());
     return cc::exitCode(e.status());
   } catch (const std::exception& e) {
     ROS_FATAL("%s: cannot open the %s transport: %s", me.c_str(), toString(scene.solver.transport), e.what());
@@ -131,7 +131,10 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (ros_glue::nodeHelpRequested(argc, argv, "rail_track", "the track side of a railsim run (FE track and the wheel-rail contact in co-simulation, moving loads, replay)")) return 0;
+  if (ros_glue::nodeHelpRequested(argc, argv, "rail_track",
+                                  "the track side of a railsim run (FE track and the wheel-rail contact in "
+                                  "co-simulation, moving loads, replay)"))
+    return 0;
   ros::init(argc, argv, "rail_track", ros::init_options::NoSigintHandler);
   // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
   ::umask(077);

@@ -27,8 +27,8 @@
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
 
-#include "rail_track_node/cosim_track.hpp"
 #include "rail_contact/tool_args.hpp"
+#include "rail_track_node/cosim_track.hpp"
 
 namespace rt = rail::track;
 namespace rc = rail::contact;
@@ -52,7 +52,8 @@ static void fillFrame(const rail::core::Scene& scene, const rc::TrackGeometry& g
                       cc::WheelStateFrame& frame) {
   const double V = scene.vehicle.speed, r0 = scene.vehicle.nominal_radius, h = scene.solver.track_step;
   const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::kTapingLineFromFlangeBack;
-  const double offsets[4] = {0.0, 2.7, 19.0, kCoachWheelSpan};  // paper coach (Table 3) wheelsets behind the leading one, m
+  const double offsets[4] = {0.0, 2.7, 19.0,
+                             kCoachWheelSpan};  // paper coach (Table 3) wheelsets behind the leading one, m
   frame.count = 8;
   frame.step = static_cast<std::uint64_t>(k);
   frame.time = k * h;
@@ -63,8 +64,8 @@ static void fillFrame(const rail::core::Scene& scene, const rc::TrackGeometry& g
     const double s = s_front0 - offsets[i / 2] + V * k * h;
     geo.centre(s, tp);
     w.arc_length = s;
-    w.p_wheel_in_world = tp.p_center_in_world +
-                         tp.R_track_to_world * Eigen::Vector3d(0.0, i % 2 == 0 ? taping_y : -taping_y, r0 - 5e-5);
+    w.p_wheel_in_world =
+        tp.p_center_in_world + tp.R_track_to_world * Eigen::Vector3d(0.0, i % 2 == 0 ? taping_y : -taping_y, r0 - 5e-5);
     w.q_wheelset_to_world = Eigen::Quaterniond(tp.R_track_to_world);
     w.v_wheel_in_world = V * tp.R_track_to_world.col(0);
     w.omega_wheelset_in_world = tp.R_track_to_world.col(1) * (V / r0) + tp.R_track_to_world.col(2) * (V * tp.curvature);
@@ -105,17 +106,18 @@ static void runWindow(rail::core::Scene scene, double s_front0, int steps, const
   std::sort(plain.begin(), plain.end());
   std::sort(moving.begin(), moving.end());
   const rt::TrackWindow& w = *track.trackWindow();
-  std::printf("%-22s %s: window %.1f m (%d free DOFs), build %.2f s, %d steps (%.2f m): step median %.3f ms, "
-              "p99 %.3f ms, mean over all steps %.3f ms; %d moves (%d refactorised), move steps median %.1f ms "
-              "(max %.1f ms), moves alone %.1f ms each; %.3f influence solves per step after the first, %.2f Newton "
-              "iterations per step; %d refused\n",
-              "window semi-implicit", label, w.sEnd() - w.sBegin(), static_cast<int>(w.state().d.size()), build, steps,
-              scene.vehicle.speed * steps * scene.solver.track_step, 1e3 * plain[plain.size() / 2],
-              1e3 * plain[plain.size() * 99 / 100], 1e3 * total / steps, track.windowMoves(), track.windowRebuilds(),
-              moving.empty() ? 0.0 : 1e3 * moving[moving.size() / 2], moving.empty() ? 0.0 : 1e3 * moving.back(),
-              track.windowMoves() > 0 ? 1e3 * track.windowMoveSeconds() / track.windowMoves() : 0.0,
-              static_cast<double>(solves_after_first) / std::max(1, steps - 1),
-              static_cast<double>(track.newtonIterations()) / steps, bad);
+  std::printf(
+      "%-22s %s: window %.1f m (%d free DOFs), build %.2f s, %d steps (%.2f m): step median %.3f ms, "
+      "p99 %.3f ms, mean over all steps %.3f ms; %d moves (%d refactorised), move steps median %.1f ms "
+      "(max %.1f ms), moves alone %.1f ms each; %.3f influence solves per step after the first, %.2f Newton "
+      "iterations per step; %d refused\n",
+      "window semi-implicit", label, w.sEnd() - w.sBegin(), static_cast<int>(w.state().d.size()), build, steps,
+      scene.vehicle.speed * steps * scene.solver.track_step, 1e3 * plain[plain.size() / 2],
+      1e3 * plain[plain.size() * 99 / 100], 1e3 * total / steps, track.windowMoves(), track.windowRebuilds(),
+      moving.empty() ? 0.0 : 1e3 * moving[moving.size() / 2], moving.empty() ? 0.0 : 1e3 * moving.back(),
+      track.windowMoves() > 0 ? 1e3 * track.windowMoveSeconds() / track.windowMoves() : 0.0,
+      static_cast<double>(solves_after_first) / std::max(1, steps - 1),
+      static_cast<double>(track.newtonIterations()) / steps, bad);
 }
 
 static bool g_cost = false;  // pass a cost clock to the track (argument 3)
@@ -152,15 +154,16 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
   const double first = times.front();
   std::sort(times.begin(), times.end());
   const int dofs = track.state() ? static_cast<int>(track.state()->d.size()) : 0;
-  const char* name = model == rail::core::TrackModel::kRigidFe        ? "rigid_fe"
-                     : window ? (coupling == rt::CosimCoupling::kSemiImplicit ? "window semi-implicit"
-                                                                              : "window explicit")
+  const char* name = model == rail::core::TrackModel::kRigidFe ? "rigid_fe"
+                     : window
+                         ? (coupling == rt::CosimCoupling::kSemiImplicit ? "window semi-implicit" : "window explicit")
                      : coupling == rt::CosimCoupling::kSemiImplicit ? "flexible semi-implicit"
-                                                                     : "flexible explicit";
-  std::printf("%-22s free DOFs %6d  build %.2f s  step median %.3f ms  mean %.3f ms  p90 %.3f ms  p99 %.3f ms  "
-              "first %.1f ms  (%d steps, mean Fz wheel 0 %.0f N)\n",
-              name, dofs, build, 1e3 * times[times.size() / 2], 1e3 * mean, 1e3 * times[times.size() * 9 / 10],
-              1e3 * times[times.size() * 99 / 100], 1e3 * first, steps, fz / (steps + 1));
+                                                                    : "flexible explicit";
+  std::printf(
+      "%-22s free DOFs %6d  build %.2f s  step median %.3f ms  mean %.3f ms  p90 %.3f ms  p99 %.3f ms  "
+      "first %.1f ms  (%d steps, mean Fz wheel 0 %.0f N)\n",
+      name, dofs, build, 1e3 * times[times.size() / 2], 1e3 * mean, 1e3 * times[times.size() * 9 / 10],
+      1e3 * times[times.size() * 99 / 100], 1e3 * first, steps, fz / (steps + 1));
   if (track.flexible() && coupling == rt::CosimCoupling::kSemiImplicit)
     std::printf("%-22s influence window %d DOFs, %.3f influence solves and %.2f Newton iterations per step\n", "",
                 track.influenceWindow(), static_cast<double>(track.influenceSolves()) / steps,

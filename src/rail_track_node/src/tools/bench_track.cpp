@@ -12,9 +12,9 @@
 
 #include <rail_core/scene_loader.hpp>
 
+#include "rail_contact/tool_args.hpp"
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
-#include "rail_contact/tool_args.hpp"
 
 namespace rt = rail::track;
 using Clock = std::chrono::steady_clock;
@@ -51,17 +51,23 @@ int main(int argc, char** argv) {
   for (int i = 0; i < 3; ++i)
     steps[i] = static_cast<int>(rail::tools::positionalNumber(argc, argv, i + 1, steps[i], 3, kUsage));
   const double dt = 2e-5;
-  std::printf("straight tracks, paper track data, damping and absorbing ends on, dt = %g s, 2 wheel loads of "
-              "100 kN at 30 m/s\n", dt);
-  std::printf("%8s %9s %10s %10s %12s %11s %9s %11s %11s\n", "length", "free DOFs", "nnz(K)", "nnz(L)",
-              "factor [MB]", "M,C,K [MB]", "build [s]", "factor [s]", "step [ms]");
+  std::printf(
+      "straight tracks, paper track data, damping and absorbing ends on, dt = %g s, 2 wheel loads of "
+      "100 kN at 30 m/s\n",
+      dt);
+  std::printf("%8s %9s %10s %10s %12s %11s %9s %11s %11s\n", "length", "free DOFs", "nnz(K)", "nnz(L)", "factor [MB]",
+              "M,C,K [MB]", "build [s]", "factor [s]", "step [ms]");
   for (int c = 0; c < 3; ++c) {
     const double L = lengths[c];
-    const std::string text = "name: bench\ntrack:\n  gauge: 1.668\n  data: ../track/paper_track.yaml\n  segments:\n"
-                             "    - {type: straight, length: " + std::to_string(L) + "}\n"
-                             "moving_loads:\n  start_arc_length: " + std::to_string(0.25 * L) +
-                             "\n  speed: 30.0\n  loads:\n    - {offset: 0.0, rail: both, vertical: 100000.0}\n"
-                             "solver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
+    const std::string text =
+        "name: bench\ntrack:\n  gauge: 1.668\n  data: ../track/paper_track.yaml\n  segments:\n"
+        "    - {type: straight, length: " +
+        std::to_string(L) +
+        "}\n"
+        "moving_loads:\n  start_arc_length: " +
+        std::to_string(0.25 * L) +
+        "\n  speed: 30.0\n  loads:\n    - {offset: 0.0, rail: both, vertical: 100000.0}\n"
+        "solver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
     const rail::core::Scene scene = rail::core::loadSceneText(text, "bench.yaml", configDir() + "/scenes");
     const auto t0 = Clock::now();
     const rt::SceneTrack track = rt::buildSceneTrack(scene);
@@ -87,9 +93,8 @@ int main(int argc, char** argv) {
     const double nnz_L = only_factor.factor().factorNonZeros();
     std::printf("%6.0f m %9d %10ld %10.0f %12.1f %11.1f %9.2f %11.2f %11.3f   (%s factor, %d steps)\n", L, sys.size(),
                 static_cast<long>(sys.K.nonZeros()), nnz_L, 8.0 * nnz_L / 1e6,
-                (sparseBytes(sys.M) + sparseBytes(sys.C) + sparseBytes(sys.K)) / 1e6, seconds(t0, t1),
-                seconds(t2, t3), 1e3 * times[steps[c] / 2],
-                only_factor.factor().isSupernodal() ? "supernodal" : "simplicial", steps[c]);
+                (sparseBytes(sys.M) + sparseBytes(sys.C) + sparseBytes(sys.K)) / 1e6, seconds(t0, t1), seconds(t2, t3),
+                1e3 * times[steps[c] / 2], only_factor.factor().isSupernodal() ? "supernodal" : "simplicial", steps[c]);
     std::fflush(stdout);
   }
   return 0;

@@ -14,11 +14,11 @@
 
 #include <rail_core/scene_loader.hpp>
 
+#include "rail_contact/tool_args.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
 #include "rail_track_node/track_window.hpp"
-#include "rail_contact/tool_args.hpp"
 
 namespace rt = rail::track;
 using Clock = std::chrono::steady_clock;
@@ -75,8 +75,8 @@ void benchFull(const rail::core::Scene& scene, double s_front0, int steps) {
     times.push_back(seconds(a));
   }
   std::printf("  full    %7.0f m  free DOFs %7d  build %6.2f s  factorise %6.2f s  step median %8.3f ms  (%d steps)\n",
-              track.model.mesh.n_sleepers * track.model.mesh.sleeper_spacing, n, t_build, t_factor,
-              1e3 * median(times), steps);
+              track.model.mesh.n_sleepers * track.model.mesh.sleeper_spacing, n, t_build, t_factor, 1e3 * median(times),
+              steps);
 }
 
 // Window: build, median step over `steps` steps rolling, then moves along [s_from, s_to] one shift at a time.
@@ -106,11 +106,12 @@ void benchWindow(const rail::core::Scene& scene, const rt::TrackWindowSettings& 
   }
   const double steps_per_shift = shift / (scene.vehicle.speed * h);
   const double worst_shift = std::max(median(rebuild), median(reuse));
-  std::printf("  window  %5.1f m  free DOFs %7d  build %6.2f s  step median %8.3f ms  move median: rebuild %7.1f ms "
-              "(%zu), reuse %6.1f ms (%zu); a move every %.0f steps: <= %.3f ms per step amortised\n",
-              win.bays() * win.data().layout.sleeper_spacing, win.model().system.size(), t_build, 1e3 * median(times),
-              1e3 * median(rebuild), rebuild.size(), 1e3 * median(reuse), reuse.size(), steps_per_shift,
-              1e3 * (median(times) + worst_shift / steps_per_shift));
+  std::printf(
+      "  window  %5.1f m  free DOFs %7d  build %6.2f s  step median %8.3f ms  move median: rebuild %7.1f ms "
+      "(%zu), reuse %6.1f ms (%zu); a move every %.0f steps: <= %.3f ms per step amortised\n",
+      win.bays() * win.data().layout.sleeper_spacing, win.model().system.size(), t_build, 1e3 * median(times),
+      1e3 * median(rebuild), rebuild.size(), 1e3 * median(reuse), reuse.size(), steps_per_shift,
+      1e3 * (median(times) + worst_shift / steps_per_shift));
 }
 
 }  // namespace
@@ -139,13 +140,15 @@ int main(int argc, char** argv) {
   benchFull(paper, paper.vehicle.start_arc_length, steps);
 
   // 5 km straight line, same data, step and speed.
-  const std::string text = "name: line_5km\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n"
-                           "  rail_inclination: 1/20\n  data: ../track/paper_track.yaml\n  segments:\n"
-                           "    - {type: straight, length: 5000.0}\n"
-                           "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 2500.0\n"
-                           "  speed: " + std::to_string(paper.vehicle.speed) +
-                           "\n  back_to_back: 1.592\neffects:\n  track_model: flexible\nsolver:\n  track_step: " +
-                           std::to_string(paper.solver.track_step) + "\n";
+  const std::string text =
+      "name: line_5km\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n"
+      "  rail_inclination: 1/20\n  data: ../track/paper_track.yaml\n  segments:\n"
+      "    - {type: straight, length: 5000.0}\n"
+      "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 2500.0\n"
+      "  speed: " +
+      std::to_string(paper.vehicle.speed) +
+      "\n  back_to_back: 1.592\neffects:\n  track_model: flexible\nsolver:\n  track_step: " +
+      std::to_string(paper.solver.track_step) + "\n";
   const rail::core::Scene line = rail::core::loadSceneText(text, "line_5km.yaml", configDir() + "/scenes");
   std::printf("5 km straight line: h = %g s, %.2f m/s\n", line.solver.track_step, line.vehicle.speed);
   benchWindow(line, set, 2500.0, steps, 2500.0, 2800.0);

@@ -65,15 +65,20 @@ int main(int argc, char** argv) {
       if (i + 1 >= argc) usage(a + " needs a value");
       return argv[++i];
     };
-    if (a == "--track") track = next();
-    else if (a == "--csv") csv = next();
-    else if (a == "--no-damping") damping = false;
-    else if (a == "--cycles") cycles = static_cast<int>(number(a, next()));
+    if (a == "--track")
+      track = next();
+    else if (a == "--csv")
+      csv = next();
+    else if (a == "--no-damping")
+      damping = false;
+    else if (a == "--cycles")
+      cycles = static_cast<int>(number(a, next()));
     else if (a == "--freqs") {
       freqs.clear();
       std::stringstream ss(next());
       for (std::string item; std::getline(ss, item, ',');) freqs.push_back(number(a, item));
-    } else usage("unknown argument " + a);
+    } else
+      usage("unknown argument " + a);
   }
   rt::TrackData data;
   try {
@@ -92,8 +97,8 @@ int main(int argc, char** argv) {
     }
     out << "direction,f_Hz,group_velocity_m_per_s,reflected_fraction_absorbing,reflected_fraction_free\n";
   }
-  std::printf("track %s (track damping %s), absorbing ends designed for %.0f Hz; burst of %d cycles\n",
-              track.c_str(), damping ? "on" : "off", data.absorbing_ends.design_frequency, cycles);
+  std::printf("track %s (track damping %s), absorbing ends designed for %.0f Hz; burst of %d cycles\n", track.c_str(),
+              damping ? "on" : "off", data.absorbing_ends.design_frequency, cycles);
   std::printf("%-9s %7s %9s %12s %12s %8s %8s %7s\n", "direction", "f [Hz]", "c_g [m/s]", "absorbing", "free ends",
               "short[m]", "ref[m]", "wall[s]");
   for (const bool lateral : {false, true}) {
@@ -115,8 +120,9 @@ int main(int argc, char** argv) {
                     100.0 * ra.reflected_energy_fraction, 100.0 * rf.reflected_energy_fraction, ra.short_length,
                     ra.reference_length, wall);
         std::fflush(stdout);
-        if (out) out << dir << "," << f << "," << ra.group_velocity << "," << ra.reflected_energy_fraction << ","
-                     << rf.reflected_energy_fraction << "\n";
+        if (out)
+          out << dir << "," << f << "," << ra.group_velocity << "," << ra.reflected_energy_fraction << ","
+              << rf.reflected_energy_fraction << "\n";
       } catch (const std::invalid_argument& e) {
         std::printf("%-9s %7.0f  (skipped: %s)\n", dir, f, e.what());
       }

@@ -73,17 +73,28 @@ int main(int argc, char** argv) {
       if (i + 1 >= argc) usage(a + " needs a value");
       return argv[++i];
     };
-    if (a == "--track") track = next();
-    else if (a == "--length") length = number(a, next());
-    else if (a == "--gauge") gauge = number(a, next());
-    else if (a == "--points") points = static_cast<int>(number(a, next()));
-    else if (a == "--f-min") f_min = number(a, next());
-    else if (a == "--f-max") f_max = number(a, next());
-    else if (a == "--no-damping") damping = false;
-    else if (a == "--rail-beta") rail_beta = number(a, next());
-    else if (a == "--no-absorbing-ends") absorbing = false;
-    else if (a == "--csv") csv = next();
-    else usage("unknown argument " + a);
+    if (a == "--track")
+      track = next();
+    else if (a == "--length")
+      length = number(a, next());
+    else if (a == "--gauge")
+      gauge = number(a, next());
+    else if (a == "--points")
+      points = static_cast<int>(number(a, next()));
+    else if (a == "--f-min")
+      f_min = number(a, next());
+    else if (a == "--f-max")
+      f_max = number(a, next());
+    else if (a == "--no-damping")
+      damping = false;
+    else if (a == "--rail-beta")
+      rail_beta = number(a, next());
+    else if (a == "--no-absorbing-ends")
+      absorbing = false;
+    else if (a == "--csv")
+      csv = next();
+    else
+      usage("unknown argument " + a);
   }
   if (!(f_min > 0.0 && f_max > f_min) || points < 3) usage("need 0 < f-min < f-max and at least 3 points");
 
@@ -119,10 +130,11 @@ int main(int argc, char** argv) {
     const char* names[4] = {"vert_sleeper", "vert_midspan", "lat_sleeper", "lat_midspan"};
     const double head_arm = t.rail_height - t.model.data.layout.rail_centroid_height;
     rt::ReceptanceSolver solver(t.model, head_arm, pts);
-    std::printf("track %s: %.1f m straight, %d free DOFs, sleeper at s = %.2f m, mid-span at %.2f m, damping %s, "
-                "absorbing ends %s\n",
-                track.c_str(), length, t.model.system.size(), s_sleeper, s_mid, damping ? "on" : "off",
-                absorbing ? "on" : "off");
+    std::printf(
+        "track %s: %.1f m straight, %d free DOFs, sleeper at s = %.2f m, mid-span at %.2f m, damping %s, "
+        "absorbing ends %s\n",
+        track.c_str(), length, t.model.system.size(), s_sleeper, s_mid, damping ? "on" : "off",
+        absorbing ? "on" : "off");
 
     const std::vector<double> f = rt::logSpacedFrequencies(f_min, f_max, points);
     std::vector<std::vector<double>> mag(4, std::vector<double>(points)), phase(4, std::vector<double>(points));
@@ -163,11 +175,15 @@ int main(int argc, char** argv) {
     std::printf("vertical track resonance (peak above a sleeper): %.0f Hz\n", f_track);
     std::printf("lateral track resonance (peak above a sleeper):  %.0f Hz\n", f_lat);
     if (pp >= 0)
-      std::printf("vertical pinned-pinned (peak of the mid-span receptance): %.0f Hz (Euler-Bernoulli on rigid "
-                  "supports: %.0f Hz)\n", rt::peakFrequency(f, mag[1], f[pp - 1], f[pp + 1]), f_pp_eb);
+      std::printf(
+          "vertical pinned-pinned (peak of the mid-span receptance): %.0f Hz (Euler-Bernoulli on rigid "
+          "supports: %.0f Hz)\n",
+          rt::peakFrequency(f, mag[1], f[pp - 1], f[pp + 1]), f_pp_eb);
     else
-      std::printf("vertical pinned-pinned: no peak of the mid-span receptance above 600 Hz (damped out; "
-                  "Euler-Bernoulli on rigid supports: %.0f Hz)\n", f_pp_eb);
+      std::printf(
+          "vertical pinned-pinned: no peak of the mid-span receptance above 600 Hz (damped out; "
+          "Euler-Bernoulli on rigid supports: %.0f Hz)\n",
+          f_pp_eb);
     std::printf("wrote %s (%d frequencies, %.1f s)\n", csv.c_str(), points, wall);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "track_receptance: %s\n", e.what());

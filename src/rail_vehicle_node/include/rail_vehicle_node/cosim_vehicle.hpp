@@ -56,7 +56,7 @@ class CosimVehicle {
   core::coupling::Status exchangeStatus() const { return exchange_status_; }
   double time() const { return sim_->time(); }
   std::uint64_t stepsExchanged() const { return coupling_->nextStep(); }  // exchanges done so far
-  double trackStep() const { return h_; }                                  // h [s]
+  double trackStep() const { return h_; }                                 // h [s]
   // Largest internal CVODE step seen after any AdvanceTo (last step of each call) [s].
   double maxInternalStep() const { return max_internal_step_; }
 
@@ -81,9 +81,9 @@ class CosimVehicle {
   std::unique_ptr<core::coupling::VehicleCoupling> coupling_;
   std::unique_ptr<CouplingSource> source_;
   std::unique_ptr<VehicleSimulator> sim_;
-  std::unique_ptr<VehicleData> data_;     // kinematics of the interpolated state
-  Eigen::VectorXd y_interp_;              // state at the exchange time
-  std::vector<double> wheel_s_;           // arc-length warm starts per wheel [m]
+  std::unique_ptr<VehicleData> data_;  // kinematics of the interpolated state
+  Eigen::VectorXd y_interp_;           // state at the exchange time
+  std::vector<double> wheel_s_;        // arc-length warm starts per wheel [m]
   double max_internal_step_ = 0.0;
   bool started_ = false;
   core::coupling::Status exchange_status_ = core::coupling::Status::kOk;

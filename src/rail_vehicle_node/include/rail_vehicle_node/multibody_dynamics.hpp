@@ -45,9 +45,9 @@ void computeDerivativesPartial(const VehicleModel& model, double t, const Eigen:
 
 // Constraint violation of a state (infinity norms).
 struct ConstraintViolation {
-  double position = 0.0;      // max |Phi| [m, or dimensionless for orientation rows]
-  double velocity = 0.0;      // max |Phi_v v| [m/s, or 1/s]
-  double euler_norm = 0.0;    // max |‖p‖ - 1| over the bodies
+  double position = 0.0;    // max |Phi| [m, or dimensionless for orientation rows]
+  double velocity = 0.0;    // max |Phi_v v| [m/s, or 1/s]
+  double euler_norm = 0.0;  // max |‖p‖ - 1| over the bodies
 };
 ConstraintViolation evaluateViolation(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
                                       VehicleData& data);
@@ -61,10 +61,10 @@ int projectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, Vehic
                  int max_iterations);
 
 // Energies and momenta (after ComputeKinematics).
-double kineticEnergy(const VehicleModel& model, const VehicleData& data);        // [J]
-double potentialEnergy(const VehicleModel& model, const VehicleData& data);      // gravity + elements [J]
-Vector3 linearMomentum(const VehicleModel& model, const VehicleData& data);      // world [kg m/s]
-Vector3 angularMomentum(const VehicleModel& model, const VehicleData& data);     // about the world origin
+double kineticEnergy(const VehicleModel& model, const VehicleData& data);     // [J]
+double potentialEnergy(const VehicleModel& model, const VehicleData& data);   // gravity + elements [J]
+Vector3 linearMomentum(const VehicleModel& model, const VehicleData& data);   // world [kg m/s]
+Vector3 angularMomentum(const VehicleModel& model, const VehicleData& data);  // about the world origin
 
 // World position and velocity of load point k (after ComputeKinematics), e.g. a wheel centre.
 void loadPointState(const VehicleModel& model, const VehicleData& data, int k, Vector3& p_in_world,

@@ -17,9 +17,7 @@ using Matrix3 = Eigen::Matrix3d;
 // Skew-symmetric matrix a~ such that a~ * b = a x b.
 inline Matrix3 skew(const Vector3& a) {
   Matrix3 s;
-  s << 0.0, -a.z(), a.y(),
-       a.z(), 0.0, -a.x(),
-       -a.y(), a.x(), 0.0;
+  s << 0.0, -a.z(), a.y(), a.z(), 0.0, -a.x(), -a.y(), a.x(), 0.0;
   return s;
 }
 

@@ -17,11 +17,11 @@ class VehicleModel;
 
 // World-frame kinematics of one body, evaluated from the state vector.
 struct BodyKinematics {
-  Vector3 r = Vector3::Zero();           // position of the centre of mass in the world [m]
-  Matrix3 A = Matrix3::Identity();       // rotation body -> world
-  Vector3 r_dot = Vector3::Zero();       // velocity of the centre of mass in the world [m/s]
-  Vector3 omega_body = Vector3::Zero();  // angular velocity in the body frame omega' [rad/s]
-  Vector3 omega_world = Vector3::Zero(); // A * omega' [rad/s]
+  Vector3 r = Vector3::Zero();            // position of the centre of mass in the world [m]
+  Matrix3 A = Matrix3::Identity();        // rotation body -> world
+  Vector3 r_dot = Vector3::Zero();        // velocity of the centre of mass in the world [m/s]
+  Vector3 omega_body = Vector3::Zero();   // angular velocity in the body frame omega' [rad/s]
+  Vector3 omega_world = Vector3::Zero();  // A * omega' [rad/s]
 };
 
 // External wrench at one of the model's load points (e.g. a wheel centre), set by the caller.
@@ -55,17 +55,17 @@ class VehicleData {
   int n_constraints = 0;  // m
   double time = 0.0;      // time of the last right-hand side evaluation [s] (readable by force elements)
 
-  std::vector<BodyKinematics> bodies;        // per body
-  std::vector<ExternalWrench> external;      // per load point, set by the caller, held between calls
+  std::vector<BodyKinematics> bodies;    // per body
+  std::vector<ExternalWrench> external;  // per load point, set by the caller, held between calls
 
-  Eigen::VectorXd g;          // generalised forces g (6n): per body [f in world; n' in body frame]
-  Eigen::VectorXd phi;        // constraint values Phi (m)
-  Eigen::MatrixXd phi_v;      // Jacobian of Phi w.r.t. the velocities [r_dot; omega'] (m x 6n)
-  Eigen::VectorXd gamma;      // acceleration right-hand side gamma (m)
-  Eigen::VectorXd phi_dot;    // Phi_v * v (m)
-  Eigen::VectorXd rhs_c;      // gamma - 2 alpha Phi_dot - beta^2 Phi (m)
-  Eigen::VectorXd v_dot;      // accelerations [r_ddot; omega'_dot] (6n)
-  Eigen::VectorXd lambda;     // Lagrange multipliers (m)
+  Eigen::VectorXd g;        // generalised forces g (6n): per body [f in world; n' in body frame]
+  Eigen::VectorXd phi;      // constraint values Phi (m)
+  Eigen::MatrixXd phi_v;    // Jacobian of Phi w.r.t. the velocities [r_dot; omega'] (m x 6n)
+  Eigen::VectorXd gamma;    // acceleration right-hand side gamma (m)
+  Eigen::VectorXd phi_dot;  // Phi_v * v (m)
+  Eigen::VectorXd rhs_c;    // gamma - 2 alpha Phi_dot - beta^2 Phi (m)
+  Eigen::VectorXd v_dot;    // accelerations [r_ddot; omega'_dot] (6n)
+  Eigen::VectorXd lambda;   // Lagrange multipliers (m)
 
   // Augmented (KKT) solve: [M Phi_v^T; Phi_v 0].
   Eigen::MatrixXd kkt;
@@ -73,16 +73,16 @@ class VehicleData {
   Eigen::PartialPivLU<Eigen::MatrixXd> kkt_lu;
 
   // Range-space solve: S = Phi_v M^-1 Phi_v^T.
-  Eigen::MatrixXd w;          // Phi_v M^-1 (m x 6n)
-  Eigen::MatrixXd s;          // (m x m)
-  Eigen::VectorXd s_rhs;      // (m)
-  Eigen::VectorXd tmp6n;      // (6n)
+  Eigen::MatrixXd w;      // Phi_v M^-1 (m x 6n)
+  Eigen::MatrixXd s;      // (m x m)
+  Eigen::VectorXd s_rhs;  // (m)
+  Eigen::VectorXd tmp6n;  // (6n)
   Eigen::LDLT<Eigen::MatrixXd> s_ldlt;
   std::vector<ClusterWork> clusters;  // per constraint cluster (the range-space solve works on these)
 
   // Scratch for the projection.
-  Eigen::VectorXd dx;         // (6n)
-  Eigen::VectorXd zero6n;     // (6n), always zero
+  Eigen::VectorXd dx;      // (6n)
+  Eigen::VectorXd zero6n;  // (6n), always zero
 };
 
 }  // namespace rail::vehicle

@@ -32,24 +32,24 @@ enum class JacobianKind { kColoured, kDenseDifferenceQuotient };
 enum class LinearSolverKind { kSparseKlu, kDense };
 
 struct IntegratorSettings {
-  double rtol = 1e-6;                   // relative tolerance
-  double atol = 1e-8;                   // absolute tolerance (positions m, Euler parameters, velocities m/s)
-  double max_step = 0.0;                // [s]; 0 = no limit
-  double initial_step = 0.0;            // [s]; 0 = CVODE's estimate
+  double rtol = 1e-6;         // relative tolerance
+  double atol = 1e-8;         // absolute tolerance (positions m, Euler parameters, velocities m/s)
+  double max_step = 0.0;      // [s]; 0 = no limit
+  double initial_step = 0.0;  // [s]; 0 = CVODE's estimate
   IntegrationMethod method = IntegrationMethod::kBdf;
-  JacobianKind jacobian = JacobianKind::kColoured;             // BDF only
+  JacobianKind jacobian = JacobianKind::kColoured;                // BDF only
   LinearSolverKind linear_solver = LinearSolverKind::kSparseKlu;  // BDF with kColoured only
   // BDF only: when CVODE gives up within an AdvanceTo (repeated error-test or convergence failures, as at
   // some flange onsets with tolerances below 1e-6), Adams integrates the rest of that interval from the
   // last successful step and BDF restarts after it (counted in IntegratorCounters::adams_fallbacks).
   bool adams_fallback = true;
-  double fallback_max_step = 0.0;       // the fallback's step cap [s]; 0 = max_step
-  int max_order = 5;                    // BDF <= 5, Adams <= 12
-  long max_steps_per_call = 100000;     // internal steps allowed within one AdvanceTo
+  double fallback_max_step = 0.0;               // the fallback's step cap [s]; 0 = max_step
+  int max_order = 5;                            // BDF <= 5, Adams <= 12
+  long max_steps_per_call = 100000;             // internal steps allowed within one AdvanceTo
   double projection_position_threshold = 1e-6;  // max |Phi| that triggers a projection [m]
   double projection_velocity_threshold = 1e-5;  // max |Phi_v v| that triggers a projection [m/s]
-  double projection_euler_threshold = 1e-6;     // max |‖p‖ - 1| that triggers a projection (rotations use p/‖p‖)
-  double projection_tolerance = 1e-12;          // max |Phi| after a projection [m]
+  double projection_euler_threshold = 1e-6;  // max |‖p‖ - 1| that triggers a projection (rotations use p/‖p‖)
+  double projection_tolerance = 1e-12;       // max |Phi| after a projection [m]
   int projection_max_iterations = 20;
   // Optional timing: right-hand sides into kVehicleRhs, those of the difference-quotient Jacobians (BDF)
   // into kVehicleJacobian. Must outlive the integrator; null = no timing.
@@ -66,10 +66,10 @@ struct IntegratorCounters {
   long error_test_failures = 0;
   long nonlinear_iterations = 0;
   long nonlinear_convergence_failures = 0;
-  long projections = 0;         // constraint projections (each followed by a re-initialisation)
-  long adams_fallbacks = 0;     // intervals that BDF gave up and Adams finished (adams_fallback)
+  long projections = 0;      // constraint projections (each followed by a re-initialisation)
+  long adams_fallbacks = 0;  // intervals that BDF gave up and Adams finished (adams_fallback)
   int last_order = 0;
-  double last_step = 0.0;       // [s]
+  double last_step = 0.0;  // [s]
 };
 
 class VehicleIntegrator {
@@ -92,10 +92,10 @@ class VehicleIntegrator {
   // Restarts from a state set by the caller (e.g. after changing the external wrenches abruptly).
   void reset(const Eigen::VectorXd& y, double t);
 
-  double time() const;                               // time reached by the last AdvanceTo [s]
-  Eigen::Map<const Eigen::VectorXd> state() const;   // state at time()
+  double time() const;                              // time reached by the last AdvanceTo [s]
+  Eigen::Map<const Eigen::VectorXd> state() const;  // state at time()
   IntegratorCounters counters() const;
-  ConstraintViolation violation();                   // of state()
+  ConstraintViolation violation();  // of state()
 
  private:
   struct Impl;

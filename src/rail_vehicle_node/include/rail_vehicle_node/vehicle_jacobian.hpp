@@ -31,7 +31,7 @@ class JacobianPattern {
  public:
   explicit JacobianPattern(const VehicleModel& model);
 
-  int size() const { return n_; }                  // state size 13 n
+  int size() const { return n_; }  // state size 13 n
   int nonzeros() const { return static_cast<int>(row_index_.size()); }
   // Compressed sparse columns: rows of column j are row_index()[col_start()[j] .. col_start()[j + 1]).
   const std::vector<int>& colStart() const { return col_start_; }

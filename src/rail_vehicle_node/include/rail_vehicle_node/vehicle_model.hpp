@@ -84,9 +84,9 @@ class VehicleModel {
   void addBumpStopAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
                      const Vector3& axis_in_world, std::vector<double> deflections, std::vector<double> forces);
 
-  void setGravity(const Vector3& gravity_in_world);        // [m/s^2], default (0, 0, -9.81)
-  void setBaumgarte(double alpha, double beta);           // [1/s], default 10, 10
-  void setKktSolver(KktSolver solver);                    // default kRangeSpace
+  void setGravity(const Vector3& gravity_in_world);  // [m/s^2], default (0, 0, -9.81)
+  void setBaumgarte(double alpha, double beta);      // [1/s], default 10, 10
+  void setKktSolver(KktSolver solver);               // default kRangeSpace
 
   // Checks the model and fixes its sizes; no change is accepted afterwards.
   void finalize();

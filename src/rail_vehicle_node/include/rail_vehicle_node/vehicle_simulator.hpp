@@ -78,27 +78,27 @@ struct SimulatorSettings {
 
 // One wheel centre (rail_msgs/WheelState), world frame.
 struct WheelOutput {
-  int wheel_id = 0;   // 2 * wheelset + side
-  int wheelset = 0;   // 0 = leading
-  int side = 0;       // 0 left, 1 right
-  double arc_length = 0.0;                // s of the wheel centre's projection on the track [m]
-  Vector3 p_in_world = Vector3::Zero();   // wheel centre (the load point) [m]
+  int wheel_id = 0;                           // 2 * wheelset + side
+  int wheelset = 0;                           // 0 = leading
+  int side = 0;                               // 0 left, 1 right
+  double arc_length = 0.0;                    // s of the wheel centre's projection on the track [m]
+  Vector3 p_in_world = Vector3::Zero();       // wheel centre (the load point) [m]
   Vector4 orientation = Vector4(1, 0, 0, 0);  // R_wheelset_to_world as Euler parameters (w, x, y, z)
-  Vector3 v_in_world = Vector3::Zero();   // [m/s]
-  Vector3 omega_in_world = Vector3::Zero();  // wheelset angular velocity, spin included [rad/s]
-  Vector3 force_in_world = Vector3::Zero();  // contact wrench on the wheel at its centre [N]
-  Vector3 moment_in_world = Vector3::Zero(); // about the wheel centre [N m]
+  Vector3 v_in_world = Vector3::Zero();       // [m/s]
+  Vector3 omega_in_world = Vector3::Zero();   // wheelset angular velocity, spin included [rad/s]
+  Vector3 force_in_world = Vector3::Zero();   // contact wrench on the wheel at its centre [N]
+  Vector3 moment_in_world = Vector3::Zero();  // about the wheel centre [N m]
 };
 
 // One wheelset relative to the track frame at its arc length (rail_msgs/WheelsetTrackState).
 struct WheelsetTrackOutput {
   int wheelset = 0;
-  double arc_length = 0.0;      // s of the wheelset centre [m]
-  double lateral = 0.0;         // along n (left) from the centre line [m]
-  double vertical = 0.0;        // along b from the nominal height (nominal rolling radius above the rails) [m]
-  double angle_of_attack = 0.0; // yaw of the axle relative to the track frame [rad], > 0 turning left
-  double roll = 0.0;            // roll relative to the canted track plane [rad], > 0 left side up
-  double spin = 0.0;            // rate about the axle [rad/s]
+  double arc_length = 0.0;       // s of the wheelset centre [m]
+  double lateral = 0.0;          // along n (left) from the centre line [m]
+  double vertical = 0.0;         // along b from the nominal height (nominal rolling radius above the rails) [m]
+  double angle_of_attack = 0.0;  // yaw of the axle relative to the track frame [rad], > 0 turning left
+  double roll = 0.0;             // roll relative to the canted track plane [rad], > 0 left side up
+  double spin = 0.0;             // rate about the axle [rad/s]
 };
 
 // What an accelerometer fixed at a measurement point reads (rail_msgs/FloorAccelerations): the specific
@@ -116,7 +116,7 @@ struct EnergyOutput {
 
 // Pose of one body for tf.
 struct BodyPose {
-  std::string name;             // the data file's body name
+  std::string name;  // the data file's body name
   Vector3 p_in_world = Vector3::Zero();
   Vector4 orientation = Vector4(1, 0, 0, 0);  // body -> world, (w, x, y, z)
 };
@@ -220,40 +220,40 @@ class VehicleSimulator {
   std::unique_ptr<VehicleIntegrator> integrator_;
   IntegrationMethod method_ = IntegrationMethod::kBdf;
   double max_step_ = 0.0;
-  std::vector<int> wheelset_bodies_;     // body index per wheelset, leading first
-  std::vector<double> rolling_radius_;   // per wheelset, at the settled centred position [m]
-  std::vector<double> wheelset_s_;       // arc length per wheelset (projection warm start) [m]
-  std::vector<double> wheel_s_;          // arc length per wheel centre [m]
+  std::vector<int> wheelset_bodies_;    // body index per wheelset, leading first
+  std::vector<double> rolling_radius_;  // per wheelset, at the settled centred position [m]
+  std::vector<double> wheelset_s_;      // arc length per wheelset (projection warm start) [m]
+  std::vector<double> wheel_s_;         // arc length per wheel centre [m]
   double lift_ = 0.0;
   double static_load_ = 0.0;
   double settled_load_sum_ = 0.0;
-  double nominal_height_ = 0.0;          // nominal rolling radius [m]
+  double nominal_height_ = 0.0;  // nominal rolling radius [m]
   double derailment_lift_ = 0.0;
   double leading_s_ = 0.0;
-  bool external_active_ = false;         // wheel wrenches from settings_.wheel_wrench_source
+  bool external_active_ = false;  // wheel wrenches from settings_.wheel_wrench_source
   std::string message_;
   Eigen::VectorXd y_scratch_, ydot_scratch_;
   std::vector<WheelOutput> wheel_out_;
   std::vector<WheelsetTrackOutput> wheelset_out_;
   std::vector<BodyPose> body_out_;
   std::vector<MeasurementOutput> measurement_out_;
-  bool measure_ = false;                 // effects.floor_acceleration_output
+  bool measure_ = false;  // effects.floor_acceleration_output
   EnergyOutput energy_out_;
-  bool energy_ = false;                  // effects.energy_output
-  core::CostClock* cost_ = nullptr;      // settings.cost once built
+  bool energy_ = false;              // effects.energy_output
+  core::CostClock* cost_ = nullptr;  // settings.cost once built
 };
 
 // "bdf" / "adams" choice for solver.vehicle_method auto, given the step cap the run uses (solver.vehicle_max_step:
 // the simulator passes its max_step(), 0 for the vehicle alone): Adams (fixed-point, no Jacobian) when the step
-// is capped at max_step <= 5e-5 s (the contact's fastest modes are then resolved explicitly), BDF otherwise. See doc/simulator.md for the measurements.
-// Below kStiffCreepSpeed with the built-in contact (not external wrenches) BDF: there the creep forces act
-// as a viscous law in the slip velocity whose time constant m V_ref / (G a b C11) (wheelset 900 kg, G a b
-// C11 ~ 1e7 N, V_ref >= v_eps = 0.1 m/s) falls to ~1e-5 s, stiff for Adams at the 2e-5 s cap (at standstill:
-// 98 183 Adams steps against 1728 BDF steps for 0.02 s, 18.2 s against 3.9 s wall).
-// With external wrenches (co-simulation) always Adams: the contact is the track node's, the vehicle's own
-// right-hand side holds the suspension only, which is not stiff at any cap the track step allows. The paper
-// scene on the flexible track at an 8e-5 s track step, 1.5 s: BDF (the former choice above a 5e-5 s cap)
-// 32.3 s of loop wall, its difference-quotient Jacobians 121 875 right-hand sides; Adams 20.8 s.
+// is capped at max_step <= 5e-5 s (the contact's fastest modes are then resolved explicitly), BDF otherwise. See
+// doc/simulator.md for the measurements. Below kStiffCreepSpeed with the built-in contact (not external wrenches) BDF:
+// there the creep forces act as a viscous law in the slip velocity whose time constant m V_ref / (G a b C11) (wheelset
+// 900 kg, G a b C11 ~ 1e7 N, V_ref >= v_eps = 0.1 m/s) falls to ~1e-5 s, stiff for Adams at the 2e-5 s cap (at
+// standstill: 98 183 Adams steps against 1728 BDF steps for 0.02 s, 18.2 s against 3.9 s wall). With external wrenches
+// (co-simulation) always Adams: the contact is the track node's, the vehicle's own right-hand side holds the suspension
+// only, which is not stiff at any cap the track step allows. The paper scene on the flexible track at an 8e-5 s track
+// step, 1.5 s: BDF (the former choice above a 5e-5 s cap) 32.3 s of loop wall, its difference-quotient Jacobians 121
+// 875 right-hand sides; Adams 20.8 s.
 constexpr double kStiffCreepSpeed = 2.0;  // [m/s]
 IntegrationMethod chooseMethod(const core::Solver& solver, double speed = 1e9, bool external_wrenches = false);
 

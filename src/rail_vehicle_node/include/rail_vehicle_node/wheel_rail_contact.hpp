@@ -25,10 +25,10 @@ namespace rail::vehicle {
 // One wheel of the vehicle: its wheelset body, its load point (the vehicle's wheel centre, where the
 // wrench is applied) and the taping-line point (the contact code's wheel centre).
 struct WheelDefinition {
-  int wheelset = 0;                          // 0 = leading
+  int wheelset = 0;  // 0 = leading
   contact::RailSide side = contact::RailSide::kLeft;
-  int load_point = 0;                        // index in VehicleModel::load_points()
-  int body = 0;                              // the wheelset body
+  int load_point = 0;                              // index in VehicleModel::load_points()
+  int body = 0;                                    // the wheelset body
   Vector3 s_load_point_in_body = Vector3::Zero();  // wheel centre from the wheelset's centre of mass [m]
   Vector3 s_taping_in_body = Vector3::Zero();      // axle point in the taping-line plane [m]
 };
@@ -75,9 +75,9 @@ struct WheelRailContactData {
     f(force_in_world, saved_force_in_world);
     f(moment_in_world, saved_moment_in_world);
   }
-  bool enabled = true;                              // false: no contact forces (set-up only)
-  long long evaluations = 0;                        // wheel evaluations since construction
-  contact::ContactCost* cost = nullptr;             // optional timing of the evaluations (not owned)
+  bool enabled = true;                   // false: no contact forces (set-up only)
+  long long evaluations = 0;             // wheel evaluations since construction
+  contact::ContactCost* cost = nullptr;  // optional timing of the evaluations (not owned)
 };
 
 // Evaluates wheel k from data.bodies (kinematics already computed) and stores the result, the wrench at

@@ -19,8 +19,8 @@
 #include <string>
 #include <vector>
 
-#include "rail_vehicle_node/vehicle_simulator.hpp"
 #include "rail_contact/tool_args.hpp"
+#include "rail_vehicle_node/vehicle_simulator.hpp"
 
 namespace {
 
@@ -39,8 +39,9 @@ struct Candidate {
 std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double& wall_per_s) {
   core::Scene scene = base;
   scene.effects.track_model = core::TrackModel::kRigid;
-  scene.solver.vehicle_method = c.method == "bdf" ? core::VehicleMethod::kBdf
-                                : c.method == "adams" ? core::VehicleMethod::kAdams : core::VehicleMethod::kAuto;
+  scene.solver.vehicle_method = c.method == "bdf"     ? core::VehicleMethod::kBdf
+                                : c.method == "adams" ? core::VehicleMethod::kAdams
+                                                      : core::VehicleMethod::kAuto;
   if (c.rtol > 0.0) scene.solver.vehicle_rtol = c.rtol;
   if (c.atol > 0.0) scene.solver.vehicle_atol = c.atol;
   vehicle::SimulatorSettings settings;
@@ -65,12 +66,13 @@ std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   wall_per_s = wall / sim.time();
   const vehicle::IntegratorCounters k = sim.counters();
-  std::printf("%s max_step %g rtol %g atol %g (%s): %.2f s simulated, %.1f s wall, %.3f s per simulated s; steps %ld, "
-              "RHS %ld + %ld for %ld Jacobians; %s %s\n",
-              c.method.c_str(), c.max_step, scene.solver.vehicle_rtol, scene.solver.vehicle_atol,
-              sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.time(), wall, wall_per_s, k.steps,
-              k.rhs_evals, k.rhs_evals_jacobian, k.jacobian_evals,
-              status == vehicle::RunStatus::kFinished ? "finished" : "stopped:", sim.message().c_str());
+  std::printf(
+      "%s max_step %g rtol %g atol %g (%s): %.2f s simulated, %.1f s wall, %.3f s per simulated s; steps %ld, "
+      "RHS %ld + %ld for %ld Jacobians; %s %s\n",
+      c.method.c_str(), c.max_step, scene.solver.vehicle_rtol, scene.solver.vehicle_atol,
+      sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.time(), wall, wall_per_s, k.steps,
+      k.rhs_evals, k.rhs_evals_jacobian, k.jacobian_evals,
+      status == vehicle::RunStatus::kFinished ? "finished" : "stopped:", sim.message().c_str());
   std::fflush(stdout);
   return out;
 }
@@ -171,7 +173,10 @@ int main(int argc, char** argv) {
   // Windows by the leading wheelset's arc length on the paper scene's layout: straight 0-100 m, transition
   // 100-200 m, circle 200-380 m, transition 380-480 m, straight 480-500 m; a transition's effect on the
   // steady parts is left out for 20 m after it.
-  struct Window { const char* name; double s0, s1; };
+  struct Window {
+    const char* name;
+    double s0, s1;
+  };
   const Window steady[] = {{"straight", 0.0, 100.0}, {"steady curve", 220.0, 380.0}, {"final straight", 485.0, 500.0}};
   const Window transitions[] = {{"entry transition", 100.0, 220.0}, {"exit transition", 380.0, 485.0}};
   for (const Candidate& c : candidates) {
@@ -189,8 +194,9 @@ int main(int argc, char** argv) {
       }
       std::printf("| %s (s %.0f-%.0f m) | %.2e | %.2e | %.2e |\n", w.name, w.s0, w.s1, dl, dv, da);
     }
-    std::printf("| transition | bursts (ref) | peak [kN] (ref) | mean burst peak [kN] (ref) | mean [kN] (ref) | count / "
-                "peak / mean burst peak / mean differences |\n|---|---|---|---|---|---|\n");
+    std::printf(
+        "| transition | bursts (ref) | peak [kN] (ref) | mean burst peak [kN] (ref) | mean [kN] (ref) | count / "
+        "peak / mean burst peak / mean differences |\n|---|---|---|---|---|---|\n");
     for (const Window& w : transitions) {
       double t0 = 1e9, t1 = -1e9;
       for (const Sample& x : ref) {
@@ -198,10 +204,12 @@ int main(int argc, char** argv) {
       }
       const Bursts a = flangeBursts(run, t0, t1), b = flangeBursts(ref, t0, t1);
       const auto rel = [](double x, double y) { return y != 0.0 ? 100.0 * (x - y) / y : 0.0; };
-      std::printf("| %s (t %.2f-%.2f s) | %d (%d) | %.1f (%.1f) | %.1f (%.1f) | %.1f (%.1f) | %+.1f %% / %+.1f %% / "
-                  "%+.1f %% / %+.1f %% |\n", w.name, t0, t1, a.count, b.count, a.peak * 1e-3, b.peak * 1e-3,
-                  a.mean_peak * 1e-3, b.mean_peak * 1e-3, a.mean * 1e-3, b.mean * 1e-3, rel(a.count, b.count),
-                  rel(a.peak, b.peak), rel(a.mean_peak, b.mean_peak), rel(a.mean, b.mean));
+      std::printf(
+          "| %s (t %.2f-%.2f s) | %d (%d) | %.1f (%.1f) | %.1f (%.1f) | %.1f (%.1f) | %+.1f %% / %+.1f %% / "
+          "%+.1f %% / %+.1f %% |\n",
+          w.name, t0, t1, a.count, b.count, a.peak * 1e-3, b.peak * 1e-3, a.mean_peak * 1e-3, b.mean_peak * 1e-3,
+          a.mean * 1e-3, b.mean * 1e-3, rel(a.count, b.count), rel(a.peak, b.peak), rel(a.mean_peak, b.mean_peak),
+          rel(a.mean, b.mean));
     }
     std::fflush(stdout);
   }

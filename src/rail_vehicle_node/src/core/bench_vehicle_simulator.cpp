@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "rail_vehicle_node/vehicle_simulator.hpp"
 #include "rail_contact/tool_args.hpp"
+#include "rail_vehicle_node/vehicle_simulator.hpp"
 
 namespace {
 const char* const kUsage =
@@ -42,8 +42,9 @@ int main(int argc, char** argv) {
   const double duration = std::atof(argv[2]);
   if (argc > 3) {
     const std::string m = argv[3];
-    scene.solver.vehicle_method = m == "bdf" ? core::VehicleMethod::kBdf
-                                  : m == "adams" ? core::VehicleMethod::kAdams : core::VehicleMethod::kAuto;
+    scene.solver.vehicle_method = m == "bdf"     ? core::VehicleMethod::kBdf
+                                  : m == "adams" ? core::VehicleMethod::kAdams
+                                                 : core::VehicleMethod::kAuto;
   }
   vehicle::SimulatorSettings settings;
   if (argc > 4) settings.standalone_max_step = std::atof(argv[4]);
@@ -72,26 +73,25 @@ int main(int argc, char** argv) {
     walls.push_back(wall / sim.time());
     all_finished = all_finished && status == vehicle::RunStatus::kFinished;
     const vehicle::IntegratorCounters c = sim.counters();
-    std::printf("%s: %s, max_step %g, jacobian %s, linear solver %s, flange %d, spin %d: %.3f s simulated in %.2f s "
-                "wall (%.3f s per simulated s, real-time factor %.2f; build %.2f s); steps %ld, RHS %ld + %ld for %ld "
-                "Jacobians, error-test failures %ld, nonlinear failures %ld, projections %ld, Adams fallbacks %ld, contact "
-                "evaluations %lld; "
-                "cost clock %s; status %s %s\n",
-                scene.name.c_str(), sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.maxStep(),
-                settings.jacobian == vehicle::JacobianKind::kColoured ? "coloured" : "dense-dq",
-                settings.linear_solver == vehicle::LinearSolverKind::kSparseKlu ? "klu" : "dense",
-                scene.effects.flange_contact, scene.effects.spin_creepage, sim.time(), wall, wall / sim.time(),
-                sim.time() / wall, build, c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
-                c.error_test_failures, c.nonlinear_convergence_failures, c.projections, c.adams_fallbacks,
-                sim.contactData().evaluations,
-                with_cost ? "on" : "off", status == vehicle::RunStatus::kFinished ? "finished" : "stopped",
-                sim.message().c_str());
+    std::printf(
+        "%s: %s, max_step %g, jacobian %s, linear solver %s, flange %d, spin %d: %.3f s simulated in %.2f s "
+        "wall (%.3f s per simulated s, real-time factor %.2f; build %.2f s); steps %ld, RHS %ld + %ld for %ld "
+        "Jacobians, error-test failures %ld, nonlinear failures %ld, projections %ld, Adams fallbacks %ld, contact "
+        "evaluations %lld; "
+        "cost clock %s; status %s %s\n",
+        scene.name.c_str(), sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.maxStep(),
+        settings.jacobian == vehicle::JacobianKind::kColoured ? "coloured" : "dense-dq",
+        settings.linear_solver == vehicle::LinearSolverKind::kSparseKlu ? "klu" : "dense", scene.effects.flange_contact,
+        scene.effects.spin_creepage, sim.time(), wall, wall / sim.time(), sim.time() / wall, build, c.steps,
+        c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals, c.error_test_failures, c.nonlinear_convergence_failures,
+        c.projections, c.adams_fallbacks, sim.contactData().evaluations, with_cost ? "on" : "off",
+        status == vehicle::RunStatus::kFinished ? "finished" : "stopped", sim.message().c_str());
     std::fflush(stdout);
   }
   std::vector<double> sorted = walls;
   std::sort(sorted.begin(), sorted.end());
   const double median = sorted.size() % 2 == 1 ? sorted[sorted.size() / 2]
-                                                : 0.5 * (sorted[sorted.size() / 2 - 1] + sorted[sorted.size() / 2]);
+                                               : 0.5 * (sorted[sorted.size() / 2 - 1] + sorted[sorted.size() / 2]);
   std::printf("median of %d runs: %.3f s wall per simulated s (real-time factor %.2f), min %.3f, max %.3f\n", runs,
               median, 1.0 / median, sorted.front(), sorted.back());
   return all_finished ? 0 : 1;

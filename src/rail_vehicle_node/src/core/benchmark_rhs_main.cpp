@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "rail_contact/tool_args.hpp"
 #include "rail_vehicle_node/multibody_dynamics.hpp"
 #include "rail_vehicle_node/vehicle_loader.hpp"
-#include "rail_contact/tool_args.hpp"
 
 #ifndef RAIL_VEHICLE_CONFIG_DIR
 #define RAIL_VEHICLE_CONFIG_DIR "config/vehicle"

@@ -58,8 +58,7 @@ CosimVehicle::CosimVehicle(const core::Scene& scene, cc::FrameTransport& transpo
   const int n_wheels = sim_->contactModel().nWheels();
   if (n_wheels != scene.wheelCount() || coupling_->states().capacity() < n_wheels) {
     std::ostringstream os;
-    os << scene.file << ": the vehicle has " << n_wheels << " wheels, the scene's frames carry "
-       << scene.wheelCount();
+    os << scene.file << ": the vehicle has " << n_wheels << " wheels, the scene's frames carry " << scene.wheelCount();
     throw std::runtime_error(os.str());
   }
   data_ = std::make_unique<VehicleData>(sim_->model());

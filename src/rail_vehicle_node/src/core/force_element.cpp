@@ -9,8 +9,8 @@
 
 namespace rail::vehicle {
 
-void ForceElement::applyForceAt(const VehicleData& data, int body, const Vector3& f_in_world,
-                                const Vector3& p_in_world, Eigen::Ref<Eigen::VectorXd> g) {
+void ForceElement::applyForceAt(const VehicleData& data, int body, const Vector3& f_in_world, const Vector3& p_in_world,
+                                Eigen::Ref<Eigen::VectorXd> g) {
   if (body == kGround) return;
   const BodyKinematics& b = data.bodies[static_cast<std::size_t>(body)];
   g.segment<3>(6 * body) += f_in_world;
@@ -65,8 +65,8 @@ Bushing::Bushing(std::string name, int body_i, int body_j, const Vector3& s_in_i
   check(parameters.damping, "damping");
   check(parameters.rotational_stiffness, "rotational_stiffness");
   check(parameters.rotational_damping, "rotational_damping");
-  has_rotational_ = (parameters.rotational_stiffness.array() > 0.0).any() ||
-                    (parameters.rotational_damping.array() > 0.0).any();
+  has_rotational_ =
+      (parameters.rotational_stiffness.array() > 0.0).any() || (parameters.rotational_damping.array() > 0.0).any();
 }
 
 void Bushing::evaluateLocal(const VehicleData& data, Vector3& deflection, Vector3& force_on_j_local) const {
@@ -105,8 +105,8 @@ void Bushing::addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) 
     const Matrix3 R_rel = R_bushing_to_world.transpose() * (A_j * R_bushing_to_j_);
     const Vector3 theta = rotationVectorFromRotation(R_rel);
     const Vector3 omega_rel = R_bushing_to_world.transpose() * (omega_j - omega_i);
-    const Vector3 torque_local = -parameters_.rotational_stiffness.cwiseProduct(theta) -
-                                 parameters_.rotational_damping.cwiseProduct(omega_rel);
+    const Vector3 torque_local =
+        -parameters_.rotational_stiffness.cwiseProduct(theta) - parameters_.rotational_damping.cwiseProduct(omega_rel);
     const Vector3 torque_world = R_bushing_to_world * torque_local;
     applyMoment(data, bodyJ(), torque_world, g);
     applyMoment(data, bodyI(), -torque_world, g);
@@ -116,13 +116,12 @@ void Bushing::addForces(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> g) 
 double Bushing::potentialEnergy(const VehicleData& data) const {
   Vector3 deflection, f_local;
   evaluateLocal(data, deflection, f_local);
-  double energy = 0.5 * deflection.dot(parameters_.stiffness.cwiseProduct(deflection)) -
-                  parameters_.preload.dot(deflection);
+  double energy =
+      0.5 * deflection.dot(parameters_.stiffness.cwiseProduct(deflection)) - parameters_.preload.dot(deflection);
   if (has_rotational_) {
     const Matrix3 A_i = bodyI() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(bodyI())].A;
     const Matrix3 A_j = bodyJ() == kGround ? Matrix3::Identity() : data.bodies[static_cast<std::size_t>(bodyJ())].A;
-    const Vector3 theta =
-        rotationVectorFromRotation((A_i * R_bushing_to_i_).transpose() * (A_j * R_bushing_to_j_));
+    const Vector3 theta = rotationVectorFromRotation((A_i * R_bushing_to_i_).transpose() * (A_j * R_bushing_to_j_));
     energy += 0.5 * theta.dot(parameters_.rotational_stiffness.cwiseProduct(theta));
   }
   return energy;
@@ -143,8 +142,9 @@ PointToPointSpringDamper::PointToPointSpringDamper(std::string name, int body_i,
   if (!(stiffness >= 0.0) || !(damping >= 0.0) || !(free_length >= 0.0) || !std::isfinite(stiffness) ||
       !std::isfinite(damping) || !std::isfinite(free_length) || !std::isfinite(preload)) {
     std::ostringstream os;
-    os << "point-to-point element " << this->name() << ": stiffness, damping and free length must be finite and >= 0, got "
-       << stiffness << ", " << damping << ", " << free_length;
+    os << "point-to-point element " << this->name()
+       << ": stiffness, damping and free length must be finite and >= 0, got " << stiffness << ", " << damping << ", "
+       << free_length;
     throw std::runtime_error(os.str());
   }
 }

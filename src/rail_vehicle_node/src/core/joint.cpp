@@ -63,8 +63,7 @@ void Joint::perpendicularRow(const VehicleData& data, const Vector3& a_in_i, con
   gamma[row] = -(a_j.dot(a_i_ddot_vel) + 2.0 * a_i_dot.dot(a_j_dot) + a_i.dot(a_j_ddot_vel));
 }
 
-SphericalJoint::SphericalJoint(std::string name, int body_i, int body_j, const Vector3& s_in_i,
-                               const Vector3& s_in_j)
+SphericalJoint::SphericalJoint(std::string name, int body_i, int body_j, const Vector3& s_in_i, const Vector3& s_in_j)
     : Joint(std::move(name), body_i, body_j), s_in_i_(s_in_i), s_in_j_(s_in_j) {}
 
 void SphericalJoint::evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorXd> phi,
@@ -72,8 +71,8 @@ void SphericalJoint::evaluate(const VehicleData& data, Eigen::Ref<Eigen::VectorX
   sphericalRows(data, s_in_i_, s_in_j_, 0, phi, phi_v_rows, gamma);
 }
 
-RevoluteJoint::RevoluteJoint(std::string name, int body_i, int body_j, const Vector3& s_in_i,
-                             const Vector3& s_in_j, const Vector3& axis_in_i, const Vector3& axis_in_j)
+RevoluteJoint::RevoluteJoint(std::string name, int body_i, int body_j, const Vector3& s_in_i, const Vector3& s_in_j,
+                             const Vector3& axis_in_i, const Vector3& axis_in_j)
     : Joint(std::move(name), body_i, body_j), s_in_i_(s_in_i), s_in_j_(s_in_j) {
   if (axis_in_i.norm() < 1e-12 || axis_in_j.norm() < 1e-12) {
     throw std::runtime_error("revolute joint " + this->name() + ": zero-length axis");

@@ -240,8 +240,8 @@ int projectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, Vehic
     if (violation <= tolerance) break;
     if (iterations >= max_iterations || !std::isfinite(violation)) {
       std::ostringstream os;
-      os << "constraint projection: max |Phi| = " << violation << " after " << iterations
-         << " iterations, tolerance " << tolerance;
+      os << "constraint projection: max |Phi| = " << violation << " after " << iterations << " iterations, tolerance "
+         << tolerance;
       throw std::runtime_error(os.str());
     }
     data.rhs_c = -data.phi;

@@ -34,19 +34,19 @@ struct VehicleIntegrator::Impl {
   SUNContext context = nullptr;
   N_Vector y = nullptr;
   N_Vector dky = nullptr;
-  N_Vector error_weights = nullptr;    // coloured Jacobian: CVODE's error weights
+  N_Vector error_weights = nullptr;  // coloured Jacobian: CVODE's error weights
   SUNMatrix jacobian = nullptr;
   SUNLinearSolver linear_solver = nullptr;
   SUNNonlinearSolver nonlinear_solver = nullptr;
   void* cvode = nullptr;
   double t = 0.0;
-  bool stepped_since_init = false;     // false right after (re-)initialisation
+  bool stepped_since_init = false;  // false right after (re-)initialisation
   bool ls_counters_stale = false;
-  bool in_jacobian = false;            // inside the DQ Jacobian (cost clock attached): RHS timed as Jacobian
+  bool in_jacobian = false;                  // inside the DQ Jacobian (cost clock attached): RHS timed as Jacobian
   std::unique_ptr<JacobianPattern> pattern;  // coloured Jacobian (BDF)
   std::unique_ptr<JacobianWork> jacobian_work;
-  long coloured_jacobian_rhs = 0;      // evaluations of the coloured Jacobians since construction
-  void* adams = nullptr;               // BDF's fallback (IntegratorSettings::adams_fallback), made at first use
+  long coloured_jacobian_rhs = 0;  // evaluations of the coloured Jacobians since construction
+  void* adams = nullptr;           // BDF's fallback (IntegratorSettings::adams_fallback), made at first use
   SUNNonlinearSolver adams_solver = nullptr;
   IntegratorCounters base;             // counters accumulated before the last re-initialisation
   std::array<char, 512> last_error{};  // CVODE's last message (fixed buffer: no allocation)
@@ -86,8 +86,8 @@ struct VehicleIntegrator::Impl {
     const int n = self->model.stateSize();
     const Eigen::Map<const Eigen::VectorXd> y_map(N_VGetArrayPointer(y), n);
     Eigen::Map<Eigen::VectorXd> y_dot_map(N_VGetArrayPointer(y_dot), n);
-    core::CostClock::Scope timing(self->settings.cost, self->in_jacobian ? core::CostClock::kVehicleJacobian
-                                                                         : core::CostClock::kVehicleRhs);
+    core::CostClock::Scope timing(self->settings.cost,
+                                  self->in_jacobian ? core::CostClock::kVehicleJacobian : core::CostClock::kVehicleRhs);
     try {
       computeDerivatives(self->model, t, y_map, y_dot_map, self->data);
     } catch (...) {
@@ -243,8 +243,8 @@ struct VehicleIntegrator::Impl {
   }
 };
 
-VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& data, const Eigen::VectorXd& y0,
-                                     double t0, const IntegratorSettings& settings)
+VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& data, const Eigen::VectorXd& y0, double t0,
+                                     const IntegratorSettings& settings)
     : impl_(std::make_unique<Impl>(model, data, settings)) {
   Impl& s = *impl_;
   std::ostringstream os;
@@ -313,7 +313,8 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
     if (settings.cost != nullptr) s.check(CVodeSetJacFn(s.cvode, &Impl::timedDqJacobian), "CVodeSetJacFn");
   } else {
     s.nonlinear_solver = SUNNonlinSol_FixedPoint(s.y, 0, s.context);
-    if (s.nonlinear_solver == nullptr) throw std::runtime_error("vehicle integrator: fixed-point solver creation failed");
+    if (s.nonlinear_solver == nullptr)
+      throw std::runtime_error("vehicle integrator: fixed-point solver creation failed");
     s.check(CVodeSetNonlinearSolver(s.cvode, s.nonlinear_solver), "CVodeSetNonlinearSolver");
   }
 }

@@ -20,7 +20,8 @@ JacobianPattern::JacobianPattern(const VehicleModel& model) {
   std::vector<std::vector<int>> cluster_of(static_cast<std::size_t>(n_b));
   for (int b = 0; b < n_b; ++b) {
     const int c = model.clusterOfBody()[static_cast<std::size_t>(b)];
-    cluster_of[static_cast<std::size_t>(b)] = c < 0 ? std::vector<int>{b} : model.constraintClusters()[static_cast<std::size_t>(c)].bodies;
+    cluster_of[static_cast<std::size_t>(b)] =
+        c < 0 ? std::vector<int>{b} : model.constraintClusters()[static_cast<std::size_t>(c)].bodies;
   }
   // Row bodies of each body's columns, and the bodies each force element touches.
   std::vector<std::set<int>> rows_of(static_cast<std::size_t>(n_b));

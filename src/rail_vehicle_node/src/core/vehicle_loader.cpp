@@ -27,17 +27,17 @@ std::string join(const std::string& path, const std::string& key) { return path.
 
 // Magnitude bounds of the vehicle data, refused above (never clamped). Far beyond any rail vehicle, they
 // only catch mistyped or corrupted values that would make the integration fail.
-constexpr double kMaxPosition = 1e3;        // m, |coordinate| of a position, offset, length or deflection
-constexpr double kMaxForce = 1e8;           // N, |preload| or bump-stop force (a loaded axle: 2e5 N)
-constexpr double kMaxStiffness = 1e12;      // N/m or N m/rad
-constexpr double kMaxDamping = 1e12;        // N s/m or N m s/rad
-constexpr double kMaxMass = 1e6;            // kg (a loaded coach: 6e4 kg)
-constexpr double kMaxInertia = 1e8;         // kg m^2, |principal moment| or |product| (a carbody: 3e6)
+constexpr double kMaxPosition = 1e3;    // m, |coordinate| of a position, offset, length or deflection
+constexpr double kMaxForce = 1e8;       // N, |preload| or bump-stop force (a loaded axle: 2e5 N)
+constexpr double kMaxStiffness = 1e12;  // N/m or N m/rad
+constexpr double kMaxDamping = 1e12;    // N s/m or N m s/rad
+constexpr double kMaxMass = 1e6;        // kg (a loaded coach: 6e4 kg)
+constexpr double kMaxInertia = 1e8;     // kg m^2, |principal moment| or |product| (a carbody: 3e6)
 // kg m^2, principal moment: 1 g at 1 mm from the axis. Below it the body's angular accelerations dwarf every
 // other rate of the model (an axlebox: 10 kg m^2) and no integrator step resolves them.
 constexpr double kMinInertia = 1e-6;
-constexpr double kMaxGravity = 1e3;         // m/s^2, |component| of the gravity vector
-constexpr double kMaxAxisComponent = 1e6;   // dimensionless, |component| of a direction before normalising
+constexpr double kMaxGravity = 1e3;        // m/s^2, |component| of the gravity vector
+constexpr double kMaxAxisComponent = 1e6;  // dimensionless, |component| of a direction before normalising
 
 std::string format(double v) {
   std::ostringstream os;
@@ -132,14 +132,15 @@ class Reader {
     return vec3(node, join(path, key), max_abs, unit);
   }
 
-  Vector3 nonNegativeVec3(const YAML::Node& map, const std::string& path, const char* key, bool required,
-                          double max, const char* unit) const {
+  Vector3 nonNegativeVec3(const YAML::Node& map, const std::string& path, const char* key, bool required, double max,
+                          const char* unit) const {
     const YAML::Node node = map[key];
     if (!required && (!node.IsDefined() || node.IsNull())) return Vector3::Zero();
     const Vector3 v = vec3(map, path, key, max, unit);
     for (int k = 0; k < 3; ++k) {
-      if (v[k] < 0.0) fail(node[static_cast<std::size_t>(k)], join(path, key) + "[" + std::to_string(k) + "]",
-                           "must be >= 0", describe(node[static_cast<std::size_t>(k)]));
+      if (v[k] < 0.0)
+        fail(node[static_cast<std::size_t>(k)], join(path, key) + "[" + std::to_string(k) + "]", "must be >= 0",
+             describe(node[static_cast<std::size_t>(k)]));
     }
     return v;
   }
@@ -208,8 +209,9 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
     throw VehicleFileError(path + ": " + dup->field + ": " + dup->describe());
   }
   if (!root.IsMap()) reader.fail(root, "(top level)", "expected a map", describe(root));
-  reader.checkKeys(root, "", {"name", "description", "parameters", "gravity", "bodies", "load_points", "joints", "forces",
-                                  "measurement_points"});
+  reader.checkKeys(root, "",
+                   {"name", "description", "parameters", "gravity", "bodies", "load_points", "joints", "forces",
+                    "measurement_points"});
 
   if (root["gravity"].IsDefined()) {
     const Vector3 g = reader.vec3(root, "", "gravity", kMaxGravity, "m/s^2");
@@ -229,27 +231,30 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
     }
     if (body.name == "ground") reader.fail(node["name"], join(where, "name"), "reserved name", body.name);
     body.mass = reader.number(node, where, "mass");
-    if (!(body.mass > 0.0)) reader.fail(node["mass"], join(where, "mass"), "mass must be > 0 kg", describe(node["mass"]));
+    if (!(body.mass > 0.0))
+      reader.fail(node["mass"], join(where, "mass"), "mass must be > 0 kg", describe(node["mass"]));
     if (!(body.mass <= kMaxMass)) {
-      reader.fail(node["mass"], join(where, "mass"), "mass must be <= " + format(kMaxMass) + " kg", describe(node["mass"]));
+      reader.fail(node["mass"], join(where, "mass"), "mass must be <= " + format(kMaxMass) + " kg",
+                  describe(node["mass"]));
     }
     body.r_reference = reader.vec3(node, where, "centre_of_mass", kMaxPosition, "m");
     const Vector3 principal = reader.vec3(node, where, "inertia", kMaxInertia, "kg m^2");
     for (int i = 0; i < 3; ++i) {
       if (!(principal[i] > 0.0)) {
-        reader.fail(node["inertia"][static_cast<std::size_t>(i)], join(where, "inertia") + "[" + std::to_string(i) + "]",
-                    "moment of inertia must be > 0 kg m^2", describe(node["inertia"][static_cast<std::size_t>(i)]));
+        reader.fail(node["inertia"][static_cast<std::size_t>(i)],
+                    join(where, "inertia") + "[" + std::to_string(i) + "]", "moment of inertia must be > 0 kg m^2",
+                    describe(node["inertia"][static_cast<std::size_t>(i)]));
       }
       if (!(principal[i] >= kMinInertia)) {
-        reader.fail(node["inertia"][static_cast<std::size_t>(i)], join(where, "inertia") + "[" + std::to_string(i) + "]",
+        reader.fail(node["inertia"][static_cast<std::size_t>(i)],
+                    join(where, "inertia") + "[" + std::to_string(i) + "]",
                     "moment of inertia must be >= " + format(kMinInertia) + " kg m^2",
                     describe(node["inertia"][static_cast<std::size_t>(i)]));
       }
     }
     const Vector3 products = reader.optionalVec3(node, where, "products_of_inertia", kMaxInertia, "kg m^2");
-    body.inertia_in_body << principal[0], products[0], products[1],
-                            products[0], principal[1], products[2],
-                            products[1], products[2], principal[2];
+    body.inertia_in_body << principal[0], products[0], products[1], products[0], principal[1], products[2], products[1],
+        products[2], principal[2];
     build(reader, node, where, [&] { model.addBody(body); });
   }
 
@@ -290,18 +295,21 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
     } else if (type == "spherical" || type == "fixed") {
       reader.checkKeys(node, where, {"name", "type", "body_i", "body_j", "position"});
     } else {
-      reader.fail(node["type"], join(where, "type"), "unknown joint type (expected revolute, spherical or fixed)", type);
+      reader.fail(node["type"], join(where, "type"), "unknown joint type (expected revolute, spherical or fixed)",
+                  type);
     }
     const std::string name = reader.string(node, where, "name");
     if (!joint_names.insert(name).second) reader.fail(node["name"], join(where, "name"), "joint defined twice", name);
     const int body_i = bodyOf(reader, model, node, where, "body_i", false);
     const int body_j = bodyOf(reader, model, node, where, "body_j", true);
-    if (body_i == body_j) reader.fail(node["body_j"], join(where, "body_j"), "a joint needs two different bodies",
-                                      describe(node["body_j"]));
+    if (body_i == body_j)
+      reader.fail(node["body_j"], join(where, "body_j"), "a joint needs two different bodies",
+                  describe(node["body_j"]));
     const Vector3 p = reader.vec3(node, where, "position", kMaxPosition, "m");
     if (type == "revolute") {
       const Vector3 axis = reader.vec3(node, where, "axis", kMaxAxisComponent, "");
-      if (axis.norm() < 1e-12) reader.fail(node["axis"], join(where, "axis"), "axis must not be zero", describe(node["axis"]));
+      if (axis.norm() < 1e-12)
+        reader.fail(node["axis"], join(where, "axis"), "axis must not be zero", describe(node["axis"]));
       build(reader, node, where, [&] { model.addRevoluteJointAt(name, body_i, body_j, p, axis.normalized()); });
     } else if (type == "spherical") {
       build(reader, node, where, [&] { model.addSphericalJointAt(name, body_i, body_j, p); });
@@ -319,11 +327,13 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
     if (!node.IsMap()) reader.fail(node, where, "expected a map", describe(node));
     const std::string type = reader.string(node, where, "type");
     if (type == "bushing") {
-      reader.checkKeys(node, where, {"name", "type", "body_i", "body_j", "position", "stiffness", "damping", "preload",
-                                     "free_offset", "rotational_stiffness", "rotational_damping"});
+      reader.checkKeys(node, where,
+                       {"name", "type", "body_i", "body_j", "position", "stiffness", "damping", "preload",
+                        "free_offset", "rotational_stiffness", "rotational_damping"});
     } else if (type == "point_to_point") {
-      reader.checkKeys(node, where, {"name", "type", "body_i", "body_j", "position_i", "position_j", "stiffness",
-                                     "damping", "free_length", "preload"});
+      reader.checkKeys(node, where,
+                       {"name", "type", "body_i", "body_j", "position_i", "position_j", "stiffness", "damping",
+                        "free_length", "preload"});
     } else if (type == "bump_stop") {
       reader.checkKeys(node, where, {"name", "type", "body_i", "body_j", "position", "axis", "table"});
     } else {
@@ -331,11 +341,13 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
                   "unknown force type (expected bushing, point_to_point or bump_stop)", type);
     }
     const std::string name = reader.string(node, where, "name");
-    if (!force_names.insert(name).second) reader.fail(node["name"], join(where, "name"), "force element defined twice", name);
+    if (!force_names.insert(name).second)
+      reader.fail(node["name"], join(where, "name"), "force element defined twice", name);
     const int body_i = bodyOf(reader, model, node, where, "body_i", true);
     const int body_j = bodyOf(reader, model, node, where, "body_j", true);
-    if (body_i == body_j) reader.fail(node["body_j"], join(where, "body_j"), "a force element needs two different bodies",
-                                      describe(node["body_j"]));
+    if (body_i == body_j)
+      reader.fail(node["body_j"], join(where, "body_j"), "a force element needs two different bodies",
+                  describe(node["body_j"]));
     if (type == "bushing") {
       Bushing::Parameters par;
       par.stiffness = reader.nonNegativeVec3(node, where, "stiffness", false, kMaxStiffness, "N/m");
@@ -344,7 +356,8 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
       par.free_offset = reader.optionalVec3(node, where, "free_offset", kMaxPosition, "m");
       par.rotational_stiffness =
           reader.nonNegativeVec3(node, where, "rotational_stiffness", false, kMaxStiffness, "N m/rad");
-      par.rotational_damping = reader.nonNegativeVec3(node, where, "rotational_damping", false, kMaxDamping, "N m s/rad");
+      par.rotational_damping =
+          reader.nonNegativeVec3(node, where, "rotational_damping", false, kMaxDamping, "N m s/rad");
       const Vector3 p = reader.vec3(node, where, "position", kMaxPosition, "m");
       build(reader, node, where, [&] { model.addBushingAt(name, body_i, body_j, p, Matrix3::Identity(), par); });
     } else if (type == "point_to_point") {
@@ -354,20 +367,24 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
       const double damping = reader.optionalBounded(node, where, "damping", 0.0, kMaxDamping, "N s/m");
       const double free_length = reader.optionalBounded(node, where, "free_length", -1.0, kMaxPosition, "m");
       const double preload = reader.optionalBounded(node, where, "preload", 0.0, kMaxForce, "N");
-      if (stiffness < 0.0) reader.fail(node["stiffness"], join(where, "stiffness"), "must be >= 0", describe(node["stiffness"]));
-      if (damping < 0.0) reader.fail(node["damping"], join(where, "damping"), "must be >= 0", describe(node["damping"]));
+      if (stiffness < 0.0)
+        reader.fail(node["stiffness"], join(where, "stiffness"), "must be >= 0", describe(node["stiffness"]));
+      if (damping < 0.0)
+        reader.fail(node["damping"], join(where, "damping"), "must be >= 0", describe(node["damping"]));
       if (node["free_length"].IsDefined() && free_length < 0.0) {
         reader.fail(node["free_length"], join(where, "free_length"), "must be >= 0", describe(node["free_length"]));
       }
       if ((p_j - p_i).norm() < 1e-9) {
-        reader.fail(node["position_j"], join(where, "position_j"), "must differ from position_i", describe(node["position_j"]));
+        reader.fail(node["position_j"], join(where, "position_j"), "must differ from position_i",
+                    describe(node["position_j"]));
       }
       build(reader, node, where,
             [&] { model.addPointToPointAt(name, body_i, body_j, p_i, p_j, stiffness, damping, free_length, preload); });
     } else {
       const Vector3 p = reader.vec3(node, where, "position", kMaxPosition, "m");
       const Vector3 axis = reader.vec3(node, where, "axis", kMaxAxisComponent, "");
-      if (axis.norm() < 1e-12) reader.fail(node["axis"], join(where, "axis"), "axis must not be zero", describe(node["axis"]));
+      if (axis.norm() < 1e-12)
+        reader.fail(node["axis"], join(where, "axis"), "axis must not be zero", describe(node["axis"]));
       const YAML::Node table = reader.require(node, where, "table");
       if (!table.IsSequence() || table.size() < 2) {
         reader.fail(table, join(where, "table"), "expected a list of >= 2 [deflection, force] rows", describe(table));
@@ -376,7 +393,8 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
       for (std::size_t r = 0; r < table.size(); ++r) {
         const std::string row_path = join(where, "table") + "[" + std::to_string(r) + "]";
         const YAML::Node row = table[r];
-        if (!row.IsSequence() || row.size() != 2) reader.fail(row, row_path, "expected [deflection, force]", describe(row));
+        if (!row.IsSequence() || row.size() != 2)
+          reader.fail(row, row_path, "expected [deflection, force]", describe(row));
         const double d = reader.bounded(row[0], row_path + "[0]", kMaxPosition, "m");
         const double f = reader.bounded(row[1], row_path + "[1]", kMaxForce, "N");
         if (r == 0 && (d < 0.0 || f != 0.0)) {
@@ -393,9 +411,8 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
         deflections.push_back(d);
         magnitudes.push_back(f);
       }
-      build(reader, node, where, [&] {
-        model.addBumpStopAt(name, body_i, body_j, p, axis.normalized(), deflections, magnitudes);
-      });
+      build(reader, node, where,
+            [&] { model.addBumpStopAt(name, body_i, body_j, p, axis.normalized(), deflections, magnitudes); });
     }
   }
 }

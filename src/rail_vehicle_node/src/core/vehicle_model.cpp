@@ -94,9 +94,10 @@ double VehicleModel::wheelSpan() const {
   if (load_points_.empty()) return 0.0;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (const LoadPoint& p : load_points_) {
-    const double x = p.body == kGround ? p.s_in_body.x()
-                                       : (bodies_[static_cast<std::size_t>(p.body)].r_reference +
-                                          referenceRotation(p.body) * p.s_in_body).x();
+    const double x =
+        p.body == kGround
+            ? p.s_in_body.x()
+            : (bodies_[static_cast<std::size_t>(p.body)].r_reference + referenceRotation(p.body) * p.s_in_body).x();
     lo = std::min(lo, x);
     hi = std::max(hi, x);
   }
@@ -129,10 +130,9 @@ void VehicleModel::addRevoluteJointAt(const std::string& name, int body_i, int b
                                       const Vector3& axis_in_world) {
   requireBody(body_i, false, "joint " + name + " body_i");
   requireBody(body_j, true, "joint " + name + " body_j");
-  addJoint(std::make_unique<RevoluteJoint>(name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world),
-                                           worldToBodyAtReference(body_j, p_in_world),
-                                           referenceRotation(body_i).transpose() * axis_in_world,
-                                           referenceRotation(body_j).transpose() * axis_in_world));
+  addJoint(std::make_unique<RevoluteJoint>(
+      name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world), worldToBodyAtReference(body_j, p_in_world),
+      referenceRotation(body_i).transpose() * axis_in_world, referenceRotation(body_j).transpose() * axis_in_world));
 }
 
 void VehicleModel::addFixedJointAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world) {
@@ -154,15 +154,14 @@ void VehicleModel::addBushingAt(const std::string& name, int body_i, int body_j,
 }
 
 void VehicleModel::addPointToPointAt(const std::string& name, int body_i, int body_j, const Vector3& p_i_in_world,
-                                     const Vector3& p_j_in_world, double stiffness, double damping,
-                                     double free_length, double preload) {
+                                     const Vector3& p_j_in_world, double stiffness, double damping, double free_length,
+                                     double preload) {
   requireBody(body_i, true, "point-to-point " + name + " body_i");
   requireBody(body_j, true, "point-to-point " + name + " body_j");
   const double length = free_length < 0.0 ? (p_j_in_world - p_i_in_world).norm() : free_length;
-  addForceElement(std::make_unique<PointToPointSpringDamper>(name, body_i, body_j,
-                                                             worldToBodyAtReference(body_i, p_i_in_world),
-                                                             worldToBodyAtReference(body_j, p_j_in_world), stiffness,
-                                                             damping, length, preload));
+  addForceElement(std::make_unique<PointToPointSpringDamper>(
+      name, body_i, body_j, worldToBodyAtReference(body_i, p_i_in_world), worldToBodyAtReference(body_j, p_j_in_world),
+      stiffness, damping, length, preload));
 }
 
 void VehicleModel::addBumpStopAt(const std::string& name, int body_i, int body_j, const Vector3& p_in_world,
@@ -170,10 +169,9 @@ void VehicleModel::addBumpStopAt(const std::string& name, int body_i, int body_j
                                  std::vector<double> forces) {
   requireBody(body_i, true, "bump stop " + name + " body_i");
   requireBody(body_j, true, "bump stop " + name + " body_j");
-  addForceElement(std::make_unique<BumpStop>(name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world),
-                                             worldToBodyAtReference(body_j, p_in_world),
-                                             referenceRotation(body_i).transpose() * axis_in_world,
-                                             std::move(deflections), std::move(forces)));
+  addForceElement(std::make_unique<BumpStop>(
+      name, body_i, body_j, worldToBodyAtReference(body_i, p_in_world), worldToBodyAtReference(body_j, p_in_world),
+      referenceRotation(body_i).transpose() * axis_in_world, std::move(deflections), std::move(forces)));
 }
 
 void VehicleModel::setGravity(const Vector3& gravity_in_world) {
@@ -216,7 +214,8 @@ void VehicleModel::finalize() {
     return b;
   };
   for (const auto& j : joints_) {
-    if (j->bodyI() != kGround && j->bodyJ() != kGround) parent[static_cast<std::size_t>(root(j->bodyI()))] = root(j->bodyJ());
+    if (j->bodyI() != kGround && j->bodyJ() != kGround)
+      parent[static_cast<std::size_t>(root(j->bodyI()))] = root(j->bodyJ());
   }
   clusters_.clear();
   cluster_of_body_.assign(static_cast<std::size_t>(n), -1);
@@ -229,7 +228,8 @@ void VehicleModel::finalize() {
       c = static_cast<int>(clusters_.size());
       clusters_.emplace_back();
     }
-    for (int r = 0; r < joints_[k]->size(); ++r) clusters_[static_cast<std::size_t>(c)].rows.push_back(joint_rows_[k] + r);
+    for (int r = 0; r < joints_[k]->size(); ++r)
+      clusters_[static_cast<std::size_t>(c)].rows.push_back(joint_rows_[k] + r);
   }
   for (int b = 0; b < n; ++b) {
     const int c = cluster_of_root[static_cast<std::size_t>(root(b))];

@@ -10,24 +10,34 @@ namespace rail::vehicle {
 
 const char* toString(RunStatus status) {
   switch (status) {
-    case RunStatus::kRunning: return "running";
-    case RunStatus::kFinished: return "finished";
-    case RunStatus::kDerailed: return "derailed";
-    case RunStatus::kNonFinite: return "non-finite state";
-    case RunStatus::kLeftTrack: return "left the track";
-    case RunStatus::kIntegratorFailed: return "integrator failure";
+    case RunStatus::kRunning:
+      return "running";
+    case RunStatus::kFinished:
+      return "finished";
+    case RunStatus::kDerailed:
+      return "derailed";
+    case RunStatus::kNonFinite:
+      return "non-finite state";
+    case RunStatus::kLeftTrack:
+      return "left the track";
+    case RunStatus::kIntegratorFailed:
+      return "integrator failure";
   }
   return "?";
 }
 
 int exitCodeOf(RunStatus status) {
   switch (status) {
-    case RunStatus::kFinished: return core::kExitOk;
+    case RunStatus::kFinished:
+      return core::kExitOk;
     case RunStatus::kDerailed:
-    case RunStatus::kLeftTrack: return core::kExitDerailed;
+    case RunStatus::kLeftTrack:
+      return core::kExitDerailed;
     case RunStatus::kNonFinite:
-    case RunStatus::kIntegratorFailed: return core::kExitNumerical;
-    default: return core::kExitInternal;
+    case RunStatus::kIntegratorFailed:
+      return core::kExitNumerical;
+    default:
+      return core::kExitInternal;
   }
 }
 
@@ -104,8 +114,7 @@ VehicleRun::Event VehicleRun::nextCosim() {
   const double h = v.trackStep();
   for (;;) {
     if (status_ != RunStatus::kRunning && status_ != RunStatus::kFinished) return checkFailure();
-    if (v.time() + 1e-9 * h >= static_cast<double>(next_output_) * output_period_ ||
-        status_ == RunStatus::kFinished) {
+    if (v.time() + 1e-9 * h >= static_cast<double>(next_output_) * output_period_ || status_ == RunStatus::kFinished) {
       output_index_ = next_output_++;
       return Event::kOutput;
     }

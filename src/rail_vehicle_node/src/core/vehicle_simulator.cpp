@@ -18,9 +18,7 @@ namespace rc = rail::contact;
 namespace {
 
 // Axial vector of a (numerically) skew-symmetric matrix W: W x = w x x.
-Vector3 axial(const Matrix3& W) {
-  return 0.5 * Vector3(W(2, 1) - W(1, 2), W(0, 2) - W(2, 0), W(1, 0) - W(0, 1));
-}
+Vector3 axial(const Matrix3& W) { return 0.5 * Vector3(W(2, 1) - W(1, 2), W(0, 2) - W(2, 0), W(1, 0) - W(0, 1)); }
 
 const char* sideName(rc::RailSide side) { return side == rc::RailSide::kLeft ? "left" : "right"; }
 
@@ -62,9 +60,12 @@ contact::WheelContactOptions defaultVehicleContactOptions() {
 
 IntegrationMethod chooseMethod(const core::Solver& solver, double speed, bool external_wrenches) {
   switch (solver.vehicle_method) {
-    case core::VehicleMethod::kBdf: return IntegrationMethod::kBdf;
-    case core::VehicleMethod::kAdams: return IntegrationMethod::kAdams;
-    case core::VehicleMethod::kAuto: break;
+    case core::VehicleMethod::kBdf:
+      return IntegrationMethod::kBdf;
+    case core::VehicleMethod::kAdams:
+      return IntegrationMethod::kAdams;
+    case core::VehicleMethod::kAuto:
+      break;
   }
   if (external_wrenches) return IntegrationMethod::kAdams;  // suspension only: not stiff (see the header)
   if (std::abs(speed) < kStiffCreepSpeed) return IntegrationMethod::kBdf;
@@ -204,7 +205,8 @@ Eigen::VectorXd placeOnTrack(const VehicleModel& model, const rc::TrackGeometry&
   for (int b = 0; b < n; ++b) {
     const RigidBody& body = bodies[static_cast<std::size_t>(b)];
     const Matrix3& R = frame[static_cast<std::size_t>(b)];
-    const Vector3 p = origin[static_cast<std::size_t>(b)] + R * Vector3(0.0, body.r_reference.y(), body.r_reference.z() + lift);
+    const Vector3 p =
+        origin[static_cast<std::size_t>(b)] + R * Vector3(0.0, body.r_reference.y(), body.r_reference.z() + lift);
     const Matrix3 A = R * rotationFromEulerParameters(body.p_reference);
     // Velocity field of the track frame moving at `speed` along the track, taken at the body's station.
     track.centre(s_of[static_cast<std::size_t>(b)], tp);
@@ -215,8 +217,7 @@ Eigen::VectorXd placeOnTrack(const VehicleModel& model, const rc::TrackGeometry&
     }
     y.segment<3>(VehicleModel::positionOffset(b)) = p;
     y.segment<4>(VehicleModel::eulerOffset(b)) = eulerParametersFromRotation(A);
-    y.segment<3>(model.velocityOffset(b)) =
-        speed * tp.dp_ds.normalized() + omega_track.cross(p - tp.p_center_in_world);
+    y.segment<3>(model.velocityOffset(b)) = speed * tp.dp_ds.normalized() + omega_track.cross(p - tp.p_center_in_world);
     y.segment<3>(model.angularVelocityOffset(b)) = A.transpose() * omega;
   }
   return y;
@@ -296,8 +297,8 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
         if ((side == 0) == (y > 0.0)) d.load_point = p;
       }
       d.s_load_point_in_body = model_.loadPoints()[static_cast<std::size_t>(d.load_point)].s_in_body;
-      d.s_taping_in_body = Vector3(d.s_load_point_in_body.x(), side == 0 ? taping_y : -taping_y,
-                                   d.s_load_point_in_body.z());
+      d.s_taping_in_body =
+          Vector3(d.s_load_point_in_body.x(), side == 0 ? taping_y : -taping_y, d.s_load_point_in_body.z());
       wheels.push_back(d);
     }
   }
@@ -305,9 +306,9 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   // Contact: the scene's effects and contact section over the caller's numerical settings.
   const rc::WheelContactOptions options = core::contactOptions(scene, settings.contact);
   nominal_height_ = scene.vehicle.nominal_radius;
-  contact_model_ = std::make_unique<WheelRailContactModel>(
-      *track_, wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
-      rc::railSectionCentre(rail_profile_), options, std::move(wheels));
+  contact_model_ =
+      std::make_unique<WheelRailContactModel>(*track_, wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
+                                              rc::railSectionCentre(rail_profile_), options, std::move(wheels));
   contact_data_ = std::make_unique<WheelRailContactData>(*contact_model_);
   model_.addForceElement(std::make_unique<WheelRailContactElement>(contact_model_.get(), contact_data_.get()));
   if (settings.wheel_wrench_source != nullptr) {
@@ -436,8 +437,8 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   wheelset_s_.assign(static_cast<std::size_t>(n_ws), 0.0);
   for (int w = 0; w < n_ws; ++w) {
     wheelset_s_[static_cast<std::size_t>(w)] =
-        s0 - (x_lead - model_.bodies()[static_cast<std::size_t>(wheelset_bodies_[static_cast<std::size_t>(w)])]
-                           .r_reference.x());
+        s0 - (x_lead -
+              model_.bodies()[static_cast<std::size_t>(wheelset_bodies_[static_cast<std::size_t>(w)])].r_reference.x());
   }
   body_out_.assign(static_cast<std::size_t>(model_.nBodies()), BodyPose());
   measurement_out_.assign(model_.measurementPoints().size(), MeasurementOutput());
@@ -569,8 +570,8 @@ RunStatus VehicleSimulator::advanceTo(double t) {
     const bool finite = integrator_->state().allFinite();
     updateOutputs();
     std::ostringstream os;
-    os << "the vehicle integration failed at t = " << integrator_->time() << " s, leading wheelset at s = "
-       << leading_s_ << " m: " << e.what();
+    os << "the vehicle integration failed at t = " << integrator_->time()
+       << " s, leading wheelset at s = " << leading_s_ << " m: " << e.what();
     message_ = os.str();
     return finite ? RunStatus::kIntegratorFailed : RunStatus::kNonFinite;
   }
@@ -587,9 +588,9 @@ RunStatus VehicleSimulator::check() {
                       y.segment<6>(model_.velocityOffset(w.body)).allFinite();
       if (!ok) {
         std::ostringstream os;
-        os << "non-finite state at wheel " << 2 * w.wheelset + (w.side == rc::RailSide::kLeft ? 0 : 1)
-           << " (wheelset " << w.wheelset + 1 << ", " << sideName(w.side) << ") near s = "
-           << wheel_s_[static_cast<std::size_t>(2 * w.wheelset)] << " m, t = " << t << " s";
+        os << "non-finite state at wheel " << 2 * w.wheelset + (w.side == rc::RailSide::kLeft ? 0 : 1) << " (wheelset "
+           << w.wheelset + 1 << ", " << sideName(w.side)
+           << ") near s = " << wheel_s_[static_cast<std::size_t>(2 * w.wheelset)] << " m, t = " << t << " s";
         message_ = os.str();
         return RunStatus::kNonFinite;
       }
@@ -606,8 +607,8 @@ RunStatus VehicleSimulator::check() {
     if (std::abs(o.lateral) > settings_.derailment_lateral) {
       std::ostringstream os;
       os << "derailment: wheelset " << o.wheelset + 1 << " is " << o.lateral * 1e3
-         << " mm off the track centre line (limit " << settings_.derailment_lateral * 1e3 << " mm) at s = "
-         << o.arc_length << " m, t = " << t << " s";
+         << " mm off the track centre line (limit " << settings_.derailment_lateral * 1e3
+         << " mm) at s = " << o.arc_length << " m, t = " << t << " s";
       message_ = os.str();
       return RunStatus::kDerailed;
     }

@@ -41,8 +41,7 @@ void evaluateWheel(const WheelRailContactModel& model, const VehicleData& data, 
   state.omega_in_world = b.omega_world;
   state.s_hint = cd.s_hint[i];
   contact::WheelContactResult& out = cd.result[i];
-  model.wheelModel().evaluate(state, w.side, model.track(), contact::RigidRailDeformation(), cd.work[i], out,
-                             cd.cost);
+  model.wheelModel().evaluate(state, w.side, model.track(), contact::RigidRailDeformation(), cd.work[i], out, cd.cost);
   ++cd.evaluations;
   // Keep the hint on the rail section of the last valid contact point (the wheel moves < 1 mm per step).
   const contact::ContactPointResult& tread = out.contact[contact::kTread];
@@ -57,8 +56,7 @@ void evaluateWheel(const WheelRailContactModel& model, const VehicleData& data, 
   cd.moment_in_world[i] = b.A * out.wheel_centre.moment_in_wheelset + (arm_taping - arm_load).cross(f);
 }
 
-WheelRailContactElement::WheelRailContactElement(const WheelRailContactModel* model,
-                                                 WheelRailContactData* contact_data)
+WheelRailContactElement::WheelRailContactElement(const WheelRailContactModel* model, WheelRailContactData* contact_data)
     : ForceElement("wheel_rail_contact", model->wheels().front().body, kGround),
       model_(model),
       contact_data_(contact_data) {}

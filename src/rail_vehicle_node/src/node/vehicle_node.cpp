@@ -56,8 +56,8 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
       transport = ros_glue::makeTransport(scene, cc::Role::kVehicle, nh, pnh, peer, &stop.requested);
     }
   } catch (const cc::CouplingError& e) {
-    ROS_FATAL("%s: cannot open the %s transport to the track node: %s", node.c_str(),
-              toString(scene.solver.transport), e.what());
+    ROS_FATAL("%s: cannot open the %s transport to the track node: %s", node.c_str(), toString(scene.solver.transport),
+              e.what());
     return cc::exitCode(e.status());
   } catch (const std::exception& e) {
     ROS_FATAL("%s: cannot open the %s transport: %s", node.c_str(), toString(scene.solver.transport), e.what());
@@ -76,12 +76,16 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     return kExitBadInput;
   }
   rv::VehicleSimulator& sim = cosim ? cosim_vehicle->simulator() : *alone;
-  ROS_INFO("%s: vehicle settled on the rails (lowered %.4f mm, wheel loads %.1f N of %.1f N); integrating with "
-           "%s, rtol %g, atol %g, max step %g s (0: none)%s", node.c_str(), -sim.settleLift() * 1e3,
-           sim.settledWheelLoadSum(), sim.staticLoad(), sim.method() == rv::IntegrationMethod::kBdf ? "BDF" : "Adams",
-           scene.solver.vehicle_rtol, scene.solver.vehicle_atol, sim.maxStep(),
-           cosim ? (std::string("; co-simulation with the track over ") + toString(scene.solver.transport) +
-                    ", track step " + std::to_string(scene.solver.track_step) + " s").c_str() : "");
+  ROS_INFO(
+      "%s: vehicle settled on the rails (lowered %.4f mm, wheel loads %.1f N of %.1f N); integrating with "
+      "%s, rtol %g, atol %g, max step %g s (0: none)%s",
+      node.c_str(), -sim.settleLift() * 1e3, sim.settledWheelLoadSum(), sim.staticLoad(),
+      sim.method() == rv::IntegrationMethod::kBdf ? "BDF" : "Adams", scene.solver.vehicle_rtol,
+      scene.solver.vehicle_atol, sim.maxStep(),
+      cosim ? (std::string("; co-simulation with the track over ") + toString(scene.solver.transport) +
+               ", track step " + std::to_string(scene.solver.track_step) + " s")
+                  .c_str()
+            : "");
   rv::VehicleOutputs outputs(nh, pnh, scene, sim, cosim, cost, clock);
   if (!outputs.openBag(node, pnh)) return kExitBadInput;
 
@@ -105,11 +109,14 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
     return kExitInternal;  // the outputs close their bag
   }
   switch (run.end()) {
-    case rv::VehicleRun::End::kFinished: break;
+    case rv::VehicleRun::End::kFinished:
+      break;
     case rv::VehicleRun::End::kStopped:
       ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim.time(), stop.reason());
       break;
-    case rv::VehicleRun::End::kFailed: ROS_ERROR("%s: %s", node.c_str(), run.message().c_str()); break;
+    case rv::VehicleRun::End::kFailed:
+      ROS_ERROR("%s: %s", node.c_str(), run.message().c_str());
+      break;
     case rv::VehicleRun::End::kExchangeFailed:
       ROS_FATAL("%s: %s (track node %s)", node.c_str(), run.message().c_str(), peer.c_str());
       break;
@@ -130,7 +137,10 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
 
 }  // namespace
 int main(int argc, char** argv) {
-  if (ros_glue::nodeHelpRequested(argc, argv, "rail_vehicle", "the vehicle side of a railsim run (multibody vehicle on CVODE; alone on the rigid track or co-simulated with rail_track)")) return 0;
+  if (ros_glue::nodeHelpRequested(argc, argv, "rail_vehicle",
+                                  "the vehicle side of a railsim run (multibody vehicle on CVODE; alone on the rigid "
+                                  "track or co-simulated with rail_track)"))
+    return 0;
   ros::init(argc, argv, "rail_vehicle", ros::init_options::NoSigintHandler);
   // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
   ::umask(077);

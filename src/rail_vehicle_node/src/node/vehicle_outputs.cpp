@@ -154,11 +154,11 @@ struct OutputMessages {
 // and arrows in place. Sizes are for the picture only (the model has no geometry beyond its points).
 struct VehicleMarkers {
   visualization_msgs::MarkerArray array;
-  std::vector<int> body_marker;         // per body: its marker, or -1 (wheelsets: the axle)
-  std::vector<int> wheel_marker;        // per wheel: its disc
-  std::vector<int> arrow_marker;        // per wheel: the force arrow
-  double force_scale = 1e-5;            // m per N: 100 kN draws 1 m
-  double wheel_radius = 0.445;          // m
+  std::vector<int> body_marker;   // per body: its marker, or -1 (wheelsets: the axle)
+  std::vector<int> wheel_marker;  // per wheel: its disc
+  std::vector<int> arrow_marker;  // per wheel: the force arrow
+  double force_scale = 1e-5;      // m per N: 100 kN draws 1 m
+  double wheel_radius = 0.445;    // m
 
   VehicleMarkers(const VehicleSimulator& sim, double radius, double scale) : force_scale(scale), wheel_radius(radius) {
     const std::size_t nb = sim.bodies().size();
@@ -190,12 +190,12 @@ struct VehicleMarkers {
       }
     }
     for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
-      wheel_marker.push_back(add("wheels", visualization_msgs::Marker::CYLINDER, 2 * radius, 2 * radius, 0.13,
-                                 0.25f, 0.25f, 0.25f));
+      wheel_marker.push_back(
+          add("wheels", visualization_msgs::Marker::CYLINDER, 2 * radius, 2 * radius, 0.13, 0.25f, 0.25f, 0.25f));
     }
     for (std::size_t i = 0; i < sim.wheels().size(); ++i) {
-      arrow_marker.push_back(add("contact_forces", visualization_msgs::Marker::ARROW, 0.05, 0.12, 0.15,
-                                 0.9f, 0.2f, 0.1f));
+      arrow_marker.push_back(
+          add("contact_forces", visualization_msgs::Marker::ARROW, 0.05, 0.12, 0.15, 0.9f, 0.2f, 0.1f));
       array.markers.back().points.resize(2);
     }
   }
@@ -232,8 +232,7 @@ struct VehicleMarkers {
 };
 
 VehicleOutputs::VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const core::Scene& scene,
-                               const VehicleSimulator& sim, bool cosim, core::CostProfile& cost,
-                               core::CostClock& clock)
+                               const VehicleSimulator& sim, bool cosim, core::CostProfile& cost, core::CostClock& clock)
     : scene_(scene), sim_(sim), cost_(cost), clock_(clock), out_(std::make_unique<OutputMessages>(sim, scene)) {
   // In a co-simulation the contact is evaluated by the track node, which publishes the contact points.
   own_points_ = scene.effects.contact_point_output && !cosim;
@@ -307,7 +306,8 @@ void VehicleOutputs::publish(std::uint64_t index) {
 void VehicleOutputs::close(const std::string& node, const CosimVehicle* cosim, double wall, int exit_code) {
   const IntegratorCounters c = sim_.counters();
   // The exchange waits were timed inside the steps too: the integration is what remains.
-  if (cosim != nullptr) cost_.add(core::CostProfile::kVehicleIntegration, -cost_.seconds(core::CostProfile::kTransportWait));
+  if (cosim != nullptr)
+    cost_.add(core::CostProfile::kVehicleIntegration, -cost_.seconds(core::CostProfile::kTransportWait));
   // Bag writes happen inside the publishing scope: publishing is what remains.
   cost_.add(core::CostProfile::kPublish, -cost_.seconds(core::CostProfile::kBagWrite));
   cost_.setCount("cvode_steps", static_cast<double>(c.steps));
@@ -318,11 +318,12 @@ void VehicleOutputs::close(const std::string& node, const CosimVehicle* cosim, d
   if (cosim != nullptr) cost_.setCount("exchanges", static_cast<double>(cosim->stepsExchanged()));
   ROS_INFO_STREAM(cost_.toText(node, wall, sim_.time(), &clock_));
   bag_.writeBeside(node, ".cost.yaml", cost_.toYaml(node, scene_, wall, sim_.time(), &clock_));
-  ROS_INFO("%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
-           "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections, %ld Adams fallbacks", node.c_str(),
-           exit_code == core::kExitOk ? "finished" : "stopped", sim_.time(), sim_.leadingArcLength(), wall,
-           wall / std::max(sim_.time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
-           c.projections, c.adams_fallbacks);
+  ROS_INFO(
+      "%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
+      "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections, %ld Adams fallbacks",
+      node.c_str(), exit_code == core::kExitOk ? "finished" : "stopped", sim_.time(), sim_.leadingArcLength(), wall,
+      wall / std::max(sim_.time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals, c.projections,
+      c.adams_fallbacks);
   // How the contact was found (the vehicle's own contact on the rigid track), never hiding approximations.
   if (cosim == nullptr) {
     contact::DetectionCounts detection;

@@ -13,12 +13,12 @@ namespace rail::core::coupling {
 
 // State of one wheel centre at the exchange instant (as rail_msgs/WheelState).
 struct WheelState {
-  std::uint32_t id = 0;                          // wheel index: 2 * wheelset + side
-  double arc_length = 0.0;                       // track arc length s of the centre's projection [m]
-  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();        // centre position q_w [m]
+  std::uint32_t id = 0;                                        // wheel index: 2 * wheelset + side
+  double arc_length = 0.0;                                     // track arc length s of the centre's projection [m]
+  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();  // centre position q_w [m]
   Eigen::Quaterniond q_wheelset_to_world = Eigen::Quaterniond::Identity();  // R_wheelset_to_world
-  Eigen::Vector3d v_wheel_in_world = Eigen::Vector3d::Zero();        // centre velocity q_w dot [m/s]
-  Eigen::Vector3d omega_wheelset_in_world = Eigen::Vector3d::Zero(); // angular velocity, spin included [rad/s]
+  Eigen::Vector3d v_wheel_in_world = Eigen::Vector3d::Zero();               // centre velocity q_w dot [m/s]
+  Eigen::Vector3d omega_wheelset_in_world = Eigen::Vector3d::Zero();        // angular velocity, spin included [rad/s]
 };
 
 // Equivalent contact wrench at one wheel centre (paper eq. 13, as rail_msgs/ContactWrench).

@@ -41,7 +41,7 @@ class VehicleCoupling {
   // Throws std::runtime_error for a non-physical config. The transport must outlive this object.
   VehicleCoupling(const CouplingConfig& config, FrameTransport& transport);
 
-  std::uint64_t nextStep() const { return next_step_; }   // k of the next exchange
+  std::uint64_t nextStep() const { return next_step_; }  // k of the next exchange
   double nextExchangeTime() const;                       // t_k = k h [s]
   // Whether the vehicle, at time t [s], has reached the next exchange (t >= t_k up to 1e-9 h).
   bool exchangeDue(double t) const;
@@ -74,9 +74,9 @@ class VehicleCoupling {
   CouplingConfig config_;
   FrameTransport& transport_;
   WheelStateFrame states_;
-  WrenchFrame buffers_[3];                 // previous, last, incoming (rotated by pointer)
-  WrenchFrame* previous_ = &buffers_[0];   // W_{k-1}
-  WrenchFrame* last_ = &buffers_[1];       // W_k
+  WrenchFrame buffers_[3];                // previous, last, incoming (rotated by pointer)
+  WrenchFrame* previous_ = &buffers_[0];  // W_{k-1}
+  WrenchFrame* last_ = &buffers_[1];      // W_k
   WrenchFrame* incoming_ = &buffers_[2];
   std::uint64_t next_step_ = 0;
   int frames_ = 0;

@@ -38,8 +38,8 @@ class ReplayTransport final : public FrameTransport {
   Result receiveStates(WheelStateFrame& out, Deadline deadline) override;
   // The wrenches are dropped.
   Result sendWrenches(const WrenchFrame& frame, Deadline deadline) override;
-  Result sendStates(const WheelStateFrame& frame, Deadline deadline) override;      // kError: not this end's
-  Result receiveWrenches(WrenchFrame& frame, Deadline deadline) override;          // kError: not this end's
+  Result sendStates(const WheelStateFrame& frame, Deadline deadline) override;  // kError: not this end's
+  Result receiveWrenches(WrenchFrame& frame, Deadline deadline) override;       // kError: not this end's
   void close() override {}
 
  private:

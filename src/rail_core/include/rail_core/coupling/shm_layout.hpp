@@ -13,7 +13,7 @@ namespace rail::core::coupling::shm {
 
 constexpr std::uint64_t kShmMagic = 0x314d48534c494152ull;  // "RAILSHM1" read as little-endian bytes
 constexpr std::uint32_t kShmLayoutVersion = 1;
-constexpr std::size_t kShmPayloadOffset = 256;               // header bytes reserved before the frame
+constexpr std::size_t kShmPayloadOffset = 256;  // header bytes reserved before the frame
 constexpr std::size_t kShmHostNameSize = 64;
 
 enum class FrameKind : std::uint32_t { kWheelStates = 1, kWrenches = 2 };
@@ -27,16 +27,16 @@ constexpr std::uint32_t kReaderClosed = 1u << 2;  // the reader closed its end
 constexpr std::uint32_t kWaiters = 1u << 3;       // someone may sleep on the word: wake on change
 
 struct ShmHeader {
-  std::atomic<std::uint64_t> magic;   // kShmMagic, stored last (release) once the header is complete
-  std::uint32_t layout_version;       // kShmLayoutVersion
-  std::uint32_t header_size;          // kShmPayloadOffset
-  std::uint64_t payload_size;         // bytes of the frame area (shm_payload_size)
-  std::uint32_t wheel_capacity;       // wheels the frame area holds
-  std::uint32_t frame_kind;           // FrameKind
-  std::uint64_t scene_hash;           // hash of the resolved scene of the creating node
-  std::int64_t creator_pid;           // process that created (and writes) the region
-  std::uint64_t creator_start_time;   // its start time, /proc/<pid>/stat field 22 [clock ticks]; 0 unknown
-  char creator_host[kShmHostNameSize];  // gethostname() of the creator, NUL-terminated
+  std::atomic<std::uint64_t> magic;              // kShmMagic, stored last (release) once the header is complete
+  std::uint32_t layout_version;                  // kShmLayoutVersion
+  std::uint32_t header_size;                     // kShmPayloadOffset
+  std::uint64_t payload_size;                    // bytes of the frame area (shm_payload_size)
+  std::uint32_t wheel_capacity;                  // wheels the frame area holds
+  std::uint32_t frame_kind;                      // FrameKind
+  std::uint64_t scene_hash;                      // hash of the resolved scene of the creating node
+  std::int64_t creator_pid;                      // process that created (and writes) the region
+  std::uint64_t creator_start_time;              // its start time, /proc/<pid>/stat field 22 [clock ticks]; 0 unknown
+  char creator_host[kShmHostNameSize];           // gethostname() of the creator, NUL-terminated
   alignas(64) std::atomic<std::uint32_t> state;  // futex word: kTurnReader | kWriterClosed | ...
 };
 static_assert(sizeof(ShmHeader) <= kShmPayloadOffset, "header exceeds its reserved bytes");
@@ -47,9 +47,9 @@ static_assert(sizeof(std::atomic<std::uint32_t>) == 4, "futex word must be 32 bi
 // Frame stamp at the start of the payload.
 struct ShmFrameHead {
   std::uint64_t step;
-  double time;                        // [s]
+  double time;  // [s]
   std::uint64_t scene_hash;
-  std::uint32_t count;                // wheels in use
+  std::uint32_t count;  // wheels in use
   std::uint32_t reserved;
 };
 
@@ -68,15 +68,14 @@ struct ShmWheelState {
 struct ShmWheelWrench {
   std::uint32_t id;
   std::uint32_t reserved;
-  double f_wheel_in_world[3];         // [N]
-  double n_wheel_in_world[3];         // [N m]
+  double f_wheel_in_world[3];  // [N]
+  double n_wheel_in_world[3];  // [N m]
 };
 
 // Bytes of the frame area for a kind and capacity.
 constexpr std::size_t shmPayloadSize(FrameKind kind, std::uint32_t wheel_capacity) {
   return sizeof(ShmFrameHead) + static_cast<std::size_t>(wheel_capacity) *
-                                    (kind == FrameKind::kWheelStates ? sizeof(ShmWheelState)
-                                                                     : sizeof(ShmWheelWrench));
+                                    (kind == FrameKind::kWheelStates ? sizeof(ShmWheelState) : sizeof(ShmWheelWrench));
 }
 // Bytes of the whole region.
 constexpr std::size_t shmRegionSize(FrameKind kind, std::uint32_t wheel_capacity) {

@@ -20,19 +20,18 @@ namespace rail::core::coupling {
 
 struct ShmOptions {
   Role role = Role::kVehicle;
-  std::uint64_t scene_hash = 0;   // Scene::hash; part of the region names and checked on attach
-  int wheel_capacity = 0;         // wheels per frame (Scene::wheel_count()), > 0
-  std::string run_id;             // same on both nodes, [A-Za-z0-9_.-], 1..48 chars: separates runs
-  double attach_timeout = 30.0;   // longest wait for the peer's region [s] (solver.handshake_timeout)
-  std::string peer_host;          // the peer's host name if the caller knows it; empty = unknown
-  int spin_iterations = 2000;     // busy-wait iterations before sleeping on the futex
+  std::uint64_t scene_hash = 0;                  // Scene::hash; part of the region names and checked on attach
+  int wheel_capacity = 0;                        // wheels per frame (Scene::wheel_count()), > 0
+  std::string run_id;                            // same on both nodes, [A-Za-z0-9_.-], 1..48 chars: separates runs
+  double attach_timeout = 30.0;                  // longest wait for the peer's region [s] (solver.handshake_timeout)
+  std::string peer_host;                         // the peer's host name if the caller knows it; empty = unknown
+  int spin_iterations = 2000;                    // busy-wait iterations before sleeping on the futex
   const std::atomic<bool>* interrupt = nullptr;  // optional: ends any wait with kInterrupted
   std::string name_prefix = "railsim";           // [A-Za-z0-9_.-], first part of the region names
 };
 
 // Name of the region written by `writer`: "/<prefix>_<scene hash, 16 hex>_<run id>_v2t" (or "_t2v").
-std::string shmRegionName(const std::string& prefix, std::uint64_t scene_hash, const std::string& run_id,
-                            Role writer);
+std::string shmRegionName(const std::string& prefix, std::uint64_t scene_hash, const std::string& run_id, Role writer);
 
 // Whether a process is running: exists, is not a zombie and, when start_time != 0, started at that time
 // (/proc/<pid>/stat field 22), which tells a reused pid apart.
@@ -42,7 +41,7 @@ bool shmProcessAlive(std::int64_t pid, std::uint64_t start_time);
 class ShmRegion {
  public:
   struct Spec {
-    std::string name;             // "/..." as for shm_open
+    std::string name;  // "/..." as for shm_open
     shm::FrameKind kind = shm::FrameKind::kWheelStates;
     std::uint32_t wheel_capacity = 0;
     std::uint64_t scene_hash = 0;
@@ -108,13 +107,12 @@ class ShmTransport : public FrameTransport {
 
  private:
   // Wait until the region's turn flag equals `want_reader_turn`; the peer's closed bit ends the wait.
-  Result waitTurn(ShmRegion& region, bool want_reader_turn, std::uint32_t peer_closed_bit,
-                   Deadline deadline);
+  Result waitTurn(ShmRegion& region, bool want_reader_turn, std::uint32_t peer_closed_bit, Deadline deadline);
   Result misuse(const char* call) const;
 
   ShmOptions options_;
-  ShmRegion write_;   // the region this side writes (and created)
-  ShmRegion read_;    // the peer's region
+  ShmRegion write_;  // the region this side writes (and created)
+  ShmRegion read_;   // the peer's region
   std::int64_t peer_pid_ = 0;
   std::uint64_t peer_start_time_ = 0;
   bool closed_ = false;
