@@ -44,6 +44,7 @@ TOOLS = [
     ([PY, os.path.join(REPO, "scripts", "count_tests.py")], "Counts"),
     (["/bin/bash", os.path.join(REPO, "scripts", "rviz_screenshot.sh")], "Screenshot"),
     (["/bin/bash", os.path.join(REPO, "scripts", "check_naming")], "check_naming:"),
+    (["/bin/bash", os.path.join(REPO, "scripts", "check_format")], "check_format:"),
 ]
 
 MB = os.path.join(REPO, "config", "profiles", "manchester_a22")
@@ -103,6 +104,29 @@ class NamingCheck(unittest.TestCase):
         p = run(["/bin/bash", os.path.join(REPO, "scripts", "check_naming"), good], timeout=120)
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
         self.assertIn("every name follows the convention", p.stdout)
+
+
+class FormatCheck(unittest.TestCase):
+    """scripts/check_format, which ./railsim test (and so CI) runs over every C++ file: a file not laid out as
+    .clang-format says fails it, named; a file laid out so passes."""
+
+    def test_a_file_out_of_layout_fails_named(self):
+        d = self_dir()
+        bad, good = os.path.join(d, "bad_layout.cpp"), os.path.join(d, "good_layout.cpp")
+        with open(bad, "w") as f:
+            f.write("int  twice( int x ){return 2*x;}\n")
+        with open(good, "w") as f:
+            f.write("int twice(int x) { return 2 * x; }\n")
+        p = run(["/bin/bash", os.path.join(REPO, "scripts", "check_format"), bad, good], timeout=120)
+        self.assertEqual(p.returncode, 1, p.stdout + p.stderr)
+        self.assertEqual(p.stdout.split(), [bad])
+        self.assertIn("1 of 2 file(s) are not laid out as .clang-format says", p.stderr)
+        p = run(["/bin/bash", os.path.join(REPO, "scripts", "check_format"), good], timeout=120)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertIn("1 file(s) follow .clang-format", p.stdout)
+        p = run(["/bin/bash", os.path.join(REPO, "scripts", "check_format"), os.path.join(d, "missing.cpp")])
+        self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+        self.assertIn("missing.cpp: no such file", p.stderr)
 
 
 class ScriptsOnBadInput(unittest.TestCase):
@@ -223,7 +247,7 @@ class ContactGeometryIsHonest(unittest.TestCase):
 
 def main():
     loader = unittest.TestLoader()
-    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, ScriptsOnBadInput, NodesStartedByHand, ContactGeometryIsHonest, NamingCheck)])
+    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, ScriptsOnBadInput, NodesStartedByHand, ContactGeometryIsHonest, NamingCheck, FormatCheck)])
     return rosunit_main.run(suite, "test_tools_cli")
 
 
