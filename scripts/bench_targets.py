@@ -23,7 +23,7 @@ import sys
 
 REPO = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "src", "rail_analysis", "src"))
-from rail_analysis import costmap  # noqa: E402
+from rail_analysis import costmap, runner  # noqa: E402
 
 PAPER = os.path.join(REPO, "config", "scenes", "paper_demo.yaml")
 PAPER_5KM = os.path.join(REPO, "test", "scenes", "paper_demo_5km.yaml")
@@ -64,12 +64,12 @@ def main(argv=None):
             case_dir = os.path.join(a.out, name.replace(" ", "_").replace(",", ""), str(i))
             spec = {"case_dir": case_dir, "name": name, "case_id": name, "settings_hash": "", "scene": scene,
                     "overrides": costmap.override_items(overrides), "workspace": a.workspace, "timeout": 1800.0}
-            rec = costmap.run_case(spec)
+            rec = runner.run_case(spec)
             if rec.get("status") != "ok":
                 print("%s: run %d %s (exit %s): %s" % (name, i, rec.get("status"), rec.get("exit_code"),
                                                        (rec.get("log_tail") or "").strip()[-300:]))
                 return 1
-            cost = costmap.read_cost(case_dir)
+            cost = runner.read_cost(case_dir)
             loops.append(max(p["loop_wall_time"] for p in cost.values()))
             simulated.append(min(p["simulated_time"] for p in cost.values()))
             walls.append(rec["wall_time"])

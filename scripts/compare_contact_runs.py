@@ -20,7 +20,7 @@ import numpy as np
 
 REPO = os.path.normpath(os.path.join(os.path.dirname(os.path.realpath(__file__)), ".."))
 sys.path.insert(0, os.path.join(REPO, "src", "rail_analysis", "src"))
-from rail_analysis import costmap, loading  # noqa: E402
+from rail_analysis import loading, runner  # noqa: E402
 
 DEFAULT_SCENES = [
     ("config/scenes/tight_curve.yaml", ["vehicle.start_arc_length=145.0", "solver.end={time: 1.0}"]),
@@ -78,7 +78,7 @@ def main(argv=None):
         res = {}
         for label, ws in (("before", a.before), ("after", a.after)):
             d = os.path.join(os.path.abspath(a.out), name, label)
-            log = run(os.path.abspath(ws), scene, ov, d, costmap.free_port())
+            log = run(os.path.abspath(ws), scene, ov, d, runner.free_port())
             res[label] = figures(d, log)
             print("%s %s: %s" % (name, label, res[label]), flush=True)
         rows.append((name, res))

@@ -4,7 +4,7 @@ accuracy-cost map, poor track, a stiff pad on soft ballast, a wheel climbing the
 track models where it means something, checked for finite outputs, bounded contact forces, a bounded
 energy balance and convergence of a named key figure, and written as a table into docs/hard_cases.md.
 
-The runs reuse rail_analysis.costmap.run_case (own ROS master on a free port per run, a wall-time limit,
+The runs use rail_analysis.runner.run_case (own ROS master on a free port per run, a wall-time limit,
 the launch stopped cleanly on timeout); the bags are read with rail_analysis.loading. Scenes live in
 config/scenes/hard/ (one per case, each with a header comment saying why its settings).
 
@@ -24,11 +24,11 @@ HERE = os.path.dirname(os.path.realpath(__file__))
 REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
 sys.path.insert(0, os.path.join(REPO, "src", "rail_analysis", "src"))
 
-from rail_analysis import costmap, loading, safety  # noqa: E402  (after the path set-up above)
+from rail_analysis import costmap, loading, runner, safety  # noqa: E402  (after the path set-up above)
 
 SCENES = os.path.join(REPO, "config", "scenes", "hard")
 MODELS = ("rigid", "rigid_fe", "flexible")
-DOCS_MARKER = "<!-- everything below this line is written by test/hard_cases/run_hard_cases.py -->"
+DOCS_MARKER = "<!-- everything below this line is written by scripts/hard_cases/run_hard_cases.py -->"
 # Solver defaults of the scene format (docs/scene.md, solver): used when a scene does not set them.
 SOLVER_DEFAULTS = {"track_step": 2e-5, "vehicle_max_step": 2e-5, "vehicle_rtol": 1e-6, "vehicle_atol": 1e-8}
 # The vehicle node's log line for a derailment (src/rail_vehicle_node/src/node/vehicle_node.cpp).
@@ -335,7 +335,7 @@ def execute(run, workspace, timeout):
     spec = {"case_dir": run.dir, "name": run.name, "case_id": run.name, "settings_hash": "",
             "scene": run.case.scene, "overrides": costmap.override_items(run.overrides),
             "workspace": workspace, "timeout": timeout}
-    rec = costmap.run_case(spec)
+    rec = runner.run_case(spec)
     with open(os.path.join(run.dir, "record.yaml"), "w") as f:
         yaml.safe_dump({"overrides": costmap.override_items(run.overrides), "record": rec}, f, sort_keys=False)
     return rec
@@ -622,7 +622,7 @@ def run_suite(subset="all", models=MODELS, jobs=2, out_dir="output/hard_cases", 
         except BaseException:
             for f in futs:
                 f.cancel()
-            costmap.stop_all()
+            runner.stop_all()
             raise
     total = time.monotonic() - t0
     rows = []
@@ -645,7 +645,7 @@ def row_passed(row):
 def markdown_table(rows, total_wall, subset, models, jobs):
     lines = ["## Results", "",
              "Subset `%s`, models %s, %d job(s); suite wall time %.0f s (runs and evaluation on this machine's 2 "
-             "shared cores). Written by `test/hard_cases/run_hard_cases.py` on %s." % (
+             "shared cores). Written by `scripts/hard_cases/run_hard_cases.py` on %s." % (
                  subset, ", ".join(models), jobs, total_wall, time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())), "",
              "| case | model | result | checks | key figure (base -> refined) | wall [s] base / refined |",
              "|---|---|---|---|---|---|"]

@@ -4,9 +4,9 @@ means something, plus a refined run for the convergence check; prints one line p
 results.yaml into --out and, with --docs, the results table into that Markdown file (the text above its
 marker line is kept). Exit 0 when every check passes, 1 when one fails, 2 on a usage error.
 
-  test/hard_cases/run_hard_cases.py [--subset ci|all] [--models rigid,rigid_fe,flexible] [--jobs N]
-                                    [--out DIR] [--docs docs/hard_cases.md] [--workspace WS] [--timeout S]
-                                    [--cases KEY,...]
+  scripts/hard_cases/run_hard_cases.py [--subset ci|all] [--models rigid,rigid_fe,flexible] [--jobs N]
+                                       [--out DIR] [--docs docs/hard_cases.md] [--workspace WS] [--timeout S]
+                                       [--cases KEY,...]
 
 --workspace: the built catkin workspace whose nodes and launch files run the scenes (default: this
 repository); the scenes and data files are always this repository's.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """CI subset of the hard-case suite (hard_cases.py, subset 'ci': the vehicle alone on the rigid track for
 lift-off, two-point contact, standstill, creep speed and derailment, each with its refined run): every
-check of every case must pass. The runs start their own ROS masters (costmap.run_case), so no rostest
+check of every case must pass. The runs start their own ROS masters (rail_analysis.runner.run_case), so no rostest
 master is needed. Takes about 2-3 minutes on two cores.
 
   /usr/bin/python3 test_hard_cases_ci.py [--gtest_output=xml:FILE]
@@ -12,7 +12,7 @@ import sys
 import tempfile
 import unittest
 
-sys.path.insert(0, os.path.dirname(os.path.realpath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "..", "scripts", "hard_cases"))
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.realpath(__file__)), "..", "scripts"))
 import hard_cases  # noqa: E402
 import rosunit_main  # noqa: E402
