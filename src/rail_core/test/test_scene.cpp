@@ -7,13 +7,14 @@
 #include <vector>
 
 #include "rail_core/scene_loader.hpp"
+#include "rail_core/testing/fixtures.hpp"
 
 using namespace rail::core;
 
 namespace {
 
 const std::string kData = RAILSIM_TEST_DATA_DIR;
-const std::string kConfig = RAILSIM_CONFIG_DIR;
+const std::string kConfig = rail::core::fixtures::configDir();
 
 // A small valid scene; each malformed case below changes one thing in it.
 const std::string kBase = R"(name: base

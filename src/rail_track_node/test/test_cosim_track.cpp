@@ -18,6 +18,7 @@
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/cosim_track.hpp"
 
@@ -27,15 +28,6 @@ namespace cc = rail::core::coupling;
 using rail::core::Scene;
 
 namespace {
-
-std::string configDir() {
-#ifdef RAILSIM_CONFIG_DIR
-  return RAILSIM_CONFIG_DIR;
-#else
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
-#endif
-}
 
 // A straight 30 m track with the paper's data and the paper's coach (4 wheelsets, or fewer), Iberian gauge.
 Scene scene(const std::string& track_model, double track_step = 2.0e-5, int wheelsets = 4) {
@@ -53,7 +45,7 @@ Scene scene(const std::string& track_model, double track_step = 2.0e-5, int whee
       "\n"
       "solver:\n  track_step: " +
       std::string(step) + "\n  vehicle_max_step: " + std::string(step) + "\n  end: {time: 1.0}\n";
-  return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
+  return rail::core::fixtures::sceneFromText(text, "t.yaml");
 }
 
 // The contact of one wheel built independently, the way the vehicle side builds it on the rigid track.

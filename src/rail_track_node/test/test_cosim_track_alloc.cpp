@@ -12,6 +12,7 @@
 
 #include <rail_contact/profile.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/cosim_track.hpp"
 
@@ -23,15 +24,6 @@ namespace cc = rail::core::coupling;
 
 namespace {
 
-std::string configDir() {
-#ifdef RAILSIM_CONFIG_DIR
-  return RAILSIM_CONFIG_DIR;
-#else
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
-#endif
-}
-
 rail::core::Scene scene(const std::string& track_model) {
   const std::string text =
       "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n  data: ../track/paper_track.yaml\n"
@@ -40,7 +32,7 @@ rail::core::Scene scene(const std::string& track_model) {
       "  back_to_back: 1.592\n  wheelsets: 4\n"
       "effects:\n  track_model: " +
       track_model + "\nsolver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
-  return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
+  return rail::core::fixtures::sceneFromText(text, "t.yaml");
 }
 
 // Eight wheels rolling at 30 m/s, 50 micrometres into the rails (loaded contacts), at step k, the
@@ -120,7 +112,7 @@ WindowCounted windowAllocations(bool curve) {
       "  end: {time: 1.0}\n  track_window: {enabled: true, behind: 2.0, ahead: 2.0, shift: 3.0}\n";
   rt::CosimTrackOptions options;
   options.window.vehicle_length = 21.7;  // the paper coach's wheel span (its data file's load points)
-  rt::CosimTrack track(rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes"), options);
+  rt::CosimTrack track(rail::core::fixtures::sceneFromText(text, "t.yaml"), options);
   const rc::TrackGeometry& geo = track.geometry();
   const double taping_y = 0.5 * 1.592 + rc::flangeBackY(rc::makeS1002());
   const double offsets[4] = {0.0, 2.7, 19.0, 21.7}, V = 30.0, r0 = 0.445, h = 1e-4;

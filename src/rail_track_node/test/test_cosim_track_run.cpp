@@ -9,6 +9,7 @@
 #include <rail_core/coupling/replay_transport.hpp>
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/cosim_track.hpp"
 #include "rail_track_node/cosim_track_run.hpp"
@@ -18,11 +19,6 @@ namespace cc = rail::core::coupling;
 using rail::core::Scene;
 
 namespace {
-
-std::string configDir() {
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
-}
 
 // Straight 30 m of the paper's track, rigid_fe (contact only, no FE), track step 1 ms, to t = 0.02 s, outputs
 // at 200 Hz.
@@ -35,7 +31,7 @@ Scene scene() {
       "effects:\n  track_model: rigid_fe\n"
       "solver:\n  track_step: 1.0e-3\n  vehicle_max_step: 1.0e-3\n  end: {time: 0.02}\n  exchange_timeout: 1.0\n"
       "output:\n  rate: 200\n";
-  return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
+  return rail::core::fixtures::sceneFromText(text, "t.yaml");
 }
 
 // `wheels` wheels standing 5 cm above the rails (no contact) at instants 0, dt, ..., t_last.

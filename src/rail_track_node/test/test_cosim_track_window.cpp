@@ -18,6 +18,7 @@
 #include <rail_contact/profile.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/cosim_track.hpp"
 
@@ -27,15 +28,6 @@ namespace cc = rail::core::coupling;
 using rail::core::Scene;
 
 namespace {
-
-std::string configDir() {
-#ifdef RAILSIM_CONFIG_DIR
-  return RAILSIM_CONFIG_DIR;
-#else
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
-#endif
-}
 
 // The paper's track data and coach (Iberian gauge) on a 150 m line: straight, or 30 m straight + a 40 m
 // transition (clothoid, cant ramp 0 -> 160 mm) + 80 m of R = 500 m left curve with 160 mm cant.
@@ -57,7 +49,7 @@ Scene lineScene(bool curve, double h) {
       "effects:\n  track_model: flexible\n"
       "solver:\n  track_step: " +
       std::string(step) + "\n  vehicle_max_step: " + std::string(step) + "\n  end: {time: 1.0}\n";
-  return rail::core::loadSceneText(text, "w.yaml", configDir() + "/scenes");
+  return rail::core::fixtures::sceneFromText(text, "w.yaml");
 }
 
 // The paper coach's wheel span (Table 3: 2.7 m bogie wheelbase, 19 m between the bogie centres; the load

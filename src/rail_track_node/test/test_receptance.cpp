@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/receptance.hpp"
@@ -18,15 +19,6 @@ namespace rt = rail::track;
 
 namespace {
 
-std::string configDir() {
-#ifdef RAILSIM_CONFIG_DIR
-  return RAILSIM_CONFIG_DIR;
-#else
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
-#endif
-}
-
 // The paper's track on a straight of the given length, absorbing ends on; rail_beta >= 0 replaces the
 // rail's stiffness-proportional Rayleigh coefficient.
 rt::SceneTrack straightTrack(double length, double rail_beta) {
@@ -36,7 +28,7 @@ rt::SceneTrack straightTrack(double length, double rail_beta) {
       std::to_string(length) +
       "}\n"
       "moving_loads:\n  loads:\n    - {vertical: 0.0}\nsolver:\n  end: {time: 1.0}\n";
-  const rail::core::Scene scene = rail::core::loadSceneText(text, "r.yaml", configDir() + "/scenes");
+  const rail::core::Scene scene = rail::core::fixtures::sceneFromText(text, "r.yaml");
   rt::SceneTrack t = rt::buildSceneTrack(scene);
   if (rail_beta >= 0.0) {
     rt::TrackData data = t.model.data;

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/pad_forces.hpp"
 #include "rail_track_node/scene_track.hpp"
@@ -20,15 +21,6 @@ using rail::core::Scene;
 
 namespace {
 
-std::string configDir() {
-#ifdef RAILSIM_CONFIG_DIR
-  return RAILSIM_CONFIG_DIR;
-#else
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
-#endif
-}
-
 // A moving-load scene on the paper's track; SEGMENTS, LOADS and EFFECTS are filled in per test.
 Scene scene(const std::string& segments, const std::string& loads, const std::string& effects,
             const std::string& solver = "  track_step: 1.0e-3\n  end: {time: 1.0}") {
@@ -36,7 +28,7 @@ Scene scene(const std::string& segments, const std::string& loads, const std::st
       "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n"
       "  data: ../track/paper_track.yaml\n  segments:\n" +
       segments + "\nmoving_loads:\n" + loads + "\neffects:\n" + effects + "\nsolver:\n" + solver + "\n";
-  return rail::core::loadSceneText(text, "t.yaml", configDir() + "/scenes");
+  return rail::core::fixtures::sceneFromText(text, "t.yaml");
 }
 
 const std::string kStraight24 = "    - {type: straight, length: 24.0}";

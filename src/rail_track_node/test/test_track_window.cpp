@@ -17,6 +17,7 @@
 #include <vector>
 
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/scene_track.hpp"
@@ -30,15 +31,6 @@ namespace rc = rail::contact;
 using rail::core::Scene;
 
 namespace {
-
-std::string configDir() {
-#ifdef RAILSIM_CONFIG_DIR
-  return RAILSIM_CONFIG_DIR;
-#else
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
-#endif
-}
 
 // Wheelset positions behind the leading one (m): Table 3 of the paper (x = 22.35, 19.65, 3.35, 0.65 m),
 // as in config/vehicle/paper_coach.yaml.
@@ -61,7 +53,7 @@ Scene lineScene(const std::string& segments, double start, double lateral, doubl
       segments + "\nmoving_loads:\n  start_arc_length: " + std::to_string(start) +
       "\n  speed: " + std::to_string(kSpeed) + "\n  loads:\n" + loads +
       "effects:\n  track_model: flexible\nsolver:\n  track_step: " + std::to_string(h) + "\n  end: {time: 10.0}\n";
-  return rail::core::loadSceneText(text, "w.yaml", configDir() + "/scenes");
+  return rail::core::fixtures::sceneFromText(text, "w.yaml");
 }
 
 const std::string kStraight200 = "    - {type: straight, length: 200.0}";

@@ -14,6 +14,7 @@
 #include <rail_core/coupling/protocol.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -29,23 +30,18 @@
 #include "rail_vehicle_node/vehicle_run.hpp"
 #include "rail_vehicle_node/vehicle_simulator.hpp"
 
-#ifndef RAILSIM_CONFIG_DIR
-#define RAILSIM_CONFIG_DIR "config"
-#endif
-
 namespace rail::vehicle {
 namespace {
 
 namespace rc = rail::contact;
 namespace cc = rail::core::coupling;
 
-const std::string kScenes = std::string(RAILSIM_CONFIG_DIR) + "/scenes/";
 constexpr double kPi = 3.14159265358979323846;
 
 // straight_short (60 m Iberian-gauge straight, paper coach at 110 km/h, co-simulation on rigid_fe) ending
 // at end_time; track step h = vehicle max step = 2e-5 s (the scene defaults, the paper's values).
 core::Scene cosimScene(double end_time) {
-  core::Scene scene = core::loadSceneFile(kScenes + "straight_short.yaml");
+  core::Scene scene = core::fixtures::loadConfigScene("straight_short.yaml");
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = end_time;
   return scene;

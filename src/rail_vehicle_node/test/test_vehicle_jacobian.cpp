@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -14,19 +15,13 @@
 #include "rail_vehicle_node/vehicle_jacobian.hpp"
 #include "rail_vehicle_node/vehicle_simulator.hpp"
 
-#ifndef RAILSIM_CONFIG_DIR
-#define RAILSIM_CONFIG_DIR "config"
-#endif
-
 namespace rail::vehicle {
 namespace {
 
 namespace rc = rail::contact;
 
-const std::string kScenes = std::string(RAILSIM_CONFIG_DIR) + "/scenes/";
-
 core::Scene timedScene(const std::string& file, double start_arc_length, double speed, double end_time) {
-  core::Scene scene = core::loadSceneFile(kScenes + file);
+  core::Scene scene = core::fixtures::loadConfigScene(file);
   scene.effects.track_model = core::TrackModel::kRigid;
   scene.vehicle.start_arc_length = start_arc_length;
   scene.vehicle.speed = speed;
@@ -137,7 +132,7 @@ TEST(VehicleJacobian, MatchesTheDenseQuotientInFlangeContact) {
   // R 150 m at 50 km/h: after 0.7 s the leading wheelset flanges on the outer (right) rail
   // (test_vehicle_simulator's TightCurveLeadingWheelsetsFlangeOnTheOuterRail).
   core::Scene scene =
-      timedScene("tight_curve.yaml", 145.0, core::loadSceneFile(kScenes + "tight_curve.yaml").vehicle.speed, 0.7);
+      timedScene("tight_curve.yaml", 145.0, core::fixtures::loadConfigScene("tight_curve.yaml").vehicle.speed, 0.7);
   VehicleSimulator sim(scene);
   ASSERT_EQ(sim.advanceTo(0.7), RunStatus::kFinished) << sim.message();
   ASSERT_TRUE(sim.contacts()[1].contact[rc::kFlange].active);

@@ -6,6 +6,7 @@
 #include <rail_contact/contact_geometry_table.hpp>
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -17,23 +18,18 @@
 #include "rail_vehicle_node/rigid_math.hpp"
 #include "rail_vehicle_node/vehicle_simulator.hpp"
 
-#ifndef RAILSIM_CONFIG_DIR
-#define RAILSIM_CONFIG_DIR "config"
-#endif
-
 namespace rail::vehicle {
 namespace {
 
 namespace rc = rail::contact;
 
-const std::string kScenes = std::string(RAILSIM_CONFIG_DIR) + "/scenes/";
 constexpr double kCoachMass = 59480.0;  // Table 3 of the paper [kg]
 constexpr double kG = 9.81;             // the data file's gravity [m/s^2]
 
 // The short straight of the shipped scenes (Iberian gauge, paper coach) on the rigid track, lengthened to
 // 200 m.
 core::Scene straightScene(double speed, double end_time) {
-  core::Scene scene = core::loadSceneFile(kScenes + "straight_short.yaml");
+  core::Scene scene = core::fixtures::loadConfigScene("straight_short.yaml");
   scene.track.segments.at(0).length = 200.0;
   scene.effects.track_model = core::TrackModel::kRigid;
   scene.vehicle.speed = speed;
@@ -269,7 +265,7 @@ struct CurveRun {
 // Both tests below compare two runs of the same step sequence: Adams at the paper's 2e-5 s cap (the vehicle
 // alone is otherwise uncapped and BDF's step choice would differ between the runs by more than the effect).
 CurveRun runTightCurve(double t_end, double split_overlap, double rtol, double atol, double max_step = 2e-5) {
-  core::Scene scene = core::loadSceneFile(kScenes + "tight_curve.yaml");
+  core::Scene scene = core::fixtures::loadConfigScene("tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = t_end;
@@ -360,7 +356,7 @@ TEST(VehicleSimulator, FloorAccelerometersReadTheDerivativeOfTheFloorVelocityMin
   // from the state at 1 ms spacing. The difference's truncation error (h^2/6 times the third derivative of
   // the velocity, carbody motions below ~20 Hz: < 1e-4 m/s^2 per m/s^2) and the integrator's velocity error
   // over 2h (atol 1e-8 m/s / 2e-3 s) are far below the tolerance of 1e-3 m/s^2 + 0.5 % of |a|.
-  core::Scene scene = core::loadSceneFile(kScenes + "tight_curve.yaml");
+  core::Scene scene = core::fixtures::loadConfigScene("tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;
   scene.effects.floor_acceleration_output = true;
   scene.solver.end.kind = core::EndKind::kTime;
@@ -415,7 +411,7 @@ TEST(VehicleSimulator, EnergyOnlyFallsWithNoDriveOnRigidRails) {
   // velocities, whose squares make the energy; ~6 J of 5.7 MJ). It must also fall: the curving work of the
   // creep forces over the 0.3 s (flanging wheelsets, of the order of 10 kN of creep force at a few cm/s of
   // slip) is far above that error.
-  core::Scene scene = core::loadSceneFile(kScenes + "tight_curve.yaml");
+  core::Scene scene = core::fixtures::loadConfigScene("tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;
   scene.effects.energy_output = true;
   scene.solver.end.kind = core::EndKind::kTime;
@@ -483,7 +479,7 @@ TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
   // inside the circular curve (s 110-230 m) on the chord placement of PlaceOnTrack and runs 1 s; the
   // leading wheelset of each bogie is pushed to the outer (right) rail and flanges there, measured over the
   // last 0.3 s (the rear bogie's leading wheelset settles on its flange only after ~0.5 s).
-  core::Scene scene = core::loadSceneFile(kScenes + "tight_curve.yaml");
+  core::Scene scene = core::fixtures::loadConfigScene("tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;  // trailing wheelset at 123.3 m, inside the circle
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = 1.0;
