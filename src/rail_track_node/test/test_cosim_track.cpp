@@ -350,6 +350,41 @@ double mean(const std::vector<double>& t, const std::vector<double>& x, double t
 //    doc/fe.md for the paper's flexible sleeper, w0 = 0.781 mm per 100 kN (the FE model gave 0.996 w0
 //    above a sleeper there), within 5 %: here the load acts at the contact point with its lateral part;
 //  - that deflection is the reference static solve's within 1 % of w0 (the 1 % of the loads above).
+// Deflection sections: off the rails they are refused, naming s and the rails' extent; on the rigid_fe
+// track they read zero; on the flexible track at rest (self-weight state) they read the rails' sag.
+TEST(CosimTrack, DeflectionSectionsOffTheRailsAreRefusedAndRigidRailsReadZero) {
+  rt::CosimTrack rigid(scene("rigid_fe"));
+  try {
+    rigid.addSection(100.0);
+    FAIL() << "a section off the track was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("deflection section at s = 100 m is not on the track [", 0), 0u) << e.what();
+  }
+  rt::RailSectionDeflection out;
+  ASSERT_EQ(rigid.addSection(15.0), 0);
+  rigid.sectionDeflection(0, out);
+  EXPECT_EQ(out.s, 15.0);
+  for (int r = 0; r < 2; ++r) {
+    EXPECT_EQ(out.displacement[r].norm(), 0.0);
+    EXPECT_EQ(out.rotation[r].norm(), 0.0);
+  }
+  rt::CosimTrack flexible(scene("flexible"));
+  try {
+    flexible.addSection(100.0);
+    FAIL() << "a section off the meshed rails was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("deflection section at s = 100 m is not on the meshed rails [", 0), 0u)
+        << e.what();
+  }
+  ASSERT_EQ(flexible.addSection(15.0), 0);
+  flexible.sectionDeflection(0, out);
+  for (int r = 0; r < 2; ++r) {
+    // Self-weight sag of the rail on its pads: downwards, well under a millimetre.
+    EXPECT_LT(out.displacement[r].z(), 0.0);
+    EXPECT_GT(out.displacement[r].z(), -1e-3);
+  }
+}
+
 TEST(CosimTrack, FlexibleStandingWheelsetSettlesToStaticLoads) {
   const double h = 2e-5;
   const Scene sc = scene("flexible", h);

@@ -41,6 +41,7 @@
 
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/pad_forces.hpp"
+#include "rail_track_node/rail_probe.hpp"
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
 #include "rail_track_node/track_window.hpp"
@@ -187,13 +188,9 @@ class CosimTrack {
   void sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const;
 
  private:
-  struct RailProbe {
-    std::array<int, 12> dofs;                   // free DOFs of the element, -1 fixed
-    Eigen::Matrix<double, 3, 12> P_u, P_theta;  // element world DOFs -> track-frame displacement / rotation
-  };
   struct Section {
     double s;
-    std::array<RailProbe, 2> rail;
+    RailProbes rail;
   };
   struct Implicit;  // semi-implicit coupling: influence cache and this step's contact links
   NewmarkIntegrator& integ() noexcept { return window_ ? window_->integrator() : *integrator_; }

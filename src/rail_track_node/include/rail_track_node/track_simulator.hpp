@@ -19,6 +19,7 @@
 #include <rail_core/scene.hpp>
 
 #include "rail_track_node/newmark.hpp"
+#include "rail_track_node/rail_probe.hpp"
 #include "rail_track_node/track_mesh.hpp"
 #include "rail_track_node/track_model.hpp"
 
@@ -35,14 +36,6 @@ struct SimulationProgress {
   long steps = 0;                 ///< Newmark steps done
 };
 using ProgressCallback = std::function<void(const SimulationProgress&)>;
-
-/// Displacement (m) and small rotation (rad) of both rails at one section, components in the track frame
-/// at that section (x along the track, y lateral left, z normal up). Index: RailSide (0 left, 1 right).
-struct RailSectionDeflection {
-  double s = 0.0;  ///< arc length of the section, m
-  std::array<Eigen::Vector3d, 2> displacement;
-  std::array<Eigen::Vector3d, 2> rotation;
-};
 
 /// Prescribed loads and integration settings of a run.
 struct SimulatorSettings {
@@ -92,13 +85,9 @@ class TrackSimulator {
   void loadsAt(double t, NodalLoads& loads) const;
 
  private:
-  struct RailProbe {
-    std::array<int, 12> dofs;                   // world DOFs of the element, -1 fixed
-    Eigen::Matrix<double, 3, 12> P_u, P_theta;  // element world DOFs -> track-frame displacement / rotation
-  };
   struct Section {
     double s;
-    std::array<RailProbe, 2> rail;
+    RailProbes rail;
   };
   void reportProgress();
 

@@ -171,14 +171,10 @@ class TrackWindow {
   };
   static CondensedEnd condenseEnd(const TrackData& data, int bays, bool front);
   void addCondensedEnd(Window& w, bool front) const;
-  struct RailProbe {
-    std::array<int, 12> dofs;                   // free DOFs of the element, -1 fixed
-    Eigen::Matrix<double, 3, 12> P_u, P_theta;  // element world DOFs -> track-frame displacement / rotation
-  };
   struct Section {
     double s = 0.0;
     bool inside = false;  // on the current window's rails
-    std::array<RailProbe, 2> rail;
+    RailProbes rail;
     // Beyond a condensed window end (within boundary_length): end-plane DOFs and the maps from their
     // values to the section's track-frame displacement / rotation through the static shapes.
     bool beyond = false;

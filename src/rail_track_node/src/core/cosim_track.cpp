@@ -831,40 +831,15 @@ int CosimTrack::addSection(double s) {
          << geometry_->sEnd() << "] m";
       throw std::runtime_error(os.str());
     }
-    for (int r = 0; r < 2; ++r) {
-      sec.rail[r].dofs.fill(-1);
-      sec.rail[r].P_u.setZero();
-      sec.rail[r].P_theta.setZero();
-    }
+    makeZeroRailProbes(sec.rail);
     sections_.push_back(sec);
     return static_cast<int>(sections_.size()) - 1;
   }
   const TrackMesh& mesh = fe_->model.mesh;
   rc::TrackPoint tp;
-  for (int r = 0; r < 2; ++r) {
-    int beam = 0;
-    double xi = 0.0;
-    if (!mesh.locateRail(r, s, beam, xi)) {
-      std::ostringstream os;
-      os << "deflection section at s = " << s << " m is not on the meshed rails [" << mesh.s_start << ", "
-         << mesh.railNodeS(static_cast<int>(mesh.rail_nodes[r].size()) - 1) << "] m";
-      throw std::runtime_error(os.str());
-    }
-    geometry_->centre(s, tp);
-    const BeamElement& b = mesh.beams[static_cast<std::size_t>(beam)];
-    rc::Matrix3x12 N_u, N_theta;
-    rc::beamShapeDisplacement(xi, b.length, N_u);
-    rc::beamShapeRotation(xi, b.length, N_theta);
-    const Matrix12d T = beamWorldToLocal(b.R_local_to_world);
-    const Eigen::Matrix3d R_local_to_track = tp.R_track_to_world.transpose() * b.R_local_to_world;
-    RailProbe& p = sec.rail[r];
-    p.P_u = R_local_to_track * N_u * T;
-    p.P_theta = R_local_to_track * N_theta * T;
-    for (int d = 0; d < 6; ++d) {
-      p.dofs[d] = mesh.dofIndex(b.node_i, d);
-      p.dofs[6 + d] = mesh.dofIndex(b.node_j, d);
-    }
-  }
+  requireOnMeshRails(mesh, s);
+  geometry_->centre(s, tp);
+  makeRailProbes(mesh, tp.R_track_to_world, s, sec.rail);
   sections_.push_back(sec);
   return static_cast<int>(sections_.size()) - 1;
 }
@@ -885,13 +860,7 @@ void CosimTrack::sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionD
         "DOFs change at every move); use sectionDeflection(i, out)");
   const Section& sec = sections_[static_cast<std::size_t>(i)];
   out.s = sec.s;
-  for (int r = 0; r < 2; ++r) {
-    const RailProbe& p = sec.rail[r];
-    Eigen::Matrix<double, 12, 1> d_e;
-    for (int k = 0; k < 12; ++k) d_e(k) = (fe_ && p.dofs[k] >= 0) ? d(p.dofs[k]) : 0.0;
-    out.displacement[r].noalias() = p.P_u * d_e;
-    out.rotation[r].noalias() = p.P_theta * d_e;
-  }
+  evalRailProbes(sec.rail, d, out);
 }
 
 bool CosimTrack::energy(double& kinetic, double& potential) const noexcept {

@@ -127,30 +127,9 @@ int TrackSimulator::addSection(double s, const TrackFrameFunction& frames) {
   const TrackMesh& mesh = model_.mesh;
   Section sec;
   sec.s = s;
-  const Eigen::Matrix3d R_track = frames(s).R_track_to_world;
-  for (int r = 0; r < 2; ++r) {
-    int beam = 0;
-    double xi = 0.0;
-    if (!mesh.locateRail(r, s, beam, xi)) {
-      std::ostringstream os;
-      os << "deflection section at s = " << s << " m is not on the meshed rails [" << mesh.s_start << ", "
-         << mesh.railNodeS(static_cast<int>(mesh.rail_nodes[r].size()) - 1) << "] m";
-      throw std::runtime_error(os.str());
-    }
-    const BeamElement& b = mesh.beams[beam];
-    rail::contact::Matrix3x12 N_u, N_theta;
-    rail::contact::beamShapeDisplacement(xi, b.length, N_u);
-    rail::contact::beamShapeRotation(xi, b.length, N_theta);
-    const Matrix12d T = beamWorldToLocal(b.R_local_to_world);
-    const Eigen::Matrix3d R_local_to_track = R_track.transpose() * b.R_local_to_world;
-    RailProbe& p = sec.rail[r];
-    p.P_u = R_local_to_track * N_u * T;
-    p.P_theta = R_local_to_track * N_theta * T;
-    for (int d = 0; d < 6; ++d) {
-      p.dofs[d] = mesh.dofIndex(b.node_i, d);
-      p.dofs[6 + d] = mesh.dofIndex(b.node_j, d);
-    }
-  }
+  const Eigen::Matrix3d R_track_to_world = frames(s).R_track_to_world;
+  requireOnMeshRails(mesh, s);
+  makeRailProbes(mesh, R_track_to_world, s, sec.rail);
   sections_.push_back(sec);
   return static_cast<int>(sections_.size()) - 1;
 }
@@ -159,13 +138,7 @@ void TrackSimulator::sectionDeflection(int i, const Eigen::VectorXd& d, RailSect
   rail::core::CostClock::Scope timing(settings_.cost, rail::core::CostClock::kRailDeflection);
   const Section& sec = sections_[i];
   out.s = sec.s;
-  for (int r = 0; r < 2; ++r) {
-    const RailProbe& p = sec.rail[r];
-    Eigen::Matrix<double, 12, 1> d_e;
-    for (int k = 0; k < 12; ++k) d_e(k) = p.dofs[k] >= 0 ? d(p.dofs[k]) : 0.0;
-    out.displacement[r].noalias() = p.P_u * d_e;
-    out.rotation[r].noalias() = p.P_theta * d_e;
-  }
+  evalRailProbes(sec.rail, d, out);
 }
 
 double movingLoadEndTime(const rail::core::Scene& scene) {

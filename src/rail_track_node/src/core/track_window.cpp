@@ -557,53 +557,14 @@ void TrackWindow::fillRails() noexcept {
   }
 }
 
-namespace {
-
-// Probe of both rails at s on a mesh: element DOFs and the maps from the element's world DOFs to the
-// track-frame displacement and rotation of the rail centre line. False if s is off the mesh's rails.
-template <class Probe>
-bool makeProbe(const TrackMesh& mesh, const Eigen::Matrix3d& R_track_to_world, double s, std::array<Probe, 2>& probes) {
-  for (int r = 0; r < 2; ++r) {
-    int beam = 0;
-    double xi = 0.0;
-    if (!mesh.locateRail(r, s, beam, xi)) return false;
-    const BeamElement& b = mesh.beams[static_cast<std::size_t>(beam)];
-    rc::Matrix3x12 N_u, N_theta;
-    rc::beamShapeDisplacement(xi, b.length, N_u);
-    rc::beamShapeRotation(xi, b.length, N_theta);
-    const Matrix12d T = beamWorldToLocal(b.R_local_to_world);
-    const Eigen::Matrix3d R_local_to_track = R_track_to_world.transpose() * b.R_local_to_world;
-    Probe& p = probes[static_cast<std::size_t>(r)];
-    p.P_u = R_local_to_track * N_u * T;
-    p.P_theta = R_local_to_track * N_theta * T;
-    for (int d = 0; d < 6; ++d) {
-      p.dofs[static_cast<std::size_t>(d)] = mesh.dofIndex(b.node_i, d);
-      p.dofs[static_cast<std::size_t>(6 + d)] = mesh.dofIndex(b.node_j, d);
-    }
-  }
-  return true;
-}
-
-template <class Probe>
-void evalProbe(const std::array<Probe, 2>& probes, const Eigen::VectorXd& d, RailSectionDeflection& out) {
-  for (int r = 0; r < 2; ++r) {
-    const Probe& p = probes[static_cast<std::size_t>(r)];
-    Eigen::Matrix<double, 12, 1> d_e;
-    for (int k = 0; k < 12; ++k)
-      d_e(k) = p.dofs[static_cast<std::size_t>(k)] >= 0 ? d(p.dofs[static_cast<std::size_t>(k)]) : 0.0;
-    out.displacement[static_cast<std::size_t>(r)].noalias() = p.P_u * d_e;
-    out.rotation[static_cast<std::size_t>(r)].noalias() = p.P_theta * d_e;
-  }
-}
-
-}  // namespace
+namespace {}  // namespace
 
 void TrackWindow::placeSection(Section& sec) const {
   rc::TrackPoint tp;
   geometry_.centre(sec.s, tp);
   const TrackMesh& mesh = window_->model.mesh;
-  sec.inside =
-      sec.s >= sBegin() - kSlack && sec.s <= sEnd() + kSlack && makeProbe(mesh, tp.R_track_to_world, sec.s, sec.rail);
+  sec.inside = sec.s >= sBegin() - kSlack && sec.s <= sEnd() + kSlack &&
+               makeRailProbes(mesh, tp.R_track_to_world, sec.s, sec.rail);
   sec.beyond = false;
   if (sec.inside || !settings_.condensed_ends) return;
   const bool front = sec.s > sEnd();
@@ -612,8 +573,8 @@ void TrackWindow::placeSection(Section& sec) const {
   const double piece_length = e.piece.n_sleepers > 0 ? (e.piece.n_sleepers - 1) * e.piece.sleeper_spacing : 0.0;
   const double x = front ? sec.s - sEnd() : sBegin() - sec.s;  // distance beyond the end plane, m
   if (!(x <= piece_length)) return;                            // beyond the condensed piece: at rest
-  std::array<RailProbe, 2> piece_probe;
-  if (!makeProbe(e.piece, Eigen::Matrix3d::Identity(), front ? x : piece_length - x, piece_probe)) return;
+  RailProbes piece_probe;
+  if (!makeRailProbes(e.piece, Eigen::Matrix3d::Identity(), front ? x : piece_length - x, piece_probe)) return;
   // End plane of the window, its track frame, and the rotation from it to the frame at the section.
   const int k = front ? mesh.n_sleepers - 1 : 0;
   const std::array<int, 8> plane = planeNodes(mesh, k);
@@ -673,11 +634,11 @@ int TrackWindow::addSection(double s, double static_half_length) {
     mo.track_length = (j_hi - j_lo) * a;
     const TrackModel piece =
         buildTrackModel(data_, mo, seatPlaneFrames(geometry_, seat_below_centre_), settings_.track.g_in_world);
-    std::array<RailProbe, 2> probes;
+    RailProbes probes;
     rc::TrackPoint tp;
     geometry_.centre(s, tp);
-    makeProbe(piece.mesh, tp.R_track_to_world, s, probes);
-    evalProbe(probes, staticGravityDeflection(piece.system), sec.static_value);
+    makeRailProbes(piece.mesh, tp.R_track_to_world, s, probes);
+    evalRailProbes(probes, staticGravityDeflection(piece.system), sec.static_value);
   }
   placeSection(sec);
   sections_.push_back(sec);
@@ -688,7 +649,7 @@ void TrackWindow::sectionDynamicDeflection(int i, RailSectionDeflection& out) co
   const Section& sec = sections_[static_cast<std::size_t>(i)];
   out.s = sec.s;
   if (sec.inside) {
-    evalProbe(sec.rail, state_.d, out);
+    evalRailProbes(sec.rail, state_.d, out);
   } else if (sec.beyond) {
     Eigen::Matrix<double, 48, 1> w_b;
     for (int k = 0; k < 48; ++k) w_b(k) = state_.d(sec.plane_dofs[static_cast<std::size_t>(k)]);
