@@ -467,7 +467,9 @@ class TestCli(unittest.TestCase):
         text = p.stdout + p.stderr
         self.assertEqual(p.returncode, 4, text)
         self.assertIn("the track node died before the handshake: rail_track exited with code 2", text)
-        self.assertLess(wall, 15.0, "the run took %.1f s" % wall)
+        # Far below the scene's 120 s handshake timeout; the wall includes roslaunch starting the master and
+        # both nodes (5-16 s seen on 2 loaded cores), so the tight bound is the one below.
+        self.assertLess(wall, 40.0, "the run took %.1f s" % wall)
         # From the track node's last word to the vehicle's report: within the 1-2 s the issue asks for.
         t_track = [float(t) for t in re.findall(r"\[FATAL\] \[(\d+\.\d+)\]: /rail_track", text)]
         t_vehicle = [float(t) for t in re.findall(r"\[FATAL\] \[(\d+\.\d+)\]: /rail_vehicle: the track node died", text)]
