@@ -243,8 +243,10 @@ class Exposure(RunTestCase):
         try:
             deadline = time.monotonic() + START_TIMEOUT
             while time.monotonic() < deadline and run.poll() is None and seen is None:
-                nodes = {n: p for p in descendants(run.pid) for n in ("track_node", "vehicle_node")
-                         if process_alive(p) and os.path.basename(cmdline(p)[:1][0] if cmdline(p) else "") == n}
+                # Each command line read once: a process can end between two reads.
+                names = {p: os.path.basename((cmdline(p) or [""])[0]) for p in descendants(run.pid)}
+                nodes = {n: p for p, name in names.items() for n in ("track_node", "vehicle_node")
+                         if name == n and process_alive(p)}
                 if len(nodes) == 2:
                     ns = {n: os.readlink("/proc/%d/ns/net" % p) for n, p in nodes.items()}
                     inside = ["nsenter", "--net=/proc/%d/ns/net" % nodes["vehicle_node"]]
