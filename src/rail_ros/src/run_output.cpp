@@ -107,8 +107,9 @@ ProgressLine::ProgressLine(std::string node, double t_end_estimate, double perio
 
 double ProgressLine::wallSeconds() const { return secondsSince(wall0_); }
 
-void ProgressLine::update(double t, const std::string& extra) {
-  if (secondsSince(last_) < period_s_) return;
+bool ProgressLine::due() const { return secondsSince(last_) >= period_s_; }
+
+void ProgressLine::print(double t, const char* extra) {
   last_ = std::chrono::steady_clock::now();
   const double rtf = t / std::max(wallSeconds(), 1e-9);
   const double eta = std::max(0.0, (t_end_ - t) / std::max(rtf, 1e-12));
@@ -116,9 +117,9 @@ void ProgressLine::update(double t, const std::string& extra) {
 }
 
 void logProgress(const std::string& node, double t, double t_end, double real_time_factor, double eta_s,
-                 const std::string& extra) {
+                 const char* extra) {
   ROS_INFO("%s: t = %.3f s of %.3f s (%.1f %%)%s%s, real-time factor %.3g, ETA %.0f s", node.c_str(), t, t_end,
-           100.0 * t / std::max(t_end, 1e-9), extra.empty() ? "" : ", ", extra.c_str(), real_time_factor, eta_s);
+           100.0 * t / std::max(t_end, 1e-9), *extra == '\0' ? "" : ", ", extra, real_time_factor, eta_s);
 }
 
 void logDetection(const std::string& node, const contact::DetectionCounts& counts) {

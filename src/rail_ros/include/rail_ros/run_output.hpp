@@ -68,9 +68,11 @@ class OutputBag {
 class ProgressLine {
  public:
   ProgressLine(std::string node, double t_end_estimate, double period_s = 5.0);
-  // Prints the line when `period_s` has passed since the last one. `extra` (may be empty) is added after the
-  // time, e.g. "leading wheelset at s = 12.34 m".
-  void update(double t, const std::string& extra = std::string());
+  // True when `period_s` has passed since the last line: print() then.
+  bool due() const;
+  // Prints the line now; `extra` (may be empty) is added after the time, e.g. "leading wheelset at
+  // s = 12.34 m". Builds no string.
+  void print(double t, const char* extra = "");
   double wallSeconds() const;
 
  private:
@@ -82,7 +84,7 @@ class ProgressLine {
 
 // The progress line itself: "<node>: t = 1.234 s of 15.500 s (8.0 %)[, extra], real-time factor 0.93, ETA 13 s".
 void logProgress(const std::string& node, double t, double t_end, double real_time_factor, double eta_s,
-                 const std::string& extra = std::string());
+                 const char* extra = "");
 
 // "<node>: <how the contact was found>" as INFO, or as WARN when some points were approximate, so that a run
 // never hides them.

@@ -99,8 +99,10 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   try {
     while (run.next() == rv::VehicleRun::Event::kOutput) {
       outputs.publish(run.outputIndex());
-      std::snprintf(where, sizeof(where), "leading wheelset at s = %.2f m", sim.leadingArcLength());
-      progress.update(sim.time(), where);
+      if (progress.due()) {
+        std::snprintf(where, sizeof(where), "leading wheelset at s = %.2f m", sim.leadingArcLength());
+        progress.print(sim.time(), where);
+      }
       if (!ros::ok()) stop.requested = true;
     }
   } catch (const std::exception& e) {
