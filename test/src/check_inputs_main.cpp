@@ -146,7 +146,9 @@ void fillFrame(const rv::VehicleSimulator& sim, std::uint64_t k, double h, std::
     s.id = static_cast<std::uint32_t>(w.wheel_id);
     s.arc_length = w.arc_length;
     s.p_wheel_in_world = w.p_in_world;
-    s.q_wheelset_to_world = Eigen::Quaterniond(w.orientation[0], w.orientation[1], w.orientation[2], w.orientation[3]);
+    s.R_wheelset_to_world = Eigen::Quaterniond(w.orientation[0], w.orientation[1], w.orientation[2], w.orientation[3])
+                                .normalized()
+                                .toRotationMatrix();
     s.v_wheel_in_world = w.v_in_world;
     s.omega_wheelset_in_world = w.omega_in_world;
   }

@@ -45,7 +45,7 @@ inline void wheelStateAt(double t, int i, rail::core::coupling::WheelState& w) {
   w.id = static_cast<std::uint32_t>(i);
   w.arc_length = x0 + kSpeed * t;
   w.p_wheel_in_world = Eigen::Vector3d(x0 + kSpeed * t, y, kWheelRadius + 1e-3 * std::sin(phase));
-  w.q_wheelset_to_world = Eigen::Quaterniond(std::cos(0.5 * spin), 0.0, std::sin(0.5 * spin), 0.0);
+  w.R_wheelset_to_world = Eigen::Quaterniond(std::cos(0.5 * spin), 0.0, std::sin(0.5 * spin), 0.0).toRotationMatrix();
   w.v_wheel_in_world = Eigen::Vector3d(kSpeed, 0.0, 1e-3 * 2.0 * kPi * 7.0 * std::cos(phase));
   w.omega_wheelset_in_world = Eigen::Vector3d(0.0, kSpeed / kWheelRadius, 0.0);
 }
@@ -55,17 +55,28 @@ inline void wrenchFor(std::uint64_t step, const rail::core::coupling::WheelState
                       rail::core::coupling::WheelWrench& w) {
   const double k = static_cast<double>(step);
   w.id = s.id;
-  w.f_wheel_in_world =
-      Eigen::Vector3d(-1e3 * s.p_wheel_in_world.y() + 2e3 * std::sin(0.01 * k + s.id), 5e2 * s.q_wheelset_to_world.y(),
-                      8e4 + 1e8 * (s.p_wheel_in_world.z() - kWheelRadius) + 10.0 * s.v_wheel_in_world.z());
+  w.f_wheel_in_world = Eigen::Vector3d(
+      -1e3 * s.p_wheel_in_world.y() + 2e3 * std::sin(0.01 * k + s.id), 5e2 * s.R_wheelset_to_world(0, 2),
+      8e4 + 1e8 * (s.p_wheel_in_world.z() - kWheelRadius) + 10.0 * s.v_wheel_in_world.z());
   w.n_wheel_in_world = Eigen::Vector3d(1e-2 * s.arc_length, 0.5 * s.omega_wheelset_in_world.y(), 1e-3 * k);
 }
 
-// Whether two wheel states are identical bit for bit (the transports copy doubles, they never compute).
-inline bool same(const rail::core::coupling::WheelState& a, const rail::core::coupling::WheelState& b) {
-  return a.id == b.id && a.arc_length == b.arc_length && a.p_wheel_in_world == b.p_wheel_in_world &&
-         a.q_wheelset_to_world.coeffs() == b.q_wheelset_to_world.coeffs() && a.v_wheel_in_world == b.v_wheel_in_world &&
-         a.omega_wheelset_in_world == b.omega_wheelset_in_world;
+// A wheel state as the peer receives it: the wire carries R_wheelset_to_world as a unit quaternion
+// (frames.hpp); every other field is copied.
+inline rail::core::coupling::WheelState throughWire(rail::core::coupling::WheelState w) {
+  w.R_wheelset_to_world =
+      rail::core::coupling::orientationFromWire(rail::core::coupling::wireOrientation(w.R_wheelset_to_world));
+  return w;
+}
+
+// Whether `received` is `sent` bit for bit after the wire (the transports copy doubles; the only computation
+// is the orientation's quaternion form, the same code on both sides).
+inline bool same(const rail::core::coupling::WheelState& received, const rail::core::coupling::WheelState& sent) {
+  const rail::core::coupling::WheelState b = throughWire(sent);
+  return received.id == b.id && received.arc_length == b.arc_length &&
+         received.p_wheel_in_world == b.p_wheel_in_world && received.R_wheelset_to_world == b.R_wheelset_to_world &&
+         received.v_wheel_in_world == b.v_wheel_in_world &&
+         received.omega_wheelset_in_world == b.omega_wheelset_in_world;
 }
 
 // Names one run uses (a prefix of its own, so that a killed node's registrations do not disturb the next).

@@ -136,7 +136,7 @@ void runCosim(const std::string& kind, std::vector<double>& extrapolated) {
     ASSERT_EQ(w.count, static_cast<std::uint32_t>(kWheels)) << kind;
     for (int i = 0; i < kWheels; ++i) {
       wheelStateAt(t_k, i, g);
-      wrenchFor(static_cast<std::uint64_t>(k), g, f);
+      wrenchFor(static_cast<std::uint64_t>(k), throughWire(g), f);
       ASSERT_EQ(w.wheels[i].f_wheel_in_world, f.f_wheel_in_world) << kind << " step " << k << " wheel " << i;
       ASSERT_EQ(w.wheels[i].n_wheel_in_world, f.n_wheel_in_world) << kind << " step " << k << " wheel " << i;
     }
@@ -147,13 +147,13 @@ void runCosim(const std::string& kind, std::vector<double>& extrapolated) {
     vehicle.extrapolate(t, out);
     for (int i = 0; i < kWheels; ++i) {
       wheelStateAt(t_k, i, g);
-      wrenchFor(static_cast<std::uint64_t>(k), g, f);
+      wrenchFor(static_cast<std::uint64_t>(k), throughWire(g), f);
       Eigen::Matrix<double, 6, 1> expected, got, scale;
       expected << f.f_wheel_in_world, f.n_wheel_in_world;
       scale = expected.cwiseAbs();
       if (k > 0) {
         wheelStateAt(t_k - kTrackStep, i, g);
-        wrenchFor(static_cast<std::uint64_t>(k - 1), g, f_previous);
+        wrenchFor(static_cast<std::uint64_t>(k - 1), throughWire(g), f_previous);
         Eigen::Matrix<double, 6, 1> previous;
         previous << f_previous.f_wheel_in_world, f_previous.n_wheel_in_world;
         scale += (expected - previous).cwiseAbs();

@@ -49,7 +49,7 @@ coupling::WheelStateFrame sampleStates(std::uint64_t step) {
     w.id = static_cast<std::uint32_t>(i);
     w.arc_length = 1e3 / 3.0 + i;
     w.p_wheel_in_world = Eigen::Vector3d(-0.0, 0.1 * i + 1e-17, std::numeric_limits<double>::denorm_min());
-    w.q_wheelset_to_world = Eigen::Quaterniond(0.3, -0.4, 0.5 + 1e-16, -0.7);  // deliberately not normalised
+    w.R_wheelset_to_world = Eigen::Quaterniond(0.3, -0.4, 0.5 + 1e-16, -0.7).normalized().toRotationMatrix();
     w.v_wheel_in_world = Eigen::Vector3d(std::numeric_limits<double>::max(), -1.0 / 7.0, 2.0 / 3.0);
     w.omega_wheelset_in_world = Eigen::Vector3d(1e-300, 65.2173913043478, -std::numeric_limits<double>::min());
   }
@@ -106,8 +106,11 @@ TEST(FrameMessages, WheelStatesRoundTripIsExact) {
     EXPECT_EQ(a.id, b.id);
     EXPECT_EQ(bits(a.arc_length), bits(b.arc_length));
     expectSameBits(a.p_wheel_in_world, b.p_wheel_in_world);
-    for (int c = 0; c < 4; ++c)
-      EXPECT_EQ(bits(a.q_wheelset_to_world.coeffs()[c]), bits(b.q_wheelset_to_world.coeffs()[c]));
+    // The message carries the orientation as a unit quaternion: the matrix comes back from the same
+    // conversions bit for bit, and equal to the sent one to round-off.
+    const Eigen::Matrix3d R_wire = coupling::orientationFromWire(coupling::wireOrientation(a.R_wheelset_to_world));
+    for (int c = 0; c < 9; ++c) EXPECT_EQ(bits(R_wire.data()[c]), bits(b.R_wheelset_to_world.data()[c]));
+    EXPECT_LT((b.R_wheelset_to_world - a.R_wheelset_to_world).norm(), 1e-15);
     expectSameBits(a.v_wheel_in_world, b.v_wheel_in_world);
     expectSameBits(a.omega_wheelset_in_world, b.omega_wheelset_in_world);
   }

@@ -58,8 +58,8 @@ struct WheelFrame {
 
 bool makeWheelFrame(const WheelPose& pose, WheelFrame& wf) {
   const Matrix3d& R = pose.R_wheelset_to_world;
-  if (!R.allFinite() || !pose.p_centre_in_world.allFinite() || !std::isfinite(pose.s_hint)) return false;
-  wf.c = pose.p_centre_in_world;
+  if (!R.allFinite() || !pose.p_wheel_in_world.allFinite() || !std::isfinite(pose.arc_length)) return false;
+  wf.c = pose.p_wheel_in_world;
   const double an = R.col(1).norm();
   if (!(an > 0.5)) return false;
   wf.a = R.col(1) / an;
@@ -306,7 +306,7 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   makeWheelFrame(pose, wf);
   // Rail cross-section nearest to the wheel centre (one projection step from the hint).
   RailPoint rp;
-  double s = std::clamp(pose.s_hint, track.sStart(), track.sEnd());
+  double s = std::clamp(pose.arc_length, track.sStart(), track.sEnd());
   for (int k = 0; k < 2; ++k) {
     track.rail(pose.side, s, rp);
     const Vector3d t = rp.dp_origin_ds;

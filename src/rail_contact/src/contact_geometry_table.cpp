@@ -62,10 +62,10 @@ void ContactGeometryTable::place(double y, double yaw, double z, double roll, do
   for (int k = 0; k < 2; ++k) {
     WheelState& w = k == 0 ? left : right;
     w.R_wheelset_to_world = R;
-    w.p_centre_in_world = c + R * Eigen::Vector3d(0.0, k == 0 ? e_wheel_ : -e_wheel_, 0.0);
-    w.s_hint = x0_;
-    w.v_centre_in_world = speed * Eigen::Vector3d::UnitX();
-    w.omega_in_world = omega * R.col(1);
+    w.p_wheel_in_world = c + R * Eigen::Vector3d(0.0, k == 0 ? e_wheel_ : -e_wheel_, 0.0);
+    w.arc_length = x0_;
+    w.v_wheel_in_world = speed * Eigen::Vector3d::UnitX();
+    w.omega_wheelset_in_world = omega * R.col(1);
   }
 }
 
@@ -77,10 +77,10 @@ void ContactGeometryTable::detectBoth(double y, double yaw, double z, double rol
     const bool is_left = k == 0;
     const WheelState& ws = is_left ? wl : wr;
     WheelPose pose;
-    pose.p_centre_in_world = ws.p_centre_in_world;
+    pose.p_wheel_in_world = ws.p_wheel_in_world;
     pose.R_wheelset_to_world = ws.R_wheelset_to_world;
     pose.side = is_left ? RailSide::kLeft : RailSide::kRight;
-    pose.s_hint = ws.s_hint;
+    pose.arc_length = ws.arc_length;
     ContactGeometry* g = is_left ? left : right;
     for (int surf = 0; surf < 2; ++surf) {
       g[surf] = ContactGeometry();

@@ -51,11 +51,11 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const Clock::time_point t_begin = cost != nullptr ? Clock::now() : Clock::time_point();
   double detection_s = 0.0;  // this evaluation's search time
   WheelPose pose;
-  pose.p_centre_in_world = ws.p_centre_in_world;
+  pose.p_wheel_in_world = ws.p_wheel_in_world;
   pose.R_wheelset_to_world = ws.R_wheelset_to_world;
   pose.side = side;
-  pose.s_hint = ws.s_hint;
-  const bool input_ok = ws.v_centre_in_world.allFinite() && ws.omega_in_world.allFinite();
+  pose.arc_length = ws.arc_length;
+  const bool input_ok = ws.v_wheel_in_world.allFinite() && ws.omega_wheelset_in_world.allFinite();
   const Eigen::Vector3d axle = ws.R_wheelset_to_world.col(1).normalized();
   const double ls = side == RailSide::kLeft ? -1.0 : 1.0;
 
@@ -106,7 +106,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
 
     // Material-point velocities: wheel (rigid wheelset) and rail (section motion from the provider).
     const Eigen::Vector3d v_wheel =
-        ws.v_centre_in_world + ws.omega_in_world.cross(g.p_wheel_in_world - ws.p_centre_in_world);
+        ws.v_wheel_in_world + ws.omega_wheelset_in_world.cross(g.p_wheel_in_world - ws.p_wheel_in_world);
     const Eigen::Vector3d v_rail =
         g.rail_motion.u_dot + g.rail_motion.theta_dot.cross(g.p_rail_in_world - g.p_section_centre_in_world);
     // Penetration rate: the wheel is a surface of revolution about its axle, so the spin about the axle moves
@@ -115,9 +115,9 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     // approximate pair (normals up to acos(min_normal_opposition) apart) no longer reads a part of the
     // rolling speed (~30 m/s at 108 km/h) as a penetration rate, which eq. 9's damping turned into
     // single-sample normal-force spikes of several MN.
-    const Eigen::Vector3d omega_without_spin = ws.omega_in_world - ws.omega_in_world.dot(axle) * axle;
+    const Eigen::Vector3d omega_without_spin = ws.omega_wheelset_in_world - ws.omega_wheelset_in_world.dot(axle) * axle;
     const Eigen::Vector3d v_wheel_shape =
-        ws.v_centre_in_world + omega_without_spin.cross(g.p_wheel_in_world - ws.p_centre_in_world);
+        ws.v_wheel_in_world + omega_without_spin.cross(g.p_wheel_in_world - ws.p_wheel_in_world);
     c.penetration_rate = -(v_wheel_shape - v_rail).dot(n);
     updateImpactMemory(work.impact[k], c.penetration, c.penetration_rate);
     if (!g.in_contact) continue;
@@ -156,8 +156,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     c.b = hz.b(c.N);
 
     // Creepages (rolling speed: wheel centre relative to the rail section along t_rolling).
-    const double V = (ws.v_centre_in_world - g.rail_motion.u_dot).dot(t_w);
-    const Creepages cr = computeCreepages(v_wheel, v_rail, ws.omega_in_world, g.rail_motion.theta_dot,
+    const double V = (ws.v_wheel_in_world - g.rail_motion.u_dot).dot(t_w);
+    const Creepages cr = computeCreepages(v_wheel, v_rail, ws.omega_wheelset_in_world, g.rail_motion.theta_dot,
                                           c.R_contact_to_world, V, options_.creepage);
     c.nu_x = cr.nu_x;
     c.nu_y = cr.nu_y;
@@ -193,8 +193,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const ContactPointResult& tr = out.contact[kTread];
   const ContactPointResult& fl = out.contact[kFlange];
   out.wheel_centre = wheelCentreWrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
-                                       A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
-                                       A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
+                                       A.transpose() * (tr.p_wheel_in_world - ws.p_wheel_in_world),
+                                       A.transpose() * (fl.p_wheel_in_world - ws.p_wheel_in_world), A);
   // Eq. 15: both contacts about one section centre (the tread contact's if active, else the flange's).
   const ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
   out.rail_section_s = ref.s_r;

@@ -118,10 +118,10 @@ const BruteForce& brute() {
 
 rc::WheelPose poseOf(const rc::WheelState& w, rc::RailSide side) {
   rc::WheelPose p;
-  p.p_centre_in_world = w.p_centre_in_world;
+  p.p_wheel_in_world = w.p_wheel_in_world;
   p.R_wheelset_to_world = w.R_wheelset_to_world;
   p.side = side;
-  p.s_hint = w.s_hint;
+  p.arc_length = w.arc_length;
   return p;
 }
 
@@ -132,8 +132,8 @@ void wheelStates(double y, double z, double phi, rc::WheelState& left, rc::Wheel
   for (int k = 0; k < 2; ++k) {
     rc::WheelState& w = k == 0 ? left : right;
     w.R_wheelset_to_world = R;
-    w.p_centre_in_world = Vector3d(10.0, y, z) + R * Vector3d(0.0, k == 0 ? e : -e, 0.0);
-    w.s_hint = 10.0;
+    w.p_wheel_in_world = Vector3d(10.0, y, z) + R * Vector3d(0.0, k == 0 ? e : -e, 0.0);
+    w.arc_length = 10.0;
   }
 }
 
@@ -277,7 +277,7 @@ TEST(ContactDetection, RigidMotionOfRailAndWheelMovesContactByTheSameMotion) {
   const Vector3d x_ref(10.0, 0.75, -0.05), u0(0.3e-3, 0.4e-3, -0.7e-3), theta(2e-3, -1e-3, 1.5e-3);
   RigidMotionProvider motion(track, det.sectionCentre(), x_ref, u0, theta);
   rc::WheelState moved = wl;
-  moved.p_centre_in_world = motion.apply(wl.p_centre_in_world);
+  moved.p_wheel_in_world = motion.apply(wl.p_wheel_in_world);
   moved.R_wheelset_to_world = motion.a() * wl.R_wheelset_to_world;
   det.detect(rc::WheelSurface::kTread, poseOf(moved, rc::RailSide::kLeft), track,
              static_cast<const rc::RailDeformation&>(motion), w1, g1);
@@ -335,7 +335,7 @@ TEST(ContactDetection, BeamProviderWithRigidNodalFieldMatchesRigidMotion) {
   const Matrix3d A = rc::smallRotationMatrix(theta);
   auto apply = [&](const Vector3d& x) { return x_ref + u0 + A * (x - x_ref); };
   rc::WheelState moved = wl;
-  moved.p_centre_in_world = apply(wl.p_centre_in_world);
+  moved.p_wheel_in_world = apply(wl.p_wheel_in_world);
   moved.R_wheelset_to_world = A * wl.R_wheelset_to_world;
   det.detect(rc::WheelSurface::kTread, poseOf(moved, rc::RailSide::kLeft), track, beam, w1, g1);
   ASSERT_TRUE(g0.in_contact);
@@ -358,7 +358,7 @@ TEST(ContactDetection, WarmStartConvergesInFewIterationsWithoutFallback) {
     const rc::ContactGeometryRow r = s.table.row(y);
     rc::WheelState wl, wr;
     wheelStates(y, r.z - 20e-6, r.roll, wl, wr);
-    wl.p_centre_in_world.x() += 0.5e-3 * step;
+    wl.p_wheel_in_world.x() += 0.5e-3 * step;
     det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
                work, g);
     ASSERT_TRUE(g.in_contact);
@@ -507,12 +507,12 @@ TEST(ContactDetection, ContactLossAndRecontactAndFarOffWheel) {
              work, g);
   EXPECT_FALSE(g.in_contact);
   wl.R_wheelset_to_world = Eigen::AngleAxisd(1.3, Vector3d(1, 2, 3).normalized()).toRotationMatrix();
-  wl.s_hint = 1e6;  // beyond the track: clamped
+  wl.arc_length = 1e6;  // beyond the track: clamped
   det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
              work, g);
   EXPECT_FALSE(g.in_contact);
   EXPECT_TRUE(std::isfinite(g.penetration));
-  wl.p_centre_in_world.x() = std::numeric_limits<double>::quiet_NaN();
+  wl.p_wheel_in_world.x() = std::numeric_limits<double>::quiet_NaN();
   det.detect(rc::WheelSurface::kTread, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
              work, g);
   EXPECT_EQ(g.status, rc::DetectionStatus::kInvalidInput);

@@ -34,10 +34,10 @@ Setup& setup() {
 rc::WheelState leftWheel(double y, double dz, double V, double omega) {
   rc::WheelState w;
   const double e = setup().table.wheelHalfDistance();
-  w.p_centre_in_world = Vector3d(10.0, y + e, setup().z0 + dz);
-  w.v_centre_in_world = Vector3d(V, 0.0, 0.0);
-  w.omega_in_world = Vector3d(0.0, omega, 0.0);
-  w.s_hint = 10.0;
+  w.p_wheel_in_world = Vector3d(10.0, y + e, setup().z0 + dz);
+  w.v_wheel_in_world = Vector3d(V, 0.0, 0.0);
+  w.omega_wheelset_in_world = Vector3d(0.0, omega, 0.0);
+  w.arc_length = 10.0;
   return w;
 }
 
@@ -69,9 +69,9 @@ TEST(WheelContact, StaticNormalForceIsHertzOfThePenetration) {
   const rc::ProfileCurve& tread = setup().wheel.tread;
   rc::WheelPose pose;
   const rc::WheelState w0 = leftWheel(0.0, -50e-6, 0.0, 0.0);
-  pose.p_centre_in_world = w0.p_centre_in_world;
+  pose.p_wheel_in_world = w0.p_wheel_in_world;
   pose.side = rc::RailSide::kLeft;
-  pose.s_hint = 10.0;
+  pose.arc_length = 10.0;
   rc::DetectionWork dw;
   rc::ContactGeometry g;
   m.detector().detect(rc::WheelSurface::kTread, pose, setup().table.track(), rc::RigidRailDeformation(), dw, g);
@@ -96,7 +96,7 @@ TEST(WheelContact, HysteresisDampingFollowsEquation9) {
   rc::WheelContactResult out;
   // First touch with an approach speed of 0.05 m/s: impact velocity stored.
   rc::WheelState w = leftWheel(0.0, -10e-6, 0.0, 0.0);
-  w.v_centre_in_world.z() = -0.05;
+  w.v_wheel_in_world.z() = -0.05;
   m.evaluate(w, rc::RailSide::kLeft, setup().table.track(), rc::RigidRailDeformation(), work, out);
   const rc::ContactPointResult& c = out.contact[rc::kTread];
   ASSERT_TRUE(c.active);
@@ -105,7 +105,7 @@ TEST(WheelContact, HysteresisDampingFollowsEquation9) {
   EXPECT_NEAR(work.impact[rc::kTread].impact_velocity, 0.05 * nz, 1e-12);
   // Deeper, now separating at 0.02 m/s: N = K d^1.5 (1 + 3 (1 - e^2) / 4 * ddot / ddot_impact).
   rc::WheelState w2 = leftWheel(0.0, -40e-6, 0.0, 0.0);
-  w2.v_centre_in_world.z() = 0.02;
+  w2.v_wheel_in_world.z() = 0.02;
   m.evaluate(w2, rc::RailSide::kLeft, setup().table.track(), rc::RigidRailDeformation(), work, out);
   rc::WheelContactWork fresh;
   rc::WheelContactResult elastic;
@@ -132,10 +132,10 @@ TEST(WheelContact, PenetrationRateIgnoresTheSpinAboutTheAxle) {
   for (double y : {0.0, 0.004, 0.006, 0.007, 0.008}) {  // towards the left flange
     rc::WheelState w = leftWheel(y, -60e-6, 30.0, 0.0);
     w.R_wheelset_to_world = yaw;
-    w.v_centre_in_world.z() = -0.01;
-    w.v_centre_in_world.y() = 0.05;
+    w.v_wheel_in_world.z() = -0.01;
+    w.v_wheel_in_world.y() = 0.05;
     rc::WheelState spinning = w;
-    spinning.omega_in_world = 70.0 * yaw.col(1);  // about the axle (the wheelset frame's y)
+    spinning.omega_wheelset_in_world = 70.0 * yaw.col(1);  // about the axle (the wheelset frame's y)
     rc::WheelContactWork work_a, work_b;
     rc::WheelContactResult still, rolling;
     m.evaluate(w, rc::RailSide::kLeft, setup().table.track(), rc::RigidRailDeformation(), work_a, still);
@@ -160,7 +160,7 @@ TEST(WheelContact, CreepagesOfARollingWheelInClosedForm) {
   const rc::WheelContactModel m = makeModel(true, true);
   const double V = 20.0, omega = V / kR0 * 1.001, vy = 0.05;
   rc::WheelState w = leftWheel(0.0, -30e-6, V, omega);
-  w.v_centre_in_world.y() = vy;
+  w.v_wheel_in_world.y() = vy;
   rc::WheelContactWork work;
   rc::WheelContactResult out;
   m.evaluate(w, rc::RailSide::kLeft, setup().table.track(), rc::RigidRailDeformation(), work, out);
@@ -168,7 +168,7 @@ TEST(WheelContact, CreepagesOfARollingWheelInClosedForm) {
   ASSERT_TRUE(c.active);
   const double Vref = std::hypot(V, m.options().creepage.v_eps);
   // Distance of the contact point from the axle (level wheelset, contact below the axle).
-  const Vector3d rel = c.p_wheel_in_world - w.p_centre_in_world;
+  const Vector3d rel = c.p_wheel_in_world - w.p_wheel_in_world;
   const double rho = (rel - rel.y() * Vector3d::UnitY()).norm();
   const double gamma = c.contact_angle;
   // Wheel point velocity V - omega rho (forward), lateral vy; spin about the normal omega . n.
@@ -203,7 +203,7 @@ TEST(WheelContact, WrenchesAtWheelCentreAndRailSection) {
   const rc::WheelContactModel m = makeModel(true, true);
   rc::WheelState w = leftWheel(0.0, -40e-6, 15.0, 15.0 / kR0 * 0.999);
   w.R_wheelset_to_world = Eigen::AngleAxisd(0.004, Vector3d::UnitZ()).toRotationMatrix();
-  w.v_centre_in_world.y() = 0.1;
+  w.v_wheel_in_world.y() = 0.1;
   rc::WheelContactWork work;
   rc::WheelContactResult out;
   m.evaluate(w, rc::RailSide::kLeft, setup().table.track(), rc::RigidRailDeformation(), work, out);
@@ -215,7 +215,7 @@ TEST(WheelContact, WrenchesAtWheelCentreAndRailSection) {
   EXPECT_LT((c.force_on_wheel_in_world - f).norm(), 1e-9 * f.norm());
   // Eq. 13 about the wheel centre, moment in the wheelset frame; eq. 15 opposite force on the rail.
   const Matrix3d& A = w.R_wheelset_to_world;
-  const Vector3d m_ws = (A.transpose() * (c.p_wheel_in_world - w.p_centre_in_world)).cross(A.transpose() * f);
+  const Vector3d m_ws = (A.transpose() * (c.p_wheel_in_world - w.p_wheel_in_world)).cross(A.transpose() * f);
   EXPECT_LT((out.wheel_centre.force_in_world - f).norm(), 1e-9 * f.norm());
   EXPECT_LT((out.wheel_centre.moment_in_wheelset - m_ws).norm(), 1e-9 * m_ws.norm());
   EXPECT_LT((out.rail_section.force_in_world + f).norm(), 1e-9 * f.norm());
@@ -256,7 +256,7 @@ TEST(WheelContact, ZeroSpeedZeroLoadFlangeOffAreFiniteAndFlagged) {
   EXPECT_FALSE(out.contact[rc::kTread].active);
   EXPECT_TRUE(out.wheel_centre.moment_in_wheelset.allFinite());
   rc::WheelState bad = leftWheel(0.0, 0.0, 10.0, 0.0);
-  bad.omega_in_world.x() = std::numeric_limits<double>::infinity();
+  bad.omega_wheelset_in_world.x() = std::numeric_limits<double>::infinity();
   m.evaluate(bad, rc::RailSide::kLeft, setup().table.track(), rc::RigidRailDeformation(), work, out);
   EXPECT_EQ(out.contact[rc::kTread].status, rc::DetectionStatus::kInvalidInput);
   EXPECT_EQ(out.wheel_centre.force_in_world.norm(), 0.0);

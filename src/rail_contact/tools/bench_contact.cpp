@@ -33,12 +33,12 @@ void run(bool flange, bool spin) {
     for (int k = 0; k < 2; ++k) {
       rc::WheelState& w = states[2 * i + k];
       w.R_wheelset_to_world = R;
-      w.p_centre_in_world =
+      w.p_wheel_in_world =
           Eigen::Vector3d(2.0 + 0.8e-3 * i, y, r.z - 20e-6) +
           R * Eigen::Vector3d(0.0, k == 0 ? table.wheelHalfDistance() : -table.wheelHalfDistance(), 0.0);
-      w.v_centre_in_world = Eigen::Vector3d(40.0, 0.0, 0.0);
-      w.omega_in_world = (40.0 / 0.46) * R.col(1);
-      w.s_hint = w.p_centre_in_world.x();
+      w.v_wheel_in_world = Eigen::Vector3d(40.0, 0.0, 0.0);
+      w.omega_wheelset_in_world = (40.0 / 0.46) * R.col(1);
+      w.arc_length = w.p_wheel_in_world.x();
     }
   }
   // Detection only.
@@ -49,10 +49,10 @@ void run(bool flange, bool spin) {
     for (int k = 0; k < 2; ++k) {
       const rc::WheelState& w = states[2 * i + k];
       rc::WheelPose p;
-      p.p_centre_in_world = w.p_centre_in_world;
+      p.p_wheel_in_world = w.p_wheel_in_world;
       p.R_wheelset_to_world = w.R_wheelset_to_world;
       p.side = k == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight;
-      p.s_hint = w.s_hint;
+      p.arc_length = w.arc_length;
       for (int s = 0; s < (flange ? 2 : 1); ++s)
         model.detector().detect(static_cast<rc::WheelSurface>(s), p, table.track(), rc::RigidRailDeformation(),
                                 work[k].detection[s], g);

@@ -80,7 +80,10 @@ void fillStates(WheelStateFrame& f, std::uint64_t step) {
     w.id = static_cast<std::uint32_t>(mix(step * 31 + i));
     w.arc_length = pattern(step, i, 0);
     for (int j = 0; j < 3; ++j) w.p_wheel_in_world[j] = pattern(step, i, 1 + j);
-    for (int j = 0; j < 4; ++j) w.q_wheelset_to_world.coeffs()[j] = pattern(step, i, 4 + j);
+    // A rotation (the wire carries it as a unit quaternion, so arbitrary bits would not survive).
+    w.R_wheelset_to_world = Eigen::AngleAxisd(1e-3 * static_cast<double>(mix(step * 7 + i) % 6283),
+                                              Eigen::Vector3d(1.0, 0.2 * i, -0.3).normalized())
+                                .toRotationMatrix();
     for (int j = 0; j < 3; ++j) w.v_wheel_in_world[j] = pattern(step, i, 8 + j);
     for (int j = 0; j < 3; ++j) w.omega_wheelset_in_world[j] = pattern(step, i, 11 + j);
   }
@@ -99,12 +102,18 @@ bool sameBits(const V& a, const V& b) {
     if (bits(a[j]) != bits(b[j])) return false;
   return true;
 }
+Eigen::Matrix<double, 9, 1> flat(const Eigen::Matrix3d& m) {
+  return Eigen::Map<const Eigen::Matrix<double, 9, 1>>(m.data());
+}
+// a as received, b as sent: every field bit for bit; the orientation as the wire's quaternion form gives it
+// back (frames.hpp).
 bool sameBits(const WheelStateFrame& a, const WheelStateFrame& b) {
   if (a.count != b.count) return false;
   for (std::uint32_t i = 0; i < a.count; ++i) {
     const WheelState &x = a.wheels[i], &y = b.wheels[i];
     if (x.id != y.id || bits(x.arc_length) != bits(y.arc_length) || !sameBits(x.p_wheel_in_world, y.p_wheel_in_world) ||
-        !sameBits(x.q_wheelset_to_world.coeffs(), y.q_wheelset_to_world.coeffs()) ||
+        !sameBits(flat(x.R_wheelset_to_world), flat(orientationFromWire(wireOrientation(y.R_wheelset_to_world)))) ||
+        !x.R_wheelset_to_world.isApprox(y.R_wheelset_to_world, 1e-14) ||
         !sameBits(x.v_wheel_in_world, y.v_wheel_in_world) ||
         !sameBits(x.omega_wheelset_in_world, y.omega_wheelset_in_world))
       return false;

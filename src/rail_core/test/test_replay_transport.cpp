@@ -24,7 +24,7 @@ cc::RecordedStates twoInstants() {
       w.arc_length = 10.0 - 2.5 * i + 0.3 * k;
       w.p_wheel_in_world = Eigen::Vector3d(w.arc_length, 0.0, 0.5);
       w.v_wheel_in_world = Eigen::Vector3d(30.0 + 10.0 * k, 0.0, 0.0);
-      w.q_wheelset_to_world = Eigen::Quaterniond(Eigen::AngleAxisd(k * M_PI / 2, Eigen::Vector3d::UnitZ()));
+      w.R_wheelset_to_world = Eigen::AngleAxisd(k * M_PI / 2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
     }
     r.times.push_back(0.01 * k);
     r.frames.push_back(f);
@@ -59,7 +59,7 @@ TEST(ReplayTransport, InterpolatesEachTrackStepAndClosesAfterTheRecording) {
     EXPECT_NEAR(f.wheels[1].p_wheel_in_world.x(), 7.5 + 0.3 * a, 1e-12);
     EXPECT_NEAR(f.wheels[0].v_wheel_in_world.x(), 30.0 + 10.0 * a, 1e-12);
     // slerp: the yaw angle grows linearly, 0 .. 90 deg.
-    const Eigen::Vector3d x = f.wheels[0].q_wheelset_to_world * Eigen::Vector3d::UnitX();
+    const Eigen::Vector3d x = f.wheels[0].R_wheelset_to_world * Eigen::Vector3d::UnitX();
     EXPECT_NEAR(std::atan2(x.y(), x.x()), a * M_PI / 2, 1e-12);
   }
   EXPECT_EQ(t.receiveStates(f, {}).status, cc::Status::kPeerClosed);

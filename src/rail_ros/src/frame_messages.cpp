@@ -88,10 +88,11 @@ Result toMessage(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates&
     m.position.x = w.p_wheel_in_world.x();
     m.position.y = w.p_wheel_in_world.y();
     m.position.z = w.p_wheel_in_world.z();
-    m.orientation.x = w.q_wheelset_to_world.x();
-    m.orientation.y = w.q_wheelset_to_world.y();
-    m.orientation.z = w.q_wheelset_to_world.z();
-    m.orientation.w = w.q_wheelset_to_world.w();
+    const Eigen::Quaterniond q = coupling::wireOrientation(w.R_wheelset_to_world);
+    m.orientation.x = q.x();
+    m.orientation.y = q.y();
+    m.orientation.z = q.z();
+    m.orientation.w = q.w();
     put(w.v_wheel_in_world, m.linear_velocity);
     put(w.omega_wheelset_in_world, m.angular_velocity);
   }
@@ -142,7 +143,8 @@ Result fromMessage(const rail_msgs::WheelStates& msg, double track_step, couplin
     w.arc_length = m.arc_length;
     w.p_wheel_in_world = Eigen::Vector3d(m.position.x, m.position.y, m.position.z);
     // Eigen's (w, x, y, z) constructor; stored as given (no normalisation), so the bits survive.
-    w.q_wheelset_to_world = Eigen::Quaterniond(m.orientation.w, m.orientation.x, m.orientation.y, m.orientation.z);
+    w.R_wheelset_to_world = coupling::orientationFromWire(
+        Eigen::Quaterniond(m.orientation.w, m.orientation.x, m.orientation.y, m.orientation.z));
     get(m.linear_velocity, w.v_wheel_in_world);
     get(m.angular_velocity, w.omega_wheelset_in_world);
   }

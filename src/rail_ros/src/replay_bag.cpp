@@ -39,7 +39,8 @@ core::coupling::RecordedStates readRecordedStates(const std::string& bag_path, i
       o.id = w.wheel_id;
       o.arc_length = w.arc_length;
       o.p_wheel_in_world = Eigen::Vector3d(w.position.x, w.position.y, w.position.z);
-      o.q_wheelset_to_world = Eigen::Quaterniond(w.orientation.w, w.orientation.x, w.orientation.y, w.orientation.z);
+      o.R_wheelset_to_world = core::coupling::orientationFromWire(
+          Eigen::Quaterniond(w.orientation.w, w.orientation.x, w.orientation.y, w.orientation.z));
       o.v_wheel_in_world = Eigen::Vector3d(w.linear_velocity.x, w.linear_velocity.y, w.linear_velocity.z);
       o.omega_wheelset_in_world = Eigen::Vector3d(w.angular_velocity.x, w.angular_velocity.y, w.angular_velocity.z);
     }

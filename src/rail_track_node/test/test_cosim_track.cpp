@@ -66,8 +66,8 @@ struct DirectContact {
   // points at height z (m) on the rigid straight track.
   double verticalForce(double s, double z) const {
     rc::WheelState ws;
-    ws.p_centre_in_world = Eigen::Vector3d(s, taping_y, z);
-    ws.s_hint = s;
+    ws.p_wheel_in_world = Eigen::Vector3d(s, taping_y, z);
+    ws.arc_length = s;
     rc::WheelContactWork work;
     rc::WheelContactResult res;
     model.evaluate(ws, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), work, res);
@@ -98,7 +98,7 @@ void setWheel(cc::WheelStateFrame& f, int id, double s, double taping_y, double 
   const double y = (id % 2 == 0) ? taping_y : -taping_y;
   w.p_wheel_in_world = Eigen::Vector3d(s, 0.0, z) + q * Eigen::Vector3d(0.0, y, 0.0);
   w.arc_length = s;
-  w.q_wheelset_to_world = q;
+  w.R_wheelset_to_world = q.toRotationMatrix();
   w.v_wheel_in_world = v + omega.cross(q * Eigen::Vector3d(0.0, y, 0.0));
   w.omega_wheelset_in_world = omega;
 }
@@ -143,20 +143,14 @@ TEST(CosimTrack, RigidFeGivesRailContactWrenches) {
     ASSERT_EQ(track.step(frame, out), rt::CosimStepStatus::kOk);
     ASSERT_EQ(out.count, 8u);
     for (int i = 0; i < 8; ++i) {
-      const cc::WheelState& in = frame.wheels[static_cast<std::size_t>(i)];
-      rc::WheelState ws;
-      ws.p_centre_in_world = in.p_wheel_in_world;
-      ws.R_wheelset_to_world = in.q_wheelset_to_world.toRotationMatrix();
-      ws.v_centre_in_world = in.v_wheel_in_world;
-      ws.omega_in_world = in.omega_wheelset_in_world;
-      ws.s_hint = in.arc_length;
+      const rc::WheelState& ws = frame.wheels[static_cast<std::size_t>(i)];
       rc::WheelContactResult res;
       direct.model.evaluate(ws, i % 2 == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight, direct.track,
                             rc::RigidRailDeformation(), work[static_cast<std::size_t>(i)], res);
       const Eigen::Vector3d f = res.wheel_centre.force_in_world;
       const Eigen::Vector3d n = ws.R_wheelset_to_world * res.wheel_centre.moment_in_wheelset;
       const cc::WheelWrench& w = out.wheels[static_cast<std::size_t>(i)];
-      EXPECT_EQ(w.id, in.id);
+      EXPECT_EQ(w.id, ws.id);
       EXPECT_GT(f.z(), 0.5 * Q) << "wheel " << i << " not loaded: the test would compare zeros";
       EXPECT_LE((w.f_wheel_in_world - f).norm(), 1e-9 * f.norm()) << "step " << k << " wheel " << i;
       EXPECT_LE((w.n_wheel_in_world - n).norm(), 1e-9 * std::max(1.0, n.norm())) << "step " << k << " wheel " << i;
@@ -246,8 +240,8 @@ StaticContact staticContact(rt::CosimTrack& track, const DirectContact& direct, 
   StaticContact out;
   for (int side = 0; side < 2; ++side) {
     rc::WheelState ws;
-    ws.p_centre_in_world = Eigen::Vector3d(s0, side == 0 ? direct.taping_y : -direct.taping_y, z);
-    ws.s_hint = s0;
+    ws.p_wheel_in_world = Eigen::Vector3d(s0, side == 0 ? direct.taping_y : -direct.taping_y, z);
+    ws.arc_length = s0;
     rc::WheelContactWork work;
     rc::WheelContactResult res;
     direct.model.evaluate(ws, side == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight, direct.track,
@@ -589,12 +583,7 @@ TEST(CosimTrack, FlexibleRollingWheelsetKeepsContactAndLoad) {
     cc::WheelStateFrame frame(2);
     setWheel(frame, i, s0 + V * T_end, direct.taping_y, z, Eigen::Quaterniond::Identity(), Eigen::Vector3d(V, 0, 0),
              Eigen::Vector3d(0.0, V / 0.445, 0.0));
-    const cc::WheelState& in = frame.wheels[static_cast<std::size_t>(i)];
-    rc::WheelState ws;
-    ws.p_centre_in_world = in.p_wheel_in_world;
-    ws.v_centre_in_world = in.v_wheel_in_world;
-    ws.omega_in_world = in.omega_wheelset_in_world;
-    ws.s_hint = in.arc_length;
+    const rc::WheelState& ws = frame.wheels[static_cast<std::size_t>(i)];
     rc::WheelContactWork work = track.contactWork(i);
     rc::WheelContactResult res;
     track.contactModel().evaluate(ws, i == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight, track.geometry(),

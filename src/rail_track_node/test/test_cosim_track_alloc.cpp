@@ -49,7 +49,7 @@ void fill(cc::WheelStateFrame& f, long k, double taping_y, double offset) {
     const double s = stations[i / 2] + offset + V * k * h;
     w.arc_length = s;
     w.p_wheel_in_world = Eigen::Vector3d(s, i % 2 == 0 ? taping_y : -taping_y, r0 - 5e-5);
-    w.q_wheelset_to_world = Eigen::Quaterniond::Identity();
+    w.R_wheelset_to_world = Eigen::Matrix3d::Identity();
     w.v_wheel_in_world = Eigen::Vector3d(V, 0.0, 0.0);
     w.omega_wheelset_in_world = Eigen::Vector3d(0.0, V / r0 * 1.001, 0.0);
   }
@@ -132,7 +132,7 @@ WindowCounted windowAllocations(bool curve) {
       w.arc_length = s;
       w.p_wheel_in_world = tp.p_center_in_world +
                            tp.R_track_to_world * Eigen::Vector3d(0.0, i % 2 == 0 ? taping_y : -taping_y, r0 - 5e-5);
-      w.q_wheelset_to_world = Eigen::Quaterniond(tp.R_track_to_world);
+      w.R_wheelset_to_world = tp.R_track_to_world;
       w.v_wheel_in_world = V * tp.R_track_to_world.col(0);
       w.omega_wheelset_in_world = tp.R_track_to_world.col(1) * (V / r0 * 1.001);
     }

@@ -98,7 +98,7 @@ void fillFrame(const rc::TrackGeometry& geo, double s_front, double V, double z,
       const Eigen::Vector3d arm = R * Eigen::Vector3d(0.0, side == 0 ? taping_y : -taping_y, 0.0);
       w.p_wheel_in_world = tp.p_center_in_world + tp.R_track_to_world.col(2) * z + arm;
       w.arc_length = s;
-      w.q_wheelset_to_world = q;
+      w.R_wheelset_to_world = q.toRotationMatrix();
       w.v_wheel_in_world = v + omega.cross(arm);
       w.omega_wheelset_in_world = omega;
     }

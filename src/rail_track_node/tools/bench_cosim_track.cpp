@@ -66,7 +66,7 @@ static void fillFrame(const rail::core::Scene& scene, const rc::TrackGeometry& g
     w.arc_length = s;
     w.p_wheel_in_world =
         tp.p_center_in_world + tp.R_track_to_world * Eigen::Vector3d(0.0, i % 2 == 0 ? taping_y : -taping_y, r0 - 5e-5);
-    w.q_wheelset_to_world = Eigen::Quaterniond(tp.R_track_to_world);
+    w.R_wheelset_to_world = tp.R_track_to_world;
     w.v_wheel_in_world = V * tp.R_track_to_world.col(0);
     w.omega_wheelset_in_world = tp.R_track_to_world.col(1) * (V / r0) + tp.R_track_to_world.col(2) * (V * tp.curvature);
   }

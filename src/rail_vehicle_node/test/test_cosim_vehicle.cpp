@@ -112,14 +112,8 @@ class RigidTrackPeer {
 
   void evaluate(const cc::WheelState& in, cc::WheelWrench& out) {
     const std::size_t i = in.id;
-    const Eigen::Matrix3d R = in.q_wheelset_to_world.toRotationMatrix();
-    rc::WheelState w;
-    w.p_centre_in_world = in.p_wheel_in_world;
-    w.R_wheelset_to_world = R;
-    w.v_centre_in_world = in.v_wheel_in_world;
-    w.omega_in_world = in.omega_wheelset_in_world;
-    w.s_hint = in.arc_length;
-    model_.evaluate(w, side_[i], track_, rc::RigidRailDeformation(), work_[i], result_[i]);
+    const Eigen::Matrix3d& R = in.R_wheelset_to_world;
+    model_.evaluate(in, side_[i], track_, rc::RigidRailDeformation(), work_[i], result_[i]);
     const Eigen::Vector3d& f = result_[i].wheel_centre.force_in_world;
     out.id = in.id;
     out.f_wheel_in_world = f;

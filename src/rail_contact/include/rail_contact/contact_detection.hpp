@@ -97,10 +97,10 @@ std::string describe(const DetectionCounts& counts);
 
 /// Wheel pose for the detection (world frame).
 struct WheelPose {
-  Eigen::Vector3d p_centre_in_world = Eigen::Vector3d::Zero();        ///< wheel centre, m
+  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();         ///< wheel centre, m
   Eigen::Matrix3d R_wheelset_to_world = Eigen::Matrix3d::Identity();  ///< A_ws
   RailSide side = RailSide::kLeft;                                    ///< wheel side = rail side
-  double s_hint = 0.0;  ///< track arc length near the wheel, m (used by the search)
+  double arc_length = 0.0;  ///< track arc length near the wheel, m (used by the search)
 };
 
 /// Geometry of one detected point pair (world frame).

@@ -18,6 +18,7 @@
 #include "rail_contact/hertz.hpp"
 #include "rail_contact/kalker.hpp"
 #include "rail_contact/polach.hpp"
+#include "rail_contact/wheel_state.hpp"
 #include "rail_contact/wrench_transfer.hpp"
 
 namespace rail {
@@ -53,15 +54,6 @@ struct WheelContactOptions {
 
 /// Throws std::runtime_error naming the field and value when an option is non-physical.
 void validate(const WheelContactOptions& options);
-
-/// Kinematic state of one wheel (world frame).
-struct WheelState {
-  Eigen::Vector3d p_centre_in_world = Eigen::Vector3d::Zero();        ///< wheel centre (taping-line plane), m
-  Eigen::Matrix3d R_wheelset_to_world = Eigen::Matrix3d::Identity();  ///< A_ws
-  Eigen::Vector3d v_centre_in_world = Eigen::Vector3d::Zero();        ///< velocity of the wheel centre, m/s
-  Eigen::Vector3d omega_in_world = Eigen::Vector3d::Zero();           ///< wheelset angular velocity, rad/s
-  double s_hint = 0.0;  ///< track arc length near the wheel, m (start of the search; e.g. wheelset station)
-};
 
 /// Index of a wheel's two contacts.
 constexpr int kTread = 0;

@@ -73,7 +73,8 @@ Result ReplayTransport::receiveStates(WheelStateFrame& out, Deadline) {
     o.id = w0.id;
     o.arc_length = (1 - a) * w0.arc_length + a * w1.arc_length;
     o.p_wheel_in_world = (1 - a) * w0.p_wheel_in_world + a * w1.p_wheel_in_world;
-    o.q_wheelset_to_world = w0.q_wheelset_to_world.slerp(a, w1.q_wheelset_to_world);
+    o.R_wheelset_to_world =
+        orientationFromWire(wireOrientation(w0.R_wheelset_to_world).slerp(a, wireOrientation(w1.R_wheelset_to_world)));
     o.v_wheel_in_world = (1 - a) * w0.v_wheel_in_world + a * w1.v_wheel_in_world;
     o.omega_wheelset_in_world = (1 - a) * w0.omega_wheelset_in_world + a * w1.omega_wheelset_in_world;
   }

@@ -500,7 +500,7 @@ Result ShmTransport::sendStates(const WheelStateFrame& frame, Deadline deadline)
     o.reserved = 0;
     o.arc_length = w.arc_length;
     put(o.p_wheel_in_world, w.p_wheel_in_world);
-    put(o.q_wheelset_to_world, w.q_wheelset_to_world.coeffs());  // x, y, z, w
+    put(o.q_wheelset_to_world, wireOrientation(w.R_wheelset_to_world).coeffs());  // x, y, z, w
     put(o.v_wheel_in_world, w.v_wheel_in_world);
     put(o.omega_wheelset_in_world, w.omega_wheelset_in_world);
   }
@@ -526,7 +526,9 @@ Result ShmTransport::receiveStates(WheelStateFrame& frame, Deadline deadline) {
     w.id = o.id;
     w.arc_length = o.arc_length;
     get(o.p_wheel_in_world, w.p_wheel_in_world);
-    get(o.q_wheelset_to_world, w.q_wheelset_to_world.coeffs());
+    Eigen::Quaterniond q;
+    get(o.q_wheelset_to_world, q.coeffs());
+    w.R_wheelset_to_world = orientationFromWire(q);
     get(o.v_wheel_in_world, w.v_wheel_in_world);
     get(o.omega_wheelset_in_world, w.omega_wheelset_in_world);
   }

@@ -346,16 +346,6 @@ void CosimTrack::writeWrench(int i, const rc::WheelState& ws, const rc::WheelCon
   w.n_wheel_in_world = ws.R_wheelset_to_world * res.wheel_centre.moment_in_wheelset;
 }
 
-static rc::WheelState contactWheelState(const cc::WheelState& in) {
-  rc::WheelState ws;
-  ws.p_centre_in_world = in.p_wheel_in_world;
-  ws.R_wheelset_to_world = in.q_wheelset_to_world.normalized().toRotationMatrix();
-  ws.v_centre_in_world = in.v_wheel_in_world;
-  ws.omega_in_world = in.omega_wheelset_in_world;
-  ws.s_hint = in.arc_length;
-  return ws;
-}
-
 // Every wheel's contact on the rails as deformation_ holds them; the FE loads of the active contacts
 // (flexible) and the wheel-centre wrenches.
 void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
@@ -363,10 +353,9 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
   const bool fe = fe_ || window_;
   if (fe) loads_->clear();
   for (int i = 0; i < n; ++i) {
-    const cc::WheelState& in = states.wheels[static_cast<std::size_t>(i)];
-    const std::size_t id = in.id;
-    const rc::RailSide side = (in.id % 2 == 0) ? rc::RailSide::kLeft : rc::RailSide::kRight;
-    const rc::WheelState ws = contactWheelState(in);
+    const rc::WheelState& ws = states.wheels[static_cast<std::size_t>(i)];
+    const std::size_t id = ws.id;
+    const rc::RailSide side = (ws.id % 2 == 0) ? rc::RailSide::kLeft : rc::RailSide::kRight;
     rc::WheelContactResult& res = result_[id];
     if (fe) {
       contact_model_->evaluate(ws, side, *geometry_, *deformation_, work_[id], res, contact_cost_);
@@ -381,7 +370,7 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
     } else {
       contact_model_->evaluate(ws, side, *geometry_, rc::RigidRailDeformation(), work_[id], res, contact_cost_);
     }
-    out.wheels[static_cast<std::size_t>(i)].id = in.id;
+    out.wheels[static_cast<std::size_t>(i)].id = ws.id;
     writeWrench(i, ws, res, out);
   }
 }
@@ -614,14 +603,13 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
         L.W.col(k) = rc::beamEquivalentNodalLoadsWorld(xi, b.length, b.R_local_to_world, e, arm.cross(e));
       }
       L.R_contact_to_world = cp.R_contact_to_world;
-      const rc::WheelState ws = contactWheelState(in);
-      L.v_wheel = ws.v_centre_in_world + ws.omega_in_world.cross(cp.p_wheel_in_world - ws.p_centre_in_world);
+      L.v_wheel = in.v_wheel_in_world + in.omega_wheelset_in_world.cross(cp.p_wheel_in_world - in.p_wheel_in_world);
       rc::RailSectionMotion motion;
       deformation_->sectionMotion(side, cp.s_r, motion);
       L.v_rail_p = motion.u_dot + motion.theta_dot.cross(arm);
-      L.omega_wheel = ws.omega_in_world;
+      L.omega_wheel = in.omega_wheelset_in_world;
       L.omega_rail_p = motion.theta_dot;
-      L.V_p = (ws.v_centre_in_world - motion.u_dot).dot(cp.R_contact_to_world.col(0));
+      L.V_p = (in.v_wheel_in_world - motion.u_dot).dot(cp.R_contact_to_world.col(0));
       L.K = memory(0);
       L.a_coeff = memory(1);
       L.b_coeff = memory(2);
@@ -801,14 +789,14 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
   for (int e = 0; e < m; ++e) {
     const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
     if (e > 0 && im.links[static_cast<std::size_t>(e - 1)].wheel == Le.wheel) continue;
-    const rc::WheelState ws = contactWheelState(states.wheels[static_cast<std::size_t>(Le.frame_index)]);
+    const rc::WheelState& ws = states.wheels[static_cast<std::size_t>(Le.frame_index)];
     rc::WheelContactResult& res = result_[static_cast<std::size_t>(Le.wheel)];
     const rc::ContactPointResult& tr = res.contact[rc::kTread];
     const rc::ContactPointResult& fl = res.contact[rc::kFlange];
     const Eigen::Matrix3d& A = ws.R_wheelset_to_world;
     res.wheel_centre = rc::wheelCentreWrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
-                                             A.transpose() * (tr.p_wheel_in_world - ws.p_centre_in_world),
-                                             A.transpose() * (fl.p_wheel_in_world - ws.p_centre_in_world), A);
+                                             A.transpose() * (tr.p_wheel_in_world - ws.p_wheel_in_world),
+                                             A.transpose() * (fl.p_wheel_in_world - ws.p_wheel_in_world), A);
     const rc::ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
     res.rail_section_s = ref.s_r;
     res.rail_section = rc::railSectionWrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,

@@ -89,7 +89,7 @@ void CosimVehicle::fillWheelStates(const Eigen::Ref<const Eigen::VectorXd>& y, c
     cc::WheelState& w = frame.wheels[i];
     w.id = static_cast<std::uint32_t>(i);
     w.p_wheel_in_world = b.r + arm;
-    w.q_wheelset_to_world = Eigen::Quaterniond(b.A).normalized();
+    w.R_wheelset_to_world = b.A;
     w.v_wheel_in_world = b.r_dot + b.omega_world.cross(arm);
     w.omega_wheelset_in_world = b.omega_world;
     wheel_s_[i] = projectOnTrack(sim_->track(), w.p_wheel_in_world, wheel_s_[i], tp);

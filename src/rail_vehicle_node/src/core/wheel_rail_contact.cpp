@@ -35,11 +35,11 @@ void evaluateWheel(const WheelRailContactModel& model, const VehicleData& data, 
   const BodyKinematics& b = data.bodies[static_cast<std::size_t>(w.body)];
   const Vector3 arm_taping = b.A * w.s_taping_in_body;
   contact::WheelState state;
-  state.p_centre_in_world = b.r + arm_taping;
+  state.p_wheel_in_world = b.r + arm_taping;
   state.R_wheelset_to_world = b.A;
-  state.v_centre_in_world = b.r_dot + b.omega_world.cross(arm_taping);
-  state.omega_in_world = b.omega_world;
-  state.s_hint = cd.s_hint[i];
+  state.v_wheel_in_world = b.r_dot + b.omega_world.cross(arm_taping);
+  state.omega_wheelset_in_world = b.omega_world;
+  state.arc_length = cd.s_hint[i];
   contact::WheelContactResult& out = cd.result[i];
   model.wheelModel().evaluate(state, w.side, model.track(), contact::RigidRailDeformation(), cd.work[i], out, cd.cost);
   ++cd.evaluations;

@@ -9,18 +9,21 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <rail_contact/wheel_state.hpp>
+
 namespace rail::core::coupling {
 
-// State of one wheel centre at the exchange instant (as rail_msgs/WheelState).
-struct WheelState {
-  std::uint32_t id = 0;                                        // wheel index: 2 * wheelset + side
-  double arc_length = 0.0;                                     // track arc length s of the centre's projection [m]
-  Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();  // centre position q_w [m]
-  Eigen::Quaterniond q_wheelset_to_world = Eigen::Quaterniond::Identity();  // R_wheelset_to_world
-  Eigen::Vector3d v_wheel_in_world = Eigen::Vector3d::Zero();               // centre velocity q_w dot [m/s]
-  Eigen::Vector3d omega_wheelset_in_world = Eigen::Vector3d::Zero();        // angular velocity, spin included [rad/s]
-};
+// State of one wheel centre at the exchange instant: the contact's own WheelState (rail_contact), one type
+// from the vehicle's integrator through the transports to the track's contact.
+using rail::contact::WheelState;
 
+// R_wheelset_to_world on the wire (rail_msgs/WheelState, the shared-memory record) is a unit quaternion.
+inline Eigen::Quaterniond wireOrientation(const Eigen::Matrix3d& R_wheelset_to_world) {
+  return Eigen::Quaterniond(R_wheelset_to_world).normalized();
+}
+inline Eigen::Matrix3d orientationFromWire(const Eigen::Quaterniond& q_wheelset_to_world) {
+  return q_wheelset_to_world.normalized().toRotationMatrix();
+}
 // Equivalent contact wrench at one wheel centre (paper eq. 13, as rail_msgs/ContactWrench).
 struct WheelWrench {
   std::uint32_t id = 0;                                        // as in WheelState
