@@ -427,7 +427,7 @@ TEST(ContactDetection, RootContactNearTheSplitIsAConvergedPointFoundAlikeWarmAnd
   // the split (split_overlap) the load-carrying contact is a converged eq. 4 point all the way (never the
   // search's grid estimate, kApproximate), and it is the same whether Newton is warm-started from the
   // previous pose or the detection starts from scratch (the result is a function of the pose, which a
-  // time integrator needs). Without the overlap, the poses where the old detection converged give the
+  // time integrator needs). Without the overlap, the poses where that detection converges give the
   // same wheel-centre force: the overlap only changes what happens past a surface's end.
   const rc::ContactGeometryRow before = s.table.table(0.0, 0.006, 0.5e-3).back();
   ASSERT_EQ(before.left.kind, 0);
@@ -468,7 +468,7 @@ TEST(ContactDetection, RootContactNearTheSplitIsAConvergedPointFoundAlikeWarmAnd
     if (old_converged && old_one_load && (f - old_out.wheel_centre.force_in_world).norm() < 1e-6 * f.norm() + 1e-3)
       ++n_same_as_old;
   }
-  // Away from the split (most of the sweep) the old detection gave the same result.
+  // Away from the split (most of the sweep) the detection without overlap gives the same result.
   std::printf("root contact sweep: %d poses, %d identical to the detection without overlap\n", n, n_same_as_old);
   EXPECT_GT(n_same_as_old, n / 2);
 }

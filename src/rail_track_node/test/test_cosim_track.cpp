@@ -357,7 +357,7 @@ TEST(CosimTrack, DeflectionSectionsOffTheRailsAreRefusedAndRigidRailsReadZero) {
   rt::RailSectionDeflection out;
   ASSERT_EQ(rigid.addSection(15.0), 0);
   rigid.sectionDeflection(0, out);
-  EXPECT_EQ(out.s, 15.0);
+  EXPECT_EQ(out.arc_length, 15.0);
   for (int r = 0; r < 2; ++r) {
     EXPECT_EQ(out.displacement[r].norm(), 0.0);
     EXPECT_EQ(out.rotation[r].norm(), 0.0);

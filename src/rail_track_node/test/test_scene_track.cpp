@@ -239,7 +239,8 @@ TEST(PadForceProbe, PadsCarryTheLoadAndTheRailWeightAtRest) {
   const double expected = -(2.0 * 100000.0 + rail_weight);
   EXPECT_NEAR(sum_z, expected, 1e-6 * std::abs(expected));
   for (int r = 0; r < 2; ++r) {
-    EXPECT_NEAR(out[static_cast<std::size_t>(k_max[static_cast<std::size_t>(r)])].s, 9.0, 1e-9) << "rail " << r;
+    EXPECT_NEAR(out[static_cast<std::size_t>(k_max[static_cast<std::size_t>(r)])].arc_length, 9.0, 1e-9)
+        << "rail " << r;
     // Under the load the rail is pressed down: its displacement at that sleeper is negative.
     EXPECT_LT(out[static_cast<std::size_t>(k_max[static_cast<std::size_t>(r)])]
                   .rail_displacement_in_track[static_cast<std::size_t>(r)]
@@ -250,6 +251,6 @@ TEST(PadForceProbe, PadsCarryTheLoadAndTheRailWeightAtRest) {
   const int n_sub =
       probe.evaluate(m, t.geometry, sim.state().d, sim.state().v, nullptr, 8.95, 10.25, out.data(), m.n_sleepers);
   ASSERT_EQ(n_sub, 3);  // 9.0, 9.6, 10.2
-  EXPECT_NEAR(out[0].s, 9.0, 1e-9);
-  EXPECT_NEAR(out[2].s, 10.2, 1e-9);
+  EXPECT_NEAR(out[0].arc_length, 9.0, 1e-9);
+  EXPECT_NEAR(out[2].arc_length, 10.2, 1e-9);
 }

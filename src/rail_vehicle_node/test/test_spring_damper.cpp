@@ -153,9 +153,9 @@ TEST(BumpStop, TableInterpolationAndEnergy) {
   computeKinematics(model, y, data);
   // Integral of the piecewise-linear force from 0.025 to 0.035: trapezoids 0.005*300 + 0.005*(600+2165)/2.
   EXPECT_NEAR(stop->potentialEnergy(data), 0.005 * 300.0 + 0.005 * (600.0 + 2165.0) / 2.0, 1e-9);
-  data.g.setZero();
-  stop->addForces(data, data.g);
-  EXPECT_NEAR(data.g[1], +2165.0, 1e-9);  // pushes the block back toward the centre
+  data.generalized_forces.setZero();
+  stop->addForces(data, data.generalized_forces);
+  EXPECT_NEAR(data.generalized_forces[1], +2165.0, 1e-9);  // pushes the block back toward the centre
 }
 
 TEST(BumpStop, ImpactWithClearanceMatchesEnergyBalance) {

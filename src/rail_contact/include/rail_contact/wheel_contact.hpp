@@ -44,8 +44,7 @@ struct WheelContactOptions {
   /// Hertz's theory needs the patch small against the profile arcs around it; at the flange root those
   /// are the UIC60 gauge-corner arc (R 13 mm, EN 13674-1) and the S1002 throat, so a near-conformal patch
   /// spans at most about half that arc's width. 10 mm is also above every non-conformal patch of these
-  /// profiles up to 1 MN (tread b 3.2 mm at 73 kN, b ~ N^(1/3): 7.7 mm at 1 MN). Without it the
-  /// flange-to-flange hunting hard case had single-sample normal forces of 5-13 MN at b = 0.6-0.7 m.
+  /// profiles up to 1 MN (tread b 3.2 mm at 73 kN, b ~ N^(1/3): 7.7 mm at 1 MN). Why: doc/forces.md.
   double max_lateral_semi_axis = 0.010;
   /// Tread and flange contacts closer than this (wheel points, m) are one conformal patch across the
   /// tread/flange split: only the deeper one is kept (the other is flagged merged).

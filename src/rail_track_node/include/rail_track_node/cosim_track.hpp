@@ -189,7 +189,7 @@ class CosimTrack {
 
  private:
   struct Section {
-    double s;
+    double arc_length;  // s of the section [m]
     RailProbes rail;
   };
   struct Implicit;  // semi-implicit coupling: influence cache and this step's contact links

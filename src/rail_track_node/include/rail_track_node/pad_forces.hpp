@@ -18,7 +18,7 @@ namespace track {
 /// One sleeper: pad forces and rail displacements of both rails (index RailSide), track-frame components
 /// at the sleeper (x along the track, y left, z normal to the canted track plane, up).
 struct PadForceSample {
-  double s = 0.0;                                             ///< sleeper arc length, m
+  double arc_length = 0.0;                                    ///< s of the sleeper, m
   std::array<Eigen::Vector3d, 2> force_in_track;              ///< rail on sleeper through the pad, N (z < 0 presses)
   std::array<Eigen::Vector3d, 2> rail_displacement_in_track;  ///< rail centre-line node at the sleeper, m
 };

@@ -16,7 +16,7 @@ namespace rail::track {
 /// Displacement (m) and small rotation (rad) of both rails at one section, components in the track frame
 /// at that section (x along the track, y lateral left, z normal up). Index: RailSide (0 left, 1 right).
 struct RailSectionDeflection {
-  double s = 0.0;  ///< arc length of the section, m
+  double arc_length = 0.0;  ///< s of the section, m
   std::array<Eigen::Vector3d, 2> displacement;
   std::array<Eigen::Vector3d, 2> rotation;
 };

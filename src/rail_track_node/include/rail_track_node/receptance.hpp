@@ -22,7 +22,7 @@ namespace track {
 struct ReceptancePoint {
   enum class Direction { kVertical, kLateral };
   int rail = 0;
-  double s = 0.0;  ///< m
+  double arc_length = 0.0;  ///< s of the point, m
   Direction direction = Direction::kVertical;
 };
 

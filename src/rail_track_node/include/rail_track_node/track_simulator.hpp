@@ -86,7 +86,7 @@ class TrackSimulator {
 
  private:
   struct Section {
-    double s;
+    double arc_length;  // s of the section [m]
     RailProbes rail;
   };
   void reportProgress();

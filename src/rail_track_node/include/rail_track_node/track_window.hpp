@@ -172,8 +172,8 @@ class TrackWindow {
   static CondensedEnd condenseEnd(const TrackData& data, int bays, bool front);
   void addCondensedEnd(Window& w, bool front) const;
   struct Section {
-    double s = 0.0;
-    bool inside = false;  // on the current window's rails
+    double arc_length = 0.0;  // s of the section [m]
+    bool inside = false;      // on the current window's rails
     RailProbes rail;
     // Beyond a condensed window end (within boundary_length): end-plane DOFs and the maps from their
     // values to the section's track-frame displacement / rotation through the static shapes.

@@ -811,7 +811,7 @@ int CosimTrack::sectionCount() const { return window_ ? window_->sectionCount() 
 int CosimTrack::addSection(double s) {
   if (window_) return window_->addSection(s);
   Section sec;
-  sec.s = s;
+  sec.arc_length = s;
   if (!fe_) {
     if (!(s >= geometry_->sStart() && s <= geometry_->sEnd())) {
       std::ostringstream os;
@@ -847,7 +847,7 @@ void CosimTrack::sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionD
         "CosimTrack::sectionDeflection(i, d, out): not available with a track window (its "
         "DOFs change at every move); use sectionDeflection(i, out)");
   const Section& sec = sections_[static_cast<std::size_t>(i)];
-  out.s = sec.s;
+  out.arc_length = sec.arc_length;
   evalRailProbes(sec.rail, d, out);
 }
 

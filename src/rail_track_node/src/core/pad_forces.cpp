@@ -63,8 +63,8 @@ int PadForceProbe::evaluate(const TrackMesh& mesh, const rail::contact::TrackGeo
   rail::contact::TrackPoint tp;
   for (int k = k0; k <= k1 && n < capacity; ++k, ++n) {
     PadForceSample& o = out[n];
-    o.s = mesh.s_start + k * mesh.sleeper_spacing;
-    geometry.centre(o.s, tp);
+    o.arc_length = mesh.s_start + k * mesh.sleeper_spacing;
+    geometry.centre(o.arc_length, tp);
     for (int r = 0; r < 2; ++r) {
       const SpringDamperElement& e =
           mesh.springs[static_cast<std::size_t>(pad_[static_cast<std::size_t>(k)][static_cast<std::size_t>(r)])];

@@ -30,10 +30,10 @@ ReceptanceSolver::ReceptanceSolver(const TrackModel& model, double head_arm, con
   for (const ReceptancePoint& p : points) {
     loads.clear();
     const bool vertical = p.direction == ReceptancePoint::Direction::kVertical;
-    if (!addRailHeadLoad(model.mesh, model.data.layout.rail_inclination, head_arm, p.rail, p.s, vertical ? 1.0 : 0.0,
-                         vertical ? 0.0 : 1.0, loads)) {
+    if (!addRailHeadLoad(model.mesh, model.data.layout.rail_inclination, head_arm, p.rail, p.arc_length,
+                         vertical ? 1.0 : 0.0, vertical ? 0.0 : 1.0, loads)) {
       std::ostringstream os;
-      os << "receptance point at s = " << p.s << " m is not on the meshed rails";
+      os << "receptance point at s = " << p.arc_length << " m is not on the meshed rails";
       throw std::runtime_error(os.str());
     }
     Eigen::VectorXcd f = Eigen::VectorXcd::Zero(sys.size());

@@ -126,7 +126,7 @@ void TrackSimulator::reportProgress() {
 int TrackSimulator::addSection(double s, const TrackFrameFunction& frames) {
   const TrackMesh& mesh = model_.mesh;
   Section sec;
-  sec.s = s;
+  sec.arc_length = s;
   const Eigen::Matrix3d R_track_to_world = frames(s).R_track_to_world;
   requireOnMeshRails(mesh, s);
   makeRailProbes(mesh, R_track_to_world, s, sec.rail);
@@ -137,7 +137,7 @@ int TrackSimulator::addSection(double s, const TrackFrameFunction& frames) {
 void TrackSimulator::sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const {
   rail::core::CostClock::Scope timing(settings_.cost, rail::core::CostClock::kRailDeflection);
   const Section& sec = sections_[i];
-  out.s = sec.s;
+  out.arc_length = sec.arc_length;
   evalRailProbes(sec.rail, d, out);
 }
 

@@ -561,18 +561,18 @@ namespace {}  // namespace
 
 void TrackWindow::placeSection(Section& sec) const {
   rc::TrackPoint tp;
-  geometry_.centre(sec.s, tp);
+  geometry_.centre(sec.arc_length, tp);
   const TrackMesh& mesh = window_->model.mesh;
-  sec.inside = sec.s >= sBegin() - kSlack && sec.s <= sEnd() + kSlack &&
-               makeRailProbes(mesh, tp.R_track_to_world, sec.s, sec.rail);
+  sec.inside = sec.arc_length >= sBegin() - kSlack && sec.arc_length <= sEnd() + kSlack &&
+               makeRailProbes(mesh, tp.R_track_to_world, sec.arc_length, sec.rail);
   sec.beyond = false;
   if (sec.inside || !settings_.condensed_ends) return;
-  const bool front = sec.s > sEnd();
+  const bool front = sec.arc_length > sEnd();
   if (front ? window_->first_sleeper + window_bays_ >= line_bays_ : window_->first_sleeper <= 0) return;  // line end
   const CondensedEnd& e = condensed_[front ? 1 : 0];
   const double piece_length = e.piece.n_sleepers > 0 ? (e.piece.n_sleepers - 1) * e.piece.sleeper_spacing : 0.0;
-  const double x = front ? sec.s - sEnd() : sBegin() - sec.s;  // distance beyond the end plane, m
-  if (!(x <= piece_length)) return;                            // beyond the condensed piece: at rest
+  const double x = front ? sec.arc_length - sEnd() : sBegin() - sec.arc_length;  // distance beyond the end plane, m
+  if (!(x <= piece_length)) return;                                              // beyond the condensed piece: at rest
   RailProbes piece_probe;
   if (!makeRailProbes(e.piece, Eigen::Matrix3d::Identity(), front ? x : piece_length - x, piece_probe)) return;
   // End plane of the window, its track frame, and the rotation from it to the frame at the section.
@@ -619,8 +619,8 @@ int TrackWindow::addSection(double s, double static_half_length) {
     throw std::runtime_error(os.str());
   }
   Section sec;
-  sec.s = s;
-  sec.static_value.s = s;
+  sec.arc_length = s;
+  sec.static_value.arc_length = s;
   for (int r = 0; r < 2; ++r) {
     sec.static_value.displacement[static_cast<std::size_t>(r)].setZero();
     sec.static_value.rotation[static_cast<std::size_t>(r)].setZero();
@@ -647,7 +647,7 @@ int TrackWindow::addSection(double s, double static_half_length) {
 
 void TrackWindow::sectionDynamicDeflection(int i, RailSectionDeflection& out) const {
   const Section& sec = sections_[static_cast<std::size_t>(i)];
-  out.s = sec.s;
+  out.arc_length = sec.arc_length;
   if (sec.inside) {
     evalRailProbes(sec.rail, state_.d, out);
   } else if (sec.beyond) {

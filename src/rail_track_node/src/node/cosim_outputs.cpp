@@ -109,7 +109,7 @@ void CosimTrackOutputs::publish(const ros::Time& stamp, const core::coupling::Wh
     pads_msg_.right_rail_displacement.resize(size);
     for (std::size_t k = 0; k < size; ++k) {
       const PadForceSample& p = pad_samples_[k];
-      pads_msg_.arc_length[k] = p.s;
+      pads_msg_.arc_length[k] = p.arc_length;
       fill(pads_msg_.left_pad_force[k], p.force_in_track[kLeftRail]);
       fill(pads_msg_.right_pad_force[k], p.force_in_track[kRightRail]);
       fill(pads_msg_.left_rail_displacement[k], p.rail_displacement_in_track[kLeftRail]);

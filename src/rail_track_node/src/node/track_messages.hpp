@@ -18,7 +18,7 @@ inline void fill(geometry_msgs::Vector3& out, const Eigen::Vector3d& v) {
 // Both rails' displacement and rotation at one section (track frame), stamped.
 inline void fill(rail_msgs::RailDeflection& out, const RailSectionDeflection& deflection, const ros::Time& stamp) {
   out.header.stamp = stamp;
-  out.arc_length = deflection.s;
+  out.arc_length = deflection.arc_length;
   fill(out.left_displacement, deflection.displacement[kLeftRail]);
   fill(out.left_rotation, deflection.rotation[kLeftRail]);
   fill(out.right_displacement, deflection.displacement[kRightRail]);

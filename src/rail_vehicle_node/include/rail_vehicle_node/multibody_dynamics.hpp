@@ -23,7 +23,7 @@ void computeAppliedForces(const VehicleModel& model, VehicleData& data);
 void computeConstraints(const VehicleModel& model, VehicleData& data);
 
 // Solves [M Phi_v^T; Phi_v 0][x; mu] = [top; bottom] with the model's KktSolver, using data.phi_v.
-// top/bottom must not alias the solver's scratch (data.kkt_*, data.w, data.s*, data.tmp6n).
+// top/bottom must not alias the solver's scratch (data.kkt_*, data.mass_times_x, data.clusters).
 void solveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::Ref<const Eigen::VectorXd>& top,
                     const Eigen::Ref<const Eigen::VectorXd>& bottom, Eigen::Ref<Eigen::VectorXd> x,
                     Eigen::Ref<Eigen::VectorXd> mu);

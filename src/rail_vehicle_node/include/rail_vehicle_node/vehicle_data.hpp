@@ -30,18 +30,19 @@ struct ExternalWrench {
   Vector3 moment_in_world = Vector3::Zero();  // [N m], about the load point
 };
 
-// Range-space scratch of one constraint cluster (VehicleModel::constraint_clusters): its rows of Phi_v
-// restricted to its bodies' columns, W = Phi_K M_K^-1, S_K = W Phi_K^T and its factorisation.
+// Range-space scratch of one constraint cluster K (VehicleModel::constraint_clusters): its rows of Phi_v
+// restricted to its bodies' columns (Phi_K), Phi_K M_K^-1, the Schur complement S_K = Phi_K M_K^-1 Phi_K^T
+// and its factorisation.
 struct ClusterWork {
   explicit ClusterWork(int rows, int n_bodies)
       : phi_v(Eigen::MatrixXd::Zero(rows, 6 * n_bodies)),
-        w(Eigen::MatrixXd::Zero(rows, 6 * n_bodies)),
-        s(Eigen::MatrixXd::Zero(rows, rows)),
+        phi_v_m_inv(Eigen::MatrixXd::Zero(rows, 6 * n_bodies)),
+        schur(Eigen::MatrixXd::Zero(rows, rows)),
         rhs(Eigen::VectorXd::Zero(rows)),
         mu(Eigen::VectorXd::Zero(rows)),
         top(Eigen::VectorXd::Zero(6 * n_bodies)),
         ldlt(rows) {}
-  Eigen::MatrixXd phi_v, w, s;
+  Eigen::MatrixXd phi_v, phi_v_m_inv, schur;
   Eigen::VectorXd rhs, mu, top;
   Eigen::LDLT<Eigen::MatrixXd> ldlt;
 };
@@ -58,27 +59,23 @@ class VehicleData {
   std::vector<BodyKinematics> bodies;    // per body
   std::vector<ExternalWrench> external;  // per load point, set by the caller, held between calls
 
-  Eigen::VectorXd g;        // generalised forces g (6n): per body [f in world; n' in body frame]
-  Eigen::VectorXd phi;      // constraint values Phi (m)
-  Eigen::MatrixXd phi_v;    // Jacobian of Phi w.r.t. the velocities [r_dot; omega'] (m x 6n)
-  Eigen::VectorXd gamma;    // acceleration right-hand side gamma (m)
-  Eigen::VectorXd phi_dot;  // Phi_v * v (m)
-  Eigen::VectorXd rhs_c;    // gamma - 2 alpha Phi_dot - beta^2 Phi (m)
-  Eigen::VectorXd v_dot;    // accelerations [r_ddot; omega'_dot] (6n)
-  Eigen::VectorXd lambda;   // Lagrange multipliers (m)
+  Eigen::VectorXd generalized_forces;  // g (6n): per body [f in world; n' in body frame]
+  Eigen::VectorXd phi;                 // constraint values Phi (m)
+  Eigen::MatrixXd phi_v;               // Jacobian of Phi w.r.t. the velocities [r_dot; omega'] (m x 6n)
+  Eigen::VectorXd gamma;               // acceleration right-hand side gamma (m)
+  Eigen::VectorXd phi_dot;             // Phi_v * v (m)
+  Eigen::VectorXd rhs_c;               // gamma - 2 alpha Phi_dot - beta^2 Phi (m)
+  Eigen::VectorXd v_dot;               // accelerations [r_ddot; omega'_dot] (6n)
+  Eigen::VectorXd lambda;              // Lagrange multipliers (m)
 
   // Augmented (KKT) solve: [M Phi_v^T; Phi_v 0].
   Eigen::MatrixXd kkt;
   Eigen::VectorXd kkt_rhs, kkt_sol;
   Eigen::PartialPivLU<Eigen::MatrixXd> kkt_lu;
 
-  // Range-space solve: S = Phi_v M^-1 Phi_v^T.
-  Eigen::MatrixXd w;      // Phi_v M^-1 (m x 6n)
-  Eigen::MatrixXd s;      // (m x m)
-  Eigen::VectorXd s_rhs;  // (m)
-  Eigen::VectorXd tmp6n;  // (6n)
-  Eigen::LDLT<Eigen::MatrixXd> s_ldlt;
-  std::vector<ClusterWork> clusters;  // per constraint cluster (the range-space solve works on these)
+  // Range-space solve, one constraint cluster at a time.
+  Eigen::VectorXd mass_times_x;       // M x = top - Phi_v^T mu of the solve (6n)
+  std::vector<ClusterWork> clusters;  // per constraint cluster
 
   // Scratch for the projection.
   Eigen::VectorXd dx;      // (6n)

@@ -28,16 +28,16 @@ void computeBodyForces(const VehicleModel& model, VehicleData& data) {
   for (int b = 0; b < n; ++b) {
     const RigidBody& body = bodies[static_cast<std::size_t>(b)];
     const BodyKinematics& k = data.bodies[static_cast<std::size_t>(b)];
-    data.g.segment<3>(6 * b) = body.mass * model.gravity();
-    data.g.segment<3>(6 * b + 3) = -k.omega_body.cross(body.inertia_in_body * k.omega_body);
+    data.generalized_forces.segment<3>(6 * b) = body.mass * model.gravity();
+    data.generalized_forces.segment<3>(6 * b + 3) = -k.omega_body.cross(body.inertia_in_body * k.omega_body);
   }
   const auto& points = model.loadPoints();
   for (std::size_t p = 0; p < points.size(); ++p) {
     const LoadPoint& lp = points[p];
     const BodyKinematics& k = data.bodies[static_cast<std::size_t>(lp.body)];
     const Vector3 p_in_world = k.r + k.A * lp.s_in_body;
-    ForceElement::applyForceAt(data, lp.body, data.external[p].force_in_world, p_in_world, data.g);
-    ForceElement::applyMoment(data, lp.body, data.external[p].moment_in_world, data.g);
+    ForceElement::applyForceAt(data, lp.body, data.external[p].force_in_world, p_in_world, data.generalized_forces);
+    ForceElement::applyMoment(data, lp.body, data.external[p].moment_in_world, data.generalized_forces);
   }
 }
 
@@ -45,7 +45,7 @@ void computeBodyForces(const VehicleModel& model, VehicleData& data) {
 
 void computeAppliedForces(const VehicleModel& model, VehicleData& data) {
   computeBodyForces(model, data);
-  for (const auto& element : model.forceElements()) element->addForces(data, data.g);
+  for (const auto& element : model.forceElements()) element->addForces(data, data.generalized_forces);
 }
 
 void computeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g) {
@@ -120,7 +120,7 @@ void solveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
   // (Phi_K M_K^-1 Phi_K^T) mu_K = Phi_K M_K^-1 top_K - bottom_K; x = M^-1 (top - Phi_v^T mu).
   const auto& bodies = model.bodies();
   const auto& clusters = model.constraintClusters();
-  data.tmp6n = top;
+  data.mass_times_x = top;
   for (std::size_t c = 0; c < clusters.size(); ++c) {
     const ConstraintCluster& cluster = clusters[c];
     ClusterWork& cw = data.clusters[c];
@@ -131,23 +131,23 @@ void solveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
       for (int i = 0; i < n_rows; ++i) {
         cw.phi_v.block<1, 6>(i, col) = data.phi_v.block<1, 6>(cluster.rows[static_cast<std::size_t>(i)], 6 * b);
       }
-      cw.w.middleCols<3>(col) = cw.phi_v.middleCols<3>(col) / bodies[static_cast<std::size_t>(b)].mass;
-      cw.w.middleCols<3>(col + 3).noalias() = cw.phi_v.middleCols<3>(col + 3) * model.inverseInertia(b);
+      cw.phi_v_m_inv.middleCols<3>(col) = cw.phi_v.middleCols<3>(col) / bodies[static_cast<std::size_t>(b)].mass;
+      cw.phi_v_m_inv.middleCols<3>(col + 3).noalias() = cw.phi_v.middleCols<3>(col + 3) * model.inverseInertia(b);
       cw.top.segment<6>(col) = top.segment<6>(6 * b);
     }
     // Blocks of ~10 x 18: coefficient-wise (lazy) products, not the general matrix-product kernel.
-    cw.s.noalias() = cw.w.lazyProduct(cw.phi_v.transpose());
-    cw.ldlt.compute(cw.s);
-    cw.rhs.noalias() = cw.w.lazyProduct(cw.top);
+    cw.schur.noalias() = cw.phi_v_m_inv.lazyProduct(cw.phi_v.transpose());
+    cw.ldlt.compute(cw.schur);
+    cw.rhs.noalias() = cw.phi_v_m_inv.lazyProduct(cw.top);
     for (int i = 0; i < n_rows; ++i) cw.rhs[i] -= bottom[cluster.rows[static_cast<std::size_t>(i)]];
     cw.mu = cw.ldlt.solve(cw.rhs);
     for (int i = 0; i < n_rows; ++i) mu[cluster.rows[static_cast<std::size_t>(i)]] = cw.mu[i];
     cw.top.noalias() -= cw.phi_v.transpose().lazyProduct(cw.mu);
     for (std::size_t k = 0; k < cluster.bodies.size(); ++k) {
-      data.tmp6n.segment<6>(6 * cluster.bodies[k]) = cw.top.segment<6>(6 * static_cast<int>(k));
+      data.mass_times_x.segment<6>(6 * cluster.bodies[k]) = cw.top.segment<6>(6 * static_cast<int>(k));
     }
   }
-  applyInverseMass(model, data.tmp6n, x);
+  applyInverseMass(model, data.mass_times_x, x);
 }
 
 namespace {
@@ -168,7 +168,7 @@ void positionDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen
   }
 }
 
-// v_dot and lambda from the Baumgarte-stabilised augmented system, after data.g.
+// v_dot and lambda from the Baumgarte-stabilised augmented system, after data.generalized_forces.
 void velocityDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen::VectorXd>& y,
                          Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data) {
   const int m = model.nConstraints();
@@ -179,7 +179,7 @@ void velocityDerivatives(const VehicleModel& model, const Eigen::Ref<const Eigen
     const double beta = model.baumgarteBeta();
     data.rhs_c = data.gamma - 2.0 * alpha * data.phi_dot - (beta * beta) * data.phi;
   }
-  solveAugmented(model, data, data.g, data.rhs_c, data.v_dot, data.lambda);
+  solveAugmented(model, data, data.generalized_forces, data.rhs_c, data.v_dot, data.lambda);
   y_dot.tail(model.nVelocities()) = data.v_dot;
 }
 
@@ -204,9 +204,9 @@ void computeDerivativesPartial(const VehicleModel& model, double t, const Eigen:
   const auto& elements = model.forceElements();
   for (std::size_t e = 0; e < elements.size(); ++e) {
     if (live[e] != 0) {
-      elements[e]->addForces(data, data.g);
+      elements[e]->addForces(data, data.generalized_forces);
     } else {
-      data.g += element_g.col(static_cast<Eigen::Index>(e));
+      data.generalized_forces += element_g.col(static_cast<Eigen::Index>(e));
     }
   }
   velocityDerivatives(model, y, y_dot, data);

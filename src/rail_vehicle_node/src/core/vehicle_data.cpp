@@ -8,7 +8,7 @@ namespace rail::vehicle {
 
 VehicleData::VehicleData(const VehicleModel& model)
     // Factorisations sized in place (a copy of a fresh LDLT would read its uninitialised status field).
-    : kkt_lu(model.nVelocities() + model.nConstraints()), s_ldlt(model.nConstraints()) {
+    : kkt_lu(model.nVelocities() + model.nConstraints()) {
   if (!model.finalized()) throw std::runtime_error("vehicle data: the model must be finalised first");
   n_bodies = model.nBodies();
   n_velocities = model.nVelocities();
@@ -17,7 +17,7 @@ VehicleData::VehicleData(const VehicleModel& model)
   const int m = n_constraints;
   bodies.assign(static_cast<std::size_t>(n_bodies), BodyKinematics{});
   external.assign(model.loadPoints().size(), ExternalWrench{});
-  g = Eigen::VectorXd::Zero(nv);
+  generalized_forces = Eigen::VectorXd::Zero(nv);
   phi = Eigen::VectorXd::Zero(m);
   phi_v = Eigen::MatrixXd::Zero(m, nv);
   gamma = Eigen::VectorXd::Zero(m);
@@ -36,10 +36,7 @@ VehicleData::VehicleData(const VehicleModel& model)
   kkt_rhs = Eigen::VectorXd::Zero(nv + m);
   kkt_sol = Eigen::VectorXd::Zero(nv + m);
 
-  w = Eigen::MatrixXd::Zero(m, nv);
-  s = Eigen::MatrixXd::Zero(m, m);
-  s_rhs = Eigen::VectorXd::Zero(m);
-  tmp6n = Eigen::VectorXd::Zero(nv);
+  mass_times_x = Eigen::VectorXd::Zero(nv);
   clusters.reserve(model.constraintClusters().size());
   for (const ConstraintCluster& c : model.constraintClusters()) {
     clusters.emplace_back(static_cast<int>(c.rows.size()), static_cast<int>(c.bodies.size()));

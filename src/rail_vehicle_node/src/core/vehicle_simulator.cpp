@@ -330,7 +330,7 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   computeAppliedForces(model_, *data_);
   contact_data_->enabled = true;
   double fz = 0.0;
-  for (int b = 0; b < model_.nBodies(); ++b) fz += data_->g[6 * b + 2];
+  for (int b = 0; b < model_.nBodies(); ++b) fz += data_->generalized_forces[6 * b + 2];
   static_load_ = -fz;
   const double x_lead = model_.bodies()[static_cast<std::size_t>(wheelset_bodies_.front())].r_reference.x();
   for (int k = 0; k < contact_model_->nWheels(); ++k) {
