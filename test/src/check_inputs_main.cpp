@@ -209,13 +209,13 @@ std::string check(const std::string& path, const rail::core::SceneOverrides& ove
   if (fe_track) {
     rt::SceneTrack track = rt::buildSceneTrack(scene);
     rt::SimulatorSettings settings;
-    settings.dt = scene.solver.track_step;
+    settings.track_step = scene.solver.track_step;
     if (!scene.has_vehicle) {
       const double t_end = rt::movingLoadEndTime(scene);
       requireFinite(t_end, "moving-load end time", scene.file);
       settings.loads = scene.moving_loads;
     }
-    settings.t_end = steps * settings.dt;
+    settings.t_end = steps * settings.track_step;
     settings.rail_height = track.rail_height;
     rt::TrackSimulator sim(track.model, settings);
     const std::string file = trackDataFile(scene);
@@ -233,7 +233,7 @@ std::string check(const std::string& path, const rail::core::SceneOverrides& ove
     requireFinite(sim.state().d, "track static displacement", file);
     rt::RailSectionDeflection deflection;
     for (int k = 1; k <= steps; ++k) {
-      sim.advanceTo(k * settings.dt);
+      sim.advanceTo(k * settings.track_step);
       requireFinite(sim.state().d, "track displacement", file);
       requireFinite(sim.state().v, "track velocity", file);
       requireFinite(sim.state().a, "track acceleration", file);
@@ -247,7 +247,7 @@ std::string check(const std::string& path, const rail::core::SceneOverrides& ove
     }
     fe_dofs = track.model.system.size();
     fe_steps = sim.steps();
-    summary << "; FE track " << fe_dofs << " DOFs, " << fe_steps << " Newmark steps of " << settings.dt << " s";
+    summary << "; FE track " << fe_dofs << " DOFs, " << fe_steps << " Newmark steps of " << settings.track_step << " s";
   }
 
   // Co-simulation: the track side fed with the vehicle's wheel states.

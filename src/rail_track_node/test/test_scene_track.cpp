@@ -105,7 +105,7 @@ TEST(SceneTrack, DeflectionProbeInterpolatesNodalValues) {
   const Scene sc = scene(kStraight24, kOneLoad, "  track_damping: true");
   const rt::SceneTrack t = rt::buildSceneTrack(sc);
   rt::SimulatorSettings set;
-  set.dt = 1e-3;
+  set.track_step = 1e-3;
   set.t_end = 0.0;
   set.loads = sc.moving_loads;
   rt::TrackSimulator sim(t.model, set);
@@ -133,7 +133,7 @@ TEST(TrackSimulator, SlowlyMovingLoadMatchesStaticDeflection) {
       scene(kStraight24, kOneLoad, "  track_damping: true", "  track_step: 1.0e-3\n  end: {arc_length: 14.0}");
   const rt::SceneTrack t = rt::buildSceneTrack(sc);
   rt::SimulatorSettings set;
-  set.dt = sc.solver.track_step;
+  set.track_step = sc.solver.track_step;
   set.t_end = rt::movingLoadEndTime(sc);
   set.loads = sc.moving_loads;
   set.rail_height = t.rail_height;
@@ -177,7 +177,7 @@ TEST(TrackSimulator, LoadsAreStaticallyEquivalent) {
                          "  track_damping: true");
   const rt::SceneTrack t = rt::buildSceneTrack(sc);
   rt::SimulatorSettings set;
-  set.dt = 1e-3;
+  set.track_step = 1e-3;
   set.t_end = 0.5;
   set.loads = sc.moving_loads;
   rt::TrackSimulator sim(t.model, set);
@@ -205,7 +205,7 @@ TEST(PadForceProbe, PadsCarryTheLoadAndTheRailWeightAtRest) {
   const Scene sc = scene(kStraight24, kOneLoad, "  track_damping: true");
   const rt::SceneTrack t = rt::buildSceneTrack(sc);
   rt::SimulatorSettings set;
-  set.dt = 1e-3;
+  set.track_step = 1e-3;
   set.t_end = 0.0;
   set.loads = sc.moving_loads;
   set.rail_height = t.rail_height;

@@ -97,7 +97,7 @@ Sample sample(const rt::RailSectionDeflection& d) {
 History runFull(const Scene& scene, const std::vector<double>& s_sections, double t_end, int every) {
   const rt::SceneTrack track = rt::buildSceneTrack(scene);
   rt::SimulatorSettings set;
-  set.dt = scene.solver.track_step;
+  set.track_step = scene.solver.track_step;
   set.t_end = t_end;
   set.loads = scene.moving_loads;
   set.rail_height = track.rail_height;
@@ -107,9 +107,9 @@ History runFull(const Scene& scene, const std::vector<double>& s_sections, doubl
   History h;
   h.sections.resize(s_sections.size());
   rt::RailSectionDeflection d;
-  const long n_steps = std::lround(t_end / set.dt);
+  const long n_steps = std::lround(t_end / set.track_step);
   for (long k = 0; k <= n_steps; ++k) {
-    if (k > 0) sim.advanceTo(k * set.dt);
+    if (k > 0) sim.advanceTo(k * set.track_step);
     if (k % every != 0) continue;
     for (std::size_t i = 0; i < s_sections.size(); ++i) {
       sim.sectionDeflection(static_cast<int>(i), d);
@@ -133,7 +133,7 @@ History runWindow(const Scene& scene, rt::TrackWindowSettings set, const std::ve
   History h;
   h.sections.resize(s_sections.size());
   rt::RailSectionDeflection d;
-  const double dt = win.dt();
+  const double dt = win.trackStep();
   const long n_steps = std::lround(t_end / dt);
   for (long k = 0; k <= n_steps; ++k) {
     if (k > 0) {

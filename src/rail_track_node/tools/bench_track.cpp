@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
     const rt::SceneTrack track = rt::buildSceneTrack(scene);
     const auto t1 = Clock::now();
     rt::SimulatorSettings set;
-    set.dt = dt;
+    set.track_step = dt;
     set.t_end = 1.0;
     set.loads = scene.moving_loads;
     set.rail_height = track.rail_height;

@@ -85,7 +85,7 @@ void benchWindow(const rail::core::Scene& scene, const rt::TrackWindowSettings& 
   Clock::time_point t0 = Clock::now();
   rt::TrackWindow win(scene, set, s_front0 - set.vehicle_length, s_front0);
   const double t_build = seconds(t0);
-  const double h = win.dt();
+  const double h = win.trackStep();
   rt::NodalLoads loads(24 * 4 + 1);
   std::vector<double> times;
   for (int k = 1; k <= steps; ++k) {

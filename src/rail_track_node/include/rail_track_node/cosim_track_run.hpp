@@ -53,7 +53,7 @@ class CosimTrackRun {
 
   double time() const;          // t_k of the step exchanged last [s] (0 before the first)
   std::uint64_t steps() const;  // steps exchanged so far
-  double trackStep() const { return h_; }
+  double trackStep() const { return track_step_; }
   const core::coupling::WheelStateFrame& states() const { return coupling_.states(); }
   int exitCode() const { return exit_code_; }
   const std::string& message() const { return message_; }
@@ -66,7 +66,7 @@ class CosimTrackRun {
   CosimTrackRunOptions options_;
   std::unique_ptr<core::coupling::TimedTransport> timed_;  // with options.cost
   core::coupling::TrackCoupling coupling_;
-  double h_;
+  double track_step_;
   double output_period_;
   std::uint64_t outputs_ = 0;
   int exit_code_ = 0;

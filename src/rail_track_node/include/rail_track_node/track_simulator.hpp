@@ -39,7 +39,7 @@ using ProgressCallback = std::function<void(const SimulationProgress&)>;
 
 /// Prescribed loads and integration settings of a run.
 struct SimulatorSettings {
-  double dt = 2e-5;             ///< Newmark step, s
+  double track_step = 2e-5;     ///< Newmark step h, s
   double t_end = 0.0;           ///< end of the run, s
   bool include_gravity = true;  ///< f_g in every step (and in the initial static equilibrium)
   double rail_height = 0.172;   ///< rail foot to head top, m (moment arm of the loads: height - centroid)
@@ -65,7 +65,7 @@ class TrackSimulator {
   /// Advances to t_end.
   void run() { advanceTo(settings_.t_end); }
 
-  double time() const { return static_cast<double>(steps_) * settings_.dt; }
+  double time() const { return static_cast<double>(steps_) * settings_.track_step; }
   double endTime() const { return settings_.t_end; }
   bool finished() const { return steps_ >= end_steps_; }
   long steps() const { return steps_; }

@@ -50,7 +50,7 @@ struct TrackWindowSettings {
   /// Window length, m, rounded up to whole sleeper bays; 0 = the minimum,
   /// vehicle_length + behind + ahead + shift. A shorter window is refused.
   double length = 0.0;
-  double dt = 0.0;  ///< Newmark step, s; 0 = the scene's solver.track_step
+  double track_step = 0.0;  ///< Newmark step h, s; 0 = the scene's solver.track_step
   /// Entering nodes start at the static continuation of the carried-over w, w', w'' (K_ee x_e = -K_ec x_c);
   /// false: at rest (x_e = 0).
   bool entering_static = true;
@@ -136,7 +136,7 @@ class TrackWindow {
   /// off because the window places its end dashpots itself).
   const rail::contact::TrackGeometry& geometry() const { return geometry_; }
   const TrackData& data() const { return data_; }
-  double dt() const { return dt_; }
+  double trackStep() const { return track_step_; }
   const TrackWindowSettings& settings() const { return settings_; }
   const TrackWindowStats& stats() const { return stats_; }
 
@@ -198,7 +198,7 @@ class TrackWindow {
   Vector6d c_end_;                         // window-end dashpots (rail local frame)
   std::array<CondensedEnd, 2> condensed_;  // [0] rear end (line behind), [1] front end (line ahead)
   double seat_below_centre_ = 0.0;
-  double dt_ = 0.0;
+  double track_step_ = 0.0;
   double s_line_ = 0.0;  // arc length of the line's first sleeper, m
   int line_bays_ = 0;    // sleeper bays of the whole line
   int window_bays_ = 0;

@@ -121,7 +121,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     ws.ahead = scene.solver.track_window.ahead;
     ws.shift = scene.solver.track_window.shift;
     ws.length = scene.solver.track_window.length;
-    ws.dt = scene.solver.track_step;
+    ws.track_step = scene.solver.track_step;
     ws.include_gravity = options.include_gravity;
     ws.track = options.track;
     ws.cost = options.cost;
@@ -317,7 +317,7 @@ void CosimTrack::fillDeformation() noexcept {
 void CosimTrack::predictRail(int g, double& d_p, double& v_p) const noexcept {
   const NewmarkState& state = st();
   v_p = state.v(g);
-  d_p = state.d(g) + (window_ ? window_->dt() : integrator_->dt()) * v_p;
+  d_p = state.d(g) + (window_ ? window_->trackStep() : integrator_->dt()) * v_p;
 }
 
 void CosimTrack::fillPredictedDeformation() noexcept {

@@ -42,11 +42,11 @@ CosimTrackRun::CosimTrackRun(const core::Scene& scene, CosimTrack& track, cc::Fr
       track_(track),
       options_(std::move(options)),
       coupling_(cc::couplingConfig(scene), timedOrPlain(timed_, transport, options_.cost)),
-      h_(scene.solver.track_step),
+      track_step_(scene.solver.track_step),
       output_period_(1.0 / scene.output.rate) {}
 
 double CosimTrackRun::time() const {
-  return coupling_.nextStep() == 0 ? 0.0 : static_cast<double>(coupling_.nextStep() - 1) * h_;
+  return coupling_.nextStep() == 0 ? 0.0 : static_cast<double>(coupling_.nextStep() - 1) * track_step_;
 }
 
 std::uint64_t CosimTrackRun::steps() const { return coupling_.nextStep(); }
@@ -68,8 +68,8 @@ TrackRunStatus CosimTrackRun::step() {
   if (r.status == cc::Status::kPeerClosed) {
     const bool no_frame = coupling_.nextStep() == 0;
     const double t_last = no_frame ? -1.0 : time();
-    const bool before_end =
-        no_frame || (scene_.solver.end.kind == core::EndKind::kTime && t_last < scene_.solver.end.value - 0.5 * h_);
+    const bool before_end = no_frame || (scene_.solver.end.kind == core::EndKind::kTime &&
+                                         t_last < scene_.solver.end.value - 0.5 * track_step_);
     if (!options_.replay && before_end) {
       std::snprintf(text, sizeof(text), " went away after step %lld (t = %.6f s), before solver.end: ",
                     static_cast<long long>(coupling_.nextStep()) - 1, t_last);
@@ -102,8 +102,8 @@ TrackRunStatus CosimTrackRun::step() {
 }
 
 bool CosimTrackRun::outputDue() {
-  const double t = static_cast<double>(coupling_.states().step) * h_;
-  if (t + 1e-9 * h_ < static_cast<double>(outputs_) * output_period_) return false;
+  const double t = static_cast<double>(coupling_.states().step) * track_step_;
+  if (t + 1e-9 * track_step_ < static_cast<double>(outputs_) * output_period_) return false;
   ++outputs_;
   return true;
 }

@@ -33,7 +33,8 @@ int loadCapacity(const rail::core::MovingLoads& loads) {
 TrackSimulator::TrackSimulator(const TrackModel& model, const SimulatorSettings& settings)
     : model_(model),
       settings_(settings),
-      integrator_(model.system, settings.dt, settings.include_gravity, settings.cost, countEndDashpots(model.mesh)),
+      integrator_(model.system, settings.track_step, settings.include_gravity, settings.cost,
+                  countEndDashpots(model.mesh)),
       loads_(loadCapacity(settings.loads)) {
   if (!(settings.t_end >= 0.0) || !std::isfinite(settings.t_end)) {
     std::ostringstream os;
@@ -41,7 +42,7 @@ TrackSimulator::TrackSimulator(const TrackModel& model, const SimulatorSettings&
     throw std::runtime_error(os.str());
   }
   head_arm_ = settings.rail_height - model.data.layout.rail_centroid_height;
-  end_steps_ = std::lround(settings.t_end / settings.dt);
+  end_steps_ = std::lround(settings.t_end / settings.track_step);
 
   // Static equilibrium under gravity and the loads at t = 0.
   loadsAt(0.0, loads_);
@@ -90,10 +91,10 @@ void TrackSimulator::loadsAt(double t, NodalLoads& loads) const {
 }
 
 void TrackSimulator::advanceTo(double t) {
-  long target = std::lround(t / settings_.dt);
+  long target = std::lround(t / settings_.track_step);
   if (target > end_steps_) target = end_steps_;
   while (steps_ < target) {
-    const double t_next = static_cast<double>(steps_ + 1) * settings_.dt;
+    const double t_next = static_cast<double>(steps_ + 1) * settings_.track_step;
     loadsAt(t_next, loads_);
     integrator_.step(state_, loads_);
     ++steps_;

@@ -111,8 +111,9 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
     refuse("vehicle_length", "must be finite and >= 0 m", S.vehicle_length);
   if (!(S.length >= 0.0) || !std::isfinite(S.length))
     refuse("length", "must be finite and >= 0 m (0: minimum)", S.length);
-  dt_ = S.dt > 0.0 ? S.dt : scene.solver.track_step;
-  if (!(dt_ > 0.0) || !std::isfinite(dt_)) refuse("dt", "must be finite and > 0 s", dt_);
+  track_step_ = S.track_step > 0.0 ? S.track_step : scene.solver.track_step;
+  if (!(track_step_ > 0.0) || !std::isfinite(track_step_))
+    refuse("track_step", "must be finite and > 0 s", track_step_);
   if (!(s_front >= s_rear) || !std::isfinite(s_rear) || !std::isfinite(s_front)) {
     std::ostringstream os;
     os << scene.file << ": track window: the first wheel (s = " << s_front
@@ -224,7 +225,7 @@ std::unique_ptr<TrackWindow::Window> TrackWindow::buildWindow(int first_sleeper)
     if (front_cut) addCondensedEnd(*w, true);
   }
   w->integrator =
-      std::make_unique<NewmarkIntegrator>(w->model.system, dt_, false, settings_.cost, countEndDashpots(mesh));
+      std::make_unique<NewmarkIntegrator>(w->model.system, track_step_, false, settings_.cost, countEndDashpots(mesh));
   w->d_static = settings_.include_gravity ? staticGravityDeflection(w->model.system)
                                           : Eigen::VectorXd::Zero(w->model.system.size());
   return w;

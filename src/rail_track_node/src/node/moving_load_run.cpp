@@ -37,13 +37,14 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
     ROS_FATAL("%s: %s", me.c_str(), e.what());
     return kExitBadInput;
   }
-  settings.dt = scene.solver.track_step;
+  settings.track_step = scene.solver.track_step;
   settings.loads = scene.moving_loads;
   settings.rail_height = track->rail_height;
   const TrackModel& model = track->model;
-  ROS_INFO("%s: flexible track built: %d free DOFs, %d sleepers; running to t = %.4g s with dt = %.3g s (%ld steps)",
-           me.c_str(), model.system.size(), model.mesh.n_sleepers, settings.t_end, settings.dt,
-           std::lround(settings.t_end / settings.dt));
+  ROS_INFO(
+      "%s: flexible track built: %d free DOFs, %d sleepers; running to t = %.4g s with track step %.3g s (%ld steps)",
+      me.c_str(), model.system.size(), model.mesh.n_sleepers, settings.t_end, settings.track_step,
+      std::lround(settings.t_end / settings.track_step));
   // Factorising K_eff and the static solve fail on non-physical track data (e.g. a matrix that is not
   // positive definite): a refused input, named with the scene and its track data file.
   std::unique_ptr<TrackSimulator> sim_ptr;

@@ -56,7 +56,7 @@ class CosimVehicle {
   core::coupling::Status exchangeStatus() const { return exchange_status_; }
   double time() const { return sim_->time(); }
   std::uint64_t stepsExchanged() const { return coupling_->nextStep(); }  // exchanges done so far
-  double trackStep() const { return h_; }                                 // h [s]
+  double trackStep() const { return track_step_; }                        // h [s]
   // Largest internal CVODE step seen after any AdvanceTo (last step of each call) [s].
   double maxInternalStep() const { return max_internal_step_; }
 
@@ -77,7 +77,7 @@ class CosimVehicle {
   class CouplingSource;
   RunStatus exchange();
 
-  double h_ = 0.0;
+  double track_step_ = 0.0;
   std::unique_ptr<core::coupling::VehicleCoupling> coupling_;
   std::unique_ptr<CouplingSource> source_;
   std::unique_ptr<VehicleSimulator> sim_;

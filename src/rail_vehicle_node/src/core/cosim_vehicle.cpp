@@ -49,7 +49,7 @@ const core::Scene& checkCosimScene(const core::Scene& scene) {
 }  // namespace
 
 CosimVehicle::CosimVehicle(const core::Scene& scene, cc::FrameTransport& transport, const SimulatorSettings& settings)
-    : h_(checkCosimScene(scene).solver.track_step) {
+    : track_step_(checkCosimScene(scene).solver.track_step) {
   coupling_ = std::make_unique<cc::VehicleCoupling>(cc::couplingConfig(scene), transport);
   source_ = std::make_unique<CouplingSource>(*coupling_);
   SimulatorSettings s = settings;
