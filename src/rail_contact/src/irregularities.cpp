@@ -1,5 +1,6 @@
 // Track irregularities: CSV tables and seeded realisations of published PSDs.
 #include "rail_contact/irregularities.hpp"
+#include "rail_contact/format.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -10,7 +11,6 @@
 #include <istream>
 #include <limits>
 #include <random>
-#include <sstream>
 #include <stdexcept>
 
 namespace rail {
@@ -19,13 +19,6 @@ namespace contact {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(12);
-  os << v;
-  return os.str();
-}
 
 // ---------------------------------------------------------------------------------------------------
 // Published spectra.
@@ -197,17 +190,18 @@ Irregularities Irregularities::fromCsvStream(std::istream& in, const std::string
     for (int c = 0; c < 5; ++c) {
       if (!std::isfinite(v[c])) {
         const char* col_name = c == 0 ? "s" : kChannelNames[c - 1];
-        throw std::runtime_error(where + "column " + std::to_string(c + 1) + " (" + col_name + ") = " + fmt(v[c]) +
-                                 " is not finite");
+        throw std::runtime_error(where + "column " + std::to_string(c + 1) + " (" + col_name +
+                                 ") = " + formatNumber(v[c]) + " is not finite");
       }
     }
     if (!out.s_knots_.empty() && !(v[0] > out.s_knots_.back()))
-      throw std::runtime_error(where + "s not increasing (" + fmt(v[0]) + " after " + fmt(out.s_knots_.back()) + ")");
+      throw std::runtime_error(where + "s not increasing (" + formatNumber(v[0]) + " after " +
+                               formatNumber(out.s_knots_.back()) + ")");
     for (int c = 1; c < 5; ++c) {
       if (std::abs(v[c]) > kMaxPlausibleIrregularity)
-        throw std::runtime_error(where + kChannelNames[c - 1] + " = " + fmt(v[c]) +
-                                 " m is not a plausible irregularity (|value| > " + fmt(kMaxPlausibleIrregularity) +
-                                 " m; values must be in metres)");
+        throw std::runtime_error(where + kChannelNames[c - 1] + " = " + formatNumber(v[c]) +
+                                 " m is not a plausible irregularity (|value| > " +
+                                 formatNumber(kMaxPlausibleIrregularity) + " m; values must be in metres)");
     }
     out.s_knots_.push_back(v[0]);
     for (int c = 0; c < 4; ++c) out.knot_value_[c].push_back(v[c + 1]);
@@ -237,15 +231,16 @@ Irregularities Irregularities::fromCsvStream(std::istream& in, const std::string
 
 Irregularities Irregularities::fromPsd(const PsdRealisationSpec& spec) {
   if (!(spec.wavelength_min > 0.0) || !std::isfinite(spec.wavelength_min))
-    throw std::runtime_error("irregularity PSD: wavelength_min = " + fmt(spec.wavelength_min) + " m must be positive");
+    throw std::runtime_error("irregularity PSD: wavelength_min = " + formatNumber(spec.wavelength_min) +
+                             " m must be positive");
   if (!(spec.wavelength_max > spec.wavelength_min) || !std::isfinite(spec.wavelength_max))
-    throw std::runtime_error("irregularity PSD: wavelength_max = " + fmt(spec.wavelength_max) +
-                             " m must exceed wavelength_min = " + fmt(spec.wavelength_min) + " m");
+    throw std::runtime_error("irregularity PSD: wavelength_max = " + formatNumber(spec.wavelength_max) +
+                             " m must exceed wavelength_min = " + formatNumber(spec.wavelength_min) + " m");
   if (spec.harmonics < 1 || spec.harmonics > 1000000)
     throw std::runtime_error("irregularity PSD: harmonics = " + std::to_string(spec.harmonics) +
                              " must be in [1, 1000000]");
   if (!std::isfinite(spec.s_reference))
-    throw std::runtime_error("irregularity PSD: s_reference = " + fmt(spec.s_reference) + " is not finite");
+    throw std::runtime_error("irregularity PSD: s_reference = " + formatNumber(spec.s_reference) + " is not finite");
   Irregularities out;
   out.kind_ = Kind::kHarmonics;
   out.s_reference_ = spec.s_reference;

@@ -1,6 +1,7 @@
 // Profile interpolant (arc-length cubic spline) and generic profile measurements: rail tilt, top and
 // gauge points, wheel tread/flange split, flange height, thickness and back-face position.
 #include "rail_contact/profile.hpp"
+#include "rail_contact/format.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -91,7 +92,7 @@ double rawArcLength(const RawSegment& s, double t) {
 ProfileCurve::ProfileCurve(const ProfilePoints& points_yz, SolidSide side, const ProfileCurveOptions& options)
     : side_(side), normal_sign_(side == SolidSide::Right ? 1.0 : -1.0) {
   if (!(options.ds > 0.0) || !std::isfinite(options.ds))
-    throw std::invalid_argument("ProfileCurve: node spacing ds must be positive, got " + std::to_string(options.ds));
+    throw std::invalid_argument("ProfileCurve: node spacing ds must be positive, got " + formatNumber(options.ds));
   if (points_yz.size() < 4)
     throw std::invalid_argument("ProfileCurve: at least 4 points needed, got " + std::to_string(points_yz.size()));
   // Stage 1: spline with chord-length knots through the input points.
@@ -323,7 +324,7 @@ double extremumParameter(const ProfileCurve& curve, int axis, double sign) {
 Eigen::Vector2d railTopPoint(const ProfileCurve& rail) { return rail.position(extremumParameter(rail, 1, +1.0)); }
 
 Eigen::Vector2d gaugePoint(const ProfileCurve& rail, double depth) {
-  if (!(depth > 0.0)) throw std::invalid_argument("gaugePoint: depth must be positive, got " + std::to_string(depth));
+  if (!(depth > 0.0)) throw std::invalid_argument("gaugePoint: depth must be positive, got " + formatNumber(depth));
   const double u_top = extremumParameter(rail, 1, +1.0);
   const double z_level = rail.position(u_top).y() - depth;
   // The gauge side is the end of the curve with the larger y.
@@ -363,7 +364,7 @@ Eigen::Vector2d railSectionCentre(const ProfileCurve& rail, double depth_below_t
 WheelProfile makeWheelProfile(const ProfilePoints& points_yz, double split_angle, const ProfileCurveOptions& options) {
   if (!(split_angle > 0.0 && split_angle < 0.5 * M_PI))
     throw std::invalid_argument("makeWheelProfile: split angle must be in (0, 90) deg, got " +
-                                std::to_string(split_angle * 180.0 / M_PI) + " deg");
+                                formatNumber(split_angle * 180.0 / M_PI) + " deg");
   const ProfileCurve whole(points_yz, SolidSide::Left, options);
   double u_tape = 0.0;
   if (!whole.findCoordinate(0, 0.0, whole.uMin(), whole.uMax(), u_tape))

@@ -1,5 +1,6 @@
 // Readers and writers of profile files: plain "y z" text, MiniProf text export (.ban / .whl) and
 // SIMPACK profiles (.prr / .prw). Format conventions are described in doc/profiles.md.
+#include "rail_contact/format.hpp"
 #include "rail_contact/profile.hpp"
 
 #include <algorithm>
@@ -8,7 +9,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
 
 namespace rail {
 namespace contact {
@@ -61,13 +61,6 @@ std::vector<std::string> splitTokens(const std::string& line) {
   return out;
 }
 
-std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
-
 std::vector<double> parseNumbers(const std::string& file, int line, const std::vector<std::string>& tokens) {
   std::vector<double> v(tokens.size());
   for (size_t i = 0; i < tokens.size(); ++i)
@@ -101,7 +94,7 @@ void checkPoints(const std::string& file, int last_line, const std::vector<RawPo
     const RawPoint& a = pts[i - 1];
     const RawPoint& b = pts[i];
     if (a.y == b.y && a.z == b.z)
-      throw ProfileFileError(file, b.line, "repeated point (" + fmt(b.y) + " " + fmt(b.z) + ")");
+      throw ProfileFileError(file, b.line, "repeated point (" + formatNumber(b.y) + " " + formatNumber(b.z) + ")");
     if (dir == 0) {
       if (std::abs(b.y - pts.front().y) > tol) dir = b.y > pts.front().y ? 1 : -1;
       extreme = dir >= 0 ? std::max(extreme, b.y) : std::min(extreme, b.y);
@@ -109,8 +102,8 @@ void checkPoints(const std::string& file, int last_line, const std::vector<RawPo
     }
     if (dir * (extreme - b.y) > tol)
       throw ProfileFileError(file, b.line,
-                             axis_name + (dir > 0 ? " not increasing (" : " not decreasing (") + fmt(b.y) + " after " +
-                                 fmt(extreme) + ")");
+                             axis_name + (dir > 0 ? " not increasing (" : " not decreasing (") + formatNumber(b.y) +
+                                 " after " + formatNumber(extreme) + ")");
     extreme = dir > 0 ? std::max(extreme, b.y) : std::min(extreme, b.y);
   }
 }
@@ -123,9 +116,9 @@ void checkBounds(const std::string& file, const std::vector<RawPoint>& pts, doub
     const bool bad_y = !(std::abs(p.y * scale) <= kMaxCoordinate);
     if (bad_y || !(std::abs(p.z * scale) <= kMaxCoordinate))
       throw ProfileFileError(file, p.line,
-                             (bad_y ? y_name + " = " + fmt(p.y) : z_name + " = " + fmt(p.z)) + " " + unit_name +
-                                 " out of range (|" + y_name + "|, |" + z_name + "| must be at most " +
-                                 fmt(kMaxCoordinate) + " m)");
+                             (bad_y ? y_name + " = " + formatNumber(p.y) : z_name + " = " + formatNumber(p.z)) + " " +
+                                 unit_name + " out of range (|" + y_name + "|, |" + z_name + "| must be at most " +
+                                 formatNumber(kMaxCoordinate) + " m)");
   }
 }
 
@@ -343,7 +336,8 @@ ProfilePoints readSimpackProfile(const std::string& path, const ProfileFileOptio
   }
   if (block != None) throw ProfileFileError(path, iline, "file ends inside a block");
   if (!seen_spline || !seen_points) throw ProfileFileError(path, iline, "no spline/point block");
-  const std::string len_unit = len_f == 1e3 ? "mm" : (len_f == 1.0 ? "m" : "(units.len.f = " + fmt(len_f) + ")");
+  const std::string len_unit =
+      len_f == 1e3 ? "mm" : (len_f == 1.0 ? "m" : "(units.len.f = " + formatNumber(len_f) + ")");
   checkBounds(path, pts, 1.0 / len_f, "y", "z", len_unit);
   checkPoints(path, iline, pts, "y", kMonotonicTolerance * len_f);
 
@@ -423,7 +417,9 @@ void closeOrThrow(std::ofstream& out, const std::string& path) {
   out.close();
   if (!out) throw std::runtime_error(path + ": write failed");
 }
-std::string num(double v) {
+// A coordinate as the profile files write it (SIMPACK's fixed-width %+.15e, read back exactly): file
+// data, not message text, so not formatNumber.
+std::string fileNumber(double v) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%+.15e", v);
   return buf;
@@ -438,7 +434,7 @@ void writePlainProfile(const std::string& path, const ProfilePoints& points_yz, 
   std::ofstream out = createOrThrow(path);
   if (!comment.empty()) out << "# " << comment << "\n";
   out << "# units: mm\n# y z\n";
-  for (const Eigen::Vector2d& p : points_yz) out << num(p.x() * 1e3) << " " << num(p.y() * 1e3) << "\n";
+  for (const Eigen::Vector2d& p : points_yz) out << fileNumber(p.x() * 1e3) << " " << fileNumber(p.y() * 1e3) << "\n";
   closeOrThrow(out, path);
 }
 
@@ -447,7 +443,7 @@ void writeMiniProfProfile(const std::string& path, const ProfilePoints& points_y
   out << "Filename=" << baseName(path) << "\n";
   out << "XYPoints=" << points_yz.size() << "\n";
   out << "ColumnDef=X,Y\n\n";
-  for (const Eigen::Vector2d& p : points_yz) out << num(p.x() * 1e3) << "\t" << num(-p.y() * 1e3) << "\n";
+  for (const Eigen::Vector2d& p : points_yz) out << fileNumber(p.x() * 1e3) << "\t" << fileNumber(-p.y() * 1e3) << "\n";
   closeOrThrow(out, path);
 }
 
@@ -477,7 +473,8 @@ void writeSimpackProfile(const std::string& path, const ProfilePoints& points_yz
   out << "    units.ang.f    = +1.000000000000000e+00   ! angles in rad\n";
   out << "    point.begin\n";
   out << "    ! y (toward the field side)  z (down)\n";
-  for (const Eigen::Vector2d& p : points_yz) out << num(-p.x() * 1e3) << "  " << num(-p.y() * 1e3) << "\n";
+  for (const Eigen::Vector2d& p : points_yz)
+    out << fileNumber(-p.x() * 1e3) << "  " << fileNumber(-p.y() * 1e3) << "\n";
   out << "    point.end\n";
   out << "  spline.end\n";
   closeOrThrow(out, path);

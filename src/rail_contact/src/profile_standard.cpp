@@ -1,5 +1,6 @@
 // Standard profiles: UIC60 (60E1) rail head from EN 13674-1's arcs, S1002 wheel from EN 13715's
 // piecewise definition.
+#include "rail_contact/format.hpp"
 #include "rail_contact/profile.hpp"
 
 #include <algorithm>
@@ -176,7 +177,7 @@ double f(double S) {
 double s1002Z(double y) {
   const double S = -y * 1e3;
   if (!(S >= s1002::S_MIN - 1e-9 && S <= s1002::S_MAX + 1e-9))
-    throw std::out_of_range("s1002Z: y = " + std::to_string(y) + " m outside [-0.060, 0.070]");
+    throw std::out_of_range("s1002Z: y = " + formatNumber(y) + " m outside [-0.060, 0.070]");
   return -s1002::f(S) * 1e-3;
 }
 

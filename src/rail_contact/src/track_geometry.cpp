@@ -1,11 +1,11 @@
 // Track geometry: centre-line integration, tabulation and interpolation of the track and rail frames.
 #include "rail_contact/track_geometry.hpp"
+#include "rail_contact/format.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -19,19 +19,12 @@ using Eigen::Vector3d;
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os.precision(12);
-  os << v;
-  return os.str();
-}
-
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error("track geometry: " + what); }
 
 std::string segField(std::size_t j, const char* field) { return "segments[" + std::to_string(j) + "]." + field; }
 
 void requireFinite(double v, const std::string& name) {
-  if (!std::isfinite(v)) fail(name + " = " + fmt(v) + " is not a finite number");
+  if (!std::isfinite(v)) fail(name + " = " + formatNumber(v) + " is not a finite number");
 }
 
 // Skew-symmetric matrix [w]x: [w]x v = w x v.
@@ -195,11 +188,13 @@ TrackGeometry::TrackGeometry(const GeometrySpec& spec, const Irregularities& irr
   requireFinite(spec.table_step, "table_step");
   if (spec.segments.empty()) fail("no segments");
   if (spec.cant_reference_width <= 0.0)
-    fail("cant_reference_width = " + fmt(spec.cant_reference_width) + " m must be positive");
-  if (spec.rail_half_spacing <= 0.0) fail("rail_half_spacing = " + fmt(spec.rail_half_spacing) + " m must be positive");
+    fail("cant_reference_width = " + formatNumber(spec.cant_reference_width) + " m must be positive");
+  if (spec.rail_half_spacing <= 0.0)
+    fail("rail_half_spacing = " + formatNumber(spec.rail_half_spacing) + " m must be positive");
   if (std::abs(spec.rail_inclination) >= 0.25 * kPi)
-    fail("rail_inclination = " + fmt(spec.rail_inclination) + " rad is not a rail inclination (|value| < pi/4)");
-  if (spec.table_step <= 0.0) fail("table_step = " + fmt(spec.table_step) + " m must be positive");
+    fail("rail_inclination = " + formatNumber(spec.rail_inclination) +
+         " rad is not a rail inclination (|value| < pi/4)");
+  if (spec.table_step <= 0.0) fail("table_step = " + formatNumber(spec.table_step) + " m must be positive");
   const double e = spec.cant_reference_width;
   double total = 0.0;
   for (std::size_t j = 0; j < spec.segments.size(); ++j) {
@@ -210,34 +205,35 @@ TrackGeometry::TrackGeometry(const GeometrySpec& spec, const Irregularities& irr
     requireFinite(seg.cant_start, segField(j, "cant_start"));
     requireFinite(seg.cant_end, segField(j, "cant_end"));
     requireFinite(seg.gradient, segField(j, "gradient"));
-    if (seg.length <= 0.0) fail(segField(j, "length") + " = " + fmt(seg.length) + " m must be positive");
+    if (seg.length <= 0.0) fail(segField(j, "length") + " = " + formatNumber(seg.length) + " m must be positive");
     if (seg.type == SegmentSpec::Type::Straight && seg.curvature_start != 0.0)
-      fail(segField(j, "curvature_start") + " = " + fmt(seg.curvature_start) + " 1/m on a straight segment");
+      fail(segField(j, "curvature_start") + " = " + formatNumber(seg.curvature_start) + " 1/m on a straight segment");
     const bool ramp = seg.type == SegmentSpec::Type::Transition;
     for (double kappa : {seg.curvature_start, ramp ? seg.curvature_end : seg.curvature_start}) {
       if (std::abs(kappa) * spec.rail_half_spacing >= 1.0)
-        fail(segField(j, "curvature") + " = " + fmt(kappa) + " 1/m: radius below rail_half_spacing " +
-             fmt(spec.rail_half_spacing) + " m");
+        fail(segField(j, "curvature") + " = " + formatNumber(kappa) + " 1/m: radius below rail_half_spacing " +
+             formatNumber(spec.rail_half_spacing) + " m");
     }
     for (double cant : {seg.cant_start, ramp ? seg.cant_end : seg.cant_start}) {
       if (std::abs(cant) >= e)
-        fail(segField(j, "cant") + " = " + fmt(cant) + " m is not smaller than cant_reference_width " + fmt(e) + " m");
+        fail(segField(j, "cant") + " = " + formatNumber(cant) + " m is not smaller than cant_reference_width " +
+             formatNumber(e) + " m");
     }
     if (std::abs(seg.gradient) >= 1.0)
-      fail(segField(j, "gradient") + " = " + fmt(seg.gradient) + " is not a railway gradient (|g| < 1)");
+      fail(segField(j, "gradient") + " = " + formatNumber(seg.gradient) + " is not a railway gradient (|g| < 1)");
     total += seg.length;
   }
   has_irregularities_ = !irregularities.empty();
   if (has_irregularities_) {
     const double lambda_min = irregularities.shortestWavelength();
     if (spec.table_step > lambda_min / 8.0)
-      fail("table_step = " + fmt(spec.table_step) + " m too coarse for irregularity wavelengths down to " +
-           fmt(lambda_min) + " m (need <= " + fmt(lambda_min / 8.0) + " m)");
+      fail("table_step = " + formatNumber(spec.table_step) + " m too coarse for irregularity wavelengths down to " +
+           formatNumber(lambda_min) + " m (need <= " + formatNumber(lambda_min / 8.0) + " m)");
   }
   const double n_real = std::ceil(total / spec.table_step - 1e-9);
   if (n_real > 2.0e7)
-    fail("table of " + fmt(n_real) + " intervals (track " + fmt(total) + " m, table_step " + fmt(spec.table_step) +
-         " m) is too large");
+    fail("table of " + formatNumber(n_real) + " intervals (track " + formatNumber(total) + " m, table_step " +
+         formatNumber(spec.table_step) + " m) is too large");
 
   s_start_ = spec.s_start;
   s_end_ = spec.s_start + total;
@@ -347,8 +343,8 @@ int TrackGeometry::segmentIndex(double s) const {
 int TrackGeometry::cellIndex(double s, double& tau) const {
   const double tol = 1e-9 * (1.0 + std::abs(s_end_));
   if (!(s >= s_start_ - tol && s <= s_end_ + tol))
-    throw std::runtime_error("track geometry: s = " + fmt(s) + " m outside the track [" + fmt(s_start_) + ", " +
-                             fmt(s_end_) + "] m");
+    throw std::runtime_error("track geometry: s = " + formatNumber(s) + " m outside the track [" +
+                             formatNumber(s_start_) + ", " + formatNumber(s_end_) + "] m");
   const double u = (s - s_start_) / h_;
   int i = static_cast<int>(std::floor(u));
   i = std::min(std::max(i, 0), n_intervals_ - 1);
@@ -434,22 +430,24 @@ double TrackGeometry::designCurvature(double s) const {
 
 double cantAngle(double cant, double cant_reference_width) {
   if (!(cant_reference_width > 0.0) || !std::isfinite(cant_reference_width))
-    throw std::runtime_error("cant_angle: cant_reference_width = " + fmt(cant_reference_width) + " m must be positive");
+    throw std::runtime_error("cant_angle: cant_reference_width = " + formatNumber(cant_reference_width) +
+                             " m must be positive");
   if (!(std::abs(cant) < cant_reference_width))
-    throw std::runtime_error("cant_angle: cant = " + fmt(cant) + " m is not smaller than the cant reference width " +
-                             fmt(cant_reference_width) + " m");
+    throw std::runtime_error("cant_angle: cant = " + formatNumber(cant) +
+                             " m is not smaller than the cant reference width " + formatNumber(cant_reference_width) +
+                             " m");
   return std::asin(cant / cant_reference_width);
 }
 
 double equilibriumCant(double cant_reference_width, double speed, double radius, double g) {
   if (!(cant_reference_width > 0.0) || !std::isfinite(cant_reference_width))
-    throw std::runtime_error("equilibrium_cant: cant_reference_width = " + fmt(cant_reference_width) +
+    throw std::runtime_error("equilibrium_cant: cant_reference_width = " + formatNumber(cant_reference_width) +
                              " m must be positive");
   if (!(radius > 0.0) || !std::isfinite(radius))
-    throw std::runtime_error("equilibrium_cant: radius = " + fmt(radius) + " m must be positive");
+    throw std::runtime_error("equilibrium_cant: radius = " + formatNumber(radius) + " m must be positive");
   if (!(g > 0.0) || !std::isfinite(g))
-    throw std::runtime_error("equilibrium_cant: g = " + fmt(g) + " m/s^2 must be positive");
-  if (!std::isfinite(speed)) throw std::runtime_error("equilibrium_cant: speed = " + fmt(speed) + " m/s");
+    throw std::runtime_error("equilibrium_cant: g = " + formatNumber(g) + " m/s^2 must be positive");
+  if (!std::isfinite(speed)) throw std::runtime_error("equilibrium_cant: speed = " + formatNumber(speed) + " m/s");
   return cant_reference_width * speed * speed / (g * radius);
 }
 

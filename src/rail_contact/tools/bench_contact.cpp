@@ -95,9 +95,7 @@ int main(int argc, char** argv) {
       "usage: bench_contact\n"
       "Per-wheel contact evaluation on straight rigid track (S1002 / UIC60 1:40, 4 mm lateral oscillation):\n"
       "time per wheel for detection alone and with forces, tread + flange, then flange and spin off.\n";
-  if (rail::tools::helpRequested(argc, argv, usage)) return 0;
-  rail::tools::refuseOptions(argc, argv, usage);
-  rail::tools::atMostArguments(argc, argv, 0, usage);
+  if (rail::tools::startTool(argc, argv, usage, 0)) return 0;
   run(true, true);
   run(false, false);
   return 0;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "rail_contact/contact_geometry_table.hpp"
+#include "rail_contact/tool_args.hpp"
 
 namespace rc = rail::contact;
 
@@ -58,6 +59,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;
   std::string out = "contact_geometry.csv", conicity_out, wheel_file, rail_file;
   double gauge = 1.435, b2b = 1.360, taping = rc::kTapingLineFromFlangeBack, radius = 0.46, incl = 1.0 / 40.0;
   double y_max = 0.010, dy = 1e-4, yaw = 0.0, yaw_per_y = 0.0;
@@ -77,10 +79,6 @@ int main(int argc, char** argv) {
       if (end == v.c_str() || *end != '\0' || !std::isfinite(x)) usageError(a + ": not a number (" + v + ")");
       return x;
     };
-    if (a == "-h" || a == "--help") {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
     if (a == "--out")
       out = next();
     else if (a == "--conicity")

@@ -3,7 +3,11 @@
 #include <cmath>
 #include <cstdio>
 
+#include <rail_contact/format.hpp>
+
 namespace rail::core {
+
+using contact::formatNumber;
 
 HandshakeInfo handshakeInfo(const Scene& scene, const std::string& node) {
   HandshakeInfo h;
@@ -22,11 +26,6 @@ std::string hex(std::uint64_t v) {
   std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(v));
   return buf;
 }
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%g", v);
-  return buf;
-}
 }  // namespace
 
 std::string compareHandshake(const HandshakeInfo& mine, const HandshakeInfo& theirs) {
@@ -37,7 +36,7 @@ std::string compareHandshake(const HandshakeInfo& mine, const HandshakeInfo& the
   if (mine.wheel_count != theirs.wheel_count)
     add("wheel_count", std::to_string(mine.wheel_count), std::to_string(theirs.wheel_count));
   if (std::abs(mine.track_step - theirs.track_step) > 1e-15)
-    add("track_step", num(mine.track_step) + " s", num(theirs.track_step) + " s");
+    add("track_step", formatNumber(mine.track_step) + " s", formatNumber(theirs.track_step) + " s");
   if (mine.transport != theirs.transport) add("transport", mine.transport, theirs.transport);
   if (mine.scene_hash != theirs.scene_hash)
     add("scene_hash", hex(mine.scene_hash) + " (" + mine.scene_file + ")",

@@ -6,13 +6,15 @@
 #include <cstdio>
 #include <sstream>
 
+#include <rail_contact/format.hpp>
+
 #include "rail_core/scene.hpp"
 #include "rail_core/scene_loader.hpp"
 #include "yaml_reader.hpp"
 
 namespace rail::core {
 
-using detail::formatDouble;
+using contact::formatNumber;
 
 namespace {
 double sideSign(Direction d) { return d == Direction::kRight ? -1.0 : 1.0; }
@@ -129,9 +131,19 @@ const char* toString(LoadRail v) {
 
 namespace {
 
+// A number as a YAML float: formatNumber's exact text, ".0" on a whole number (so YAML reads a float, not an
+// integer), YAML's spellings of nan and inf.
+std::string yamlNumber(double v) {
+  if (std::isnan(v)) return ".nan";
+  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
+  std::string s = formatNumber(v);
+  if (s.find_first_of(".e") == std::string::npos) s += ".0";
+  return s;
+}
+
 // Emits numbers in their shortest exact form so the resolved scene reads back bit for bit.
 YAML::Emitter& num(YAML::Emitter& e, const char* key, double v) {
-  return e << YAML::Key << key << YAML::Value << formatDouble(v);
+  return e << YAML::Key << key << YAML::Value << yamlNumber(v);
 }
 template <typename T>
 YAML::Emitter& kv(YAML::Emitter& e, const char* key, const T& v) {
@@ -278,7 +290,7 @@ std::string toYaml(const Scene& s) {
   num(e, "rate", o.rate);
   e << YAML::Key << "topics" << YAML::Value << YAML::Flow << o.topics;
   e << YAML::Key << "deflection_sections" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (double d : o.deflection_sections) e << formatDouble(d);
+  for (double d : o.deflection_sections) e << yamlNumber(d);
   e << YAML::EndSeq;
   num(e, "pad_force_margin", o.pad_force_margin);
   e << YAML::EndMap;
@@ -364,15 +376,15 @@ std::string describe(const Scene& s, Role role) {
   o << "solver: "
     << (v.end.kind == EndKind::kTime ? "until t = " + fixed(v.end.value, 3) + " s"
                                      : "until s = " + fixed(v.end.value, 1) + " m");
-  if (s.needsTrackNode()) o << ", track step " << formatDouble(v.track_step) << " s";
+  if (s.needsTrackNode()) o << ", track step " << formatNumber(v.track_step) << " s";
   if (s.runsFeIntegration() && s.has_vehicle) {
     o << (v.track_window.enabled ? ", moving track window (" + fixed(v.track_window.behind, 1) + " m behind, " +
                                        fixed(v.track_window.ahead, 1) + " m ahead)"
                                  : ", whole track integrated");
   }
   if (s.has_vehicle) {
-    o << ", vehicle rtol " << formatDouble(v.vehicle_rtol) << " atol " << formatDouble(v.vehicle_atol) << " max step "
-      << formatDouble(v.vehicle_max_step) << " s (" << toString(v.vehicle_method) << ")";
+    o << ", vehicle rtol " << formatNumber(v.vehicle_rtol) << " atol " << formatNumber(v.vehicle_atol) << " max step "
+      << formatNumber(v.vehicle_max_step) << " s (" << toString(v.vehicle_method) << ")";
   }
   if (s.cosimulation())
     o << ", transport " << toString(v.transport) << ", timeout " << fixed(v.exchange_timeout, 1) << " s";
@@ -403,7 +415,7 @@ std::string describe(const Scene& s, Role role) {
   if (track_side && s.needsTrackNode()) {
     if (s.runsFeIntegration()) {
       add("FE track: " + std::to_string(sleepers) + " sleepers, " + std::to_string(2 * rail_nodes) +
-          " rail nodes, about " + std::to_string(6 * free_nodes) + " DOF, Newmark step " + formatDouble(v.track_step) +
+          " rail nodes, about " + std::to_string(6 * free_nodes) + " DOF, Newmark step " + formatNumber(v.track_step) +
           " s, CHOLMOD factor");
       add(std::string("track damping ") + (f.track_damping ? "on" : "off") + ", absorbing ends " +
           (f.absorbing_ends ? "on" : "off"));

@@ -14,13 +14,15 @@
 
 #include <unistd.h>
 
+#include <rail_contact/format.hpp>
+
 #include "rail_core/yaml_duplicates.hpp"
 #include "yaml_reader.hpp"
 
 namespace rail::core {
 
+using contact::formatNumber;
 using detail::failAt;
-using detail::formatDouble;
 using detail::join;
 using detail::MapReader;
 
@@ -44,7 +46,7 @@ bool contains(const std::vector<std::string>& v, const std::string& s) {
   return false;
 }
 
-std::string got(double v) { return ", got " + formatDouble(v); }
+std::string got(double v) { return ", got " + formatNumber(v); }
 
 // Value checks: each names the rule and the offending value.
 void positive(MapReader& r, const char* key, double v) {
@@ -55,7 +57,7 @@ void nonNegative(MapReader& r, const char* key, double v) {
 }
 void inRange(MapReader& r, const char* key, double v, double lo, double hi, const char* unit) {
   if (!(v >= lo && v <= hi)) {
-    r.fail(key, "must be between " + formatDouble(lo) + " and " + formatDouble(hi) + " " + unit + got(v));
+    r.fail(key, "must be between " + formatNumber(lo) + " and " + formatNumber(hi) + " " + unit + got(v));
   }
 }
 
@@ -68,7 +70,7 @@ constexpr double kMaxTrackLength = 1e6;  // [m]
 constexpr double kMinCurveRadius = 10.0;  // [m]
 void minRadius(MapReader& r, const char* key, double v) {
   if (v < kMinCurveRadius) {
-    r.fail(key, "must be >= " + formatDouble(kMinCurveRadius) + " m (0 = straight where allowed)" + got(v));
+    r.fail(key, "must be >= " + formatNumber(kMinCurveRadius) + " m (0 = straight where allowed)" + got(v));
   }
 }
 
@@ -127,7 +129,7 @@ Segment readSegment(const YAML::Node& node, const std::string& path, const Conte
   positive(r, "length", seg.length);
   if (seg.length > kMaxTrackLength) {
     r.fail("length",
-           "must be <= " + formatDouble(kMaxTrackLength) + " m (the longest track a run builds)" + got(seg.length));
+           "must be <= " + formatNumber(kMaxTrackLength) + " m (the longest track a run builds)" + got(seg.length));
   }
   r.number("gradient", seg.gradient);
   inRange(r, "gradient", seg.gradient, -0.1, 0.1, "(rise over run)");
@@ -179,7 +181,7 @@ void checkChain(const Track& t, const YAML::Node& seq, const std::string& file) 
     const double k0 = a.curvatureAtEnd(), k1 = b.curvatureAtStart();
     if (std::abs(k0 - k1) > 1e-9) {
       failAt(file, path,
-             "curvature jumps at its start from " + formatDouble(k0) + " to " + formatDouble(k1) + " 1/m (" + prev +
+             "curvature jumps at its start from " + formatNumber(k0) + " to " + formatNumber(k1) + " 1/m (" + prev +
                  " ends there); make the chain continuous (a transition) or mark the "
                  "jump with jump_allowed: true",
              line);
@@ -187,7 +189,7 @@ void checkChain(const Track& t, const YAML::Node& seq, const std::string& file) 
     const double c0 = a.signedCantAtEnd(), c1 = b.signedCantAtStart();
     if (std::abs(c0 - c1) > 1e-6) {
       failAt(file, path,
-             "cant jumps at its start from " + formatDouble(std::abs(c0)) + " to " + formatDouble(std::abs(c1)) +
+             "cant jumps at its start from " + formatNumber(std::abs(c0)) + " to " + formatNumber(std::abs(c1)) +
                  " m (" + prev +
                  " ends there); make the chain continuous (a cant ramp) or mark the jump with "
                  "jump_allowed: true",
@@ -229,10 +231,10 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
   if (!(t.cant_reference_width >= t.gauge && t.cant_reference_width <= t.gauge + 0.2)) {
     // Named against the gauge, and the gauge's origin when the scene left it to its default.
     r.fail("cant_reference_width",
-           "must be between track.gauge (" + formatDouble(t.gauge) + " m) and track.gauge + 0.2 m" +
+           "must be between track.gauge (" + formatNumber(t.gauge) + " m) and track.gauge + 0.2 m" +
                got(t.cant_reference_width) +
                (r.has("gauge") ? std::string()
-                               : "; track.gauge is not set, so its default " + formatDouble(t.gauge) + " m applies"));
+                               : "; track.gauge is not set, so its default " + formatNumber(t.gauge) + " m applies"));
   }
   r.string("rail_profile", t.rail_profile);
   if (!contains(kBuiltinRailProfiles, t.rail_profile)) {
@@ -257,11 +259,11 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
   }
   checkChain(t, seq, ctx.file);
   if (t.length() > kMaxTrackLength) {
-    r.fail("segments", "the track must be at most " + formatDouble(kMaxTrackLength) + " m long, got " +
-                           formatDouble(t.length()) + " m");
+    r.fail("segments", "the track must be at most " + formatNumber(kMaxTrackLength) + " m long, got " +
+                           formatNumber(t.length()) + " m");
   }
   if (t.length() < 2.0 * t.sleeper_spacing) {
-    r.fail("segments", "the track must be at least two sleeper spacings long, got " + formatDouble(t.length()) + " m");
+    r.fail("segments", "the track must be at least two sleeper spacings long, got " + formatNumber(t.length()) + " m");
   }
 
   Irregularities& irr = t.irregularities;
@@ -284,7 +286,7 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
       ir.number("wavelength_max", irr.wavelength_max);
       if (!(irr.wavelength_max > irr.wavelength_min)) {
         ir.fail("wavelength_max",
-                "must be > wavelength_min (" + formatDouble(irr.wavelength_min) + ")" + got(irr.wavelength_max));
+                "must be > wavelength_min (" + formatNumber(irr.wavelength_min) + ")" + got(irr.wavelength_max));
       }
     }
     ir.finish();
@@ -299,8 +301,8 @@ void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
   r.require("start_arc_length");
   r.number("start_arc_length", v.start_arc_length);
   if (v.start_arc_length < s.track.start_arc_length || v.start_arc_length >= s.track.endArcLength()) {
-    r.fail("start_arc_length", "must lie on the track [" + formatDouble(s.track.start_arc_length) + ", " +
-                                   formatDouble(s.track.endArcLength()) + ") m" + got(v.start_arc_length));
+    r.fail("start_arc_length", "must lie on the track [" + formatNumber(s.track.start_arc_length) + ", " +
+                                   formatNumber(s.track.endArcLength()) + ") m" + got(v.start_arc_length));
   }
   r.require("speed");
   r.number("speed", v.speed);
@@ -313,7 +315,7 @@ void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
   inRange(r, "nominal_radius", v.nominal_radius, 0.2, 0.7, "m");
   r.number("back_to_back", v.back_to_back);
   if (!(v.back_to_back > s.track.gauge - 0.2 && v.back_to_back < s.track.gauge)) {
-    r.fail("back_to_back", "must be between track.gauge - 0.2 and track.gauge (" + formatDouble(s.track.gauge) + ") m" +
+    r.fail("back_to_back", "must be between track.gauge - 0.2 and track.gauge (" + formatNumber(s.track.gauge) + ") m" +
                                got(v.back_to_back));
   }
   r.integer("wheelsets", v.wheelsets);
@@ -463,8 +465,8 @@ void readOutput(MapReader& root, Scene& s) {
     const double sec = o.deflection_sections[i];
     if (sec < s.track.start_arc_length || sec > s.track.endArcLength()) {
       const std::string key = "deflection_sections[" + std::to_string(i) + "]";
-      r.fail(key.c_str(), "must lie on the track [" + formatDouble(s.track.start_arc_length) + ", " +
-                              formatDouble(s.track.endArcLength()) + "] m" + got(sec));
+      r.fail(key.c_str(), "must lie on the track [" + formatNumber(s.track.start_arc_length) + ", " +
+                              formatNumber(s.track.endArcLength()) + "] m" + got(sec));
     }
   }
   r.number("pad_force_margin", o.pad_force_margin);
@@ -490,7 +492,7 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   }
   if (s.cosimulation() && s.solver.vehicle_max_step > s.solver.track_step) {
     failAt(file, "solver.vehicle_max_step",
-           "must be <= solver.track_step (" + formatDouble(s.solver.track_step) + " s) in co-simulation" +
+           "must be <= solver.track_step (" + formatNumber(s.solver.track_step) + " s) in co-simulation" +
                got(s.solver.vehicle_max_step),
            line_of("solver", "vehicle_max_step"));
   }
@@ -502,8 +504,8 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     if (sol.end.value == 0.0) sol.end.value = s.track.endArcLength();
     if (sol.end.value <= start || sol.end.value > s.track.endArcLength()) {
       failAt(file, "solver.end.arc_length",
-             "must lie after the start (" + formatDouble(start) + " m) and on the track (end " +
-                 formatDouble(s.track.endArcLength()) + " m)" + got(sol.end.value),
+             "must lie after the start (" + formatNumber(start) + " m) and on the track (end " +
+                 formatNumber(s.track.endArcLength()) + " m)" + got(sol.end.value),
              0);
     }
     if (speed <= 0.0) {

@@ -7,17 +7,6 @@
 
 namespace rail::core::detail {
 
-std::string formatDouble(double v) {
-  if (std::isnan(v)) return ".nan";
-  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
-  char buf[64];
-  auto res = std::to_chars(buf, buf + sizeof(buf), v);
-  std::string s(buf, res.ptr);
-  // Keep it a float in YAML's eyes when it prints as an integer ("30" -> "30.0").
-  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
-  return s;
-}
-
 std::string join(const std::vector<std::string>& items) {
   std::string out;
   for (const auto& x : items) out += (out.empty() ? "" : ", ") + x;

@@ -15,9 +15,6 @@
 
 namespace rail::core::detail {
 
-// Shortest text that reads back to the same double.
-std::string formatDouble(double v);
-
 // "a, b, c".
 std::string join(const std::vector<std::string>& items);
 

@@ -136,9 +136,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
-  rail::tools::refuseOptions(argc, argv, kUsage);
-  rail::tools::atMostArguments(argc, argv, 1, kUsage);
+  if (rail::tools::startTool(argc, argv, kUsage, 1)) return 0;
   const long steps = static_cast<long>(rail::tools::positionalNumber(argc, argv, 1, 100000, 1, kUsage));
   const long warmup = std::min(steps / 10, 10000L);
   std::printf("round trip of one exchange, %d wheels, %u hardware threads\n", kWheels,

@@ -9,7 +9,15 @@
 #include <cstring>
 #include <iostream>
 
+#include <rail_contact/tool_args.hpp>
+
 #include "rail_core/scene_loader.hpp"
+
+namespace {
+const char* const kUsage =
+    "usage: railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan]\n"
+    "  prints the resolved scene (exit 0) or the error (exit 1)\n";
+}  // namespace
 
 int main(int argc, char** argv) {
   const char* path = nullptr;
@@ -20,6 +28,7 @@ int main(int argc, char** argv) {
     for (const std::string& o : rail::core::splitOverrides(argv[2])) std::cout << o << "\n";
     return 0;
   }
+  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--set") == 0) {
       if (i + 1 >= argc) {
@@ -33,10 +42,6 @@ int main(int argc, char** argv) {
       plan = true;
     } else if (std::strcmp(argv[i], "--hash") == 0) {
       hash_only = true;
-    } else if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "--help") == 0) {
-      std::cout << "usage: railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan]\n"
-                   "  prints the resolved scene (exit 0) or the error (exit 1)\n";
-      return 0;
     } else if (path == nullptr) {
       path = argv[i];
     } else {
@@ -45,7 +50,7 @@ int main(int argc, char** argv) {
     }
   }
   if (path == nullptr) {
-    std::cerr << "usage: railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan]\n";
+    std::cerr << kUsage;
     return 1;
   }
   try {

@@ -5,10 +5,13 @@
 #include <limits>
 #include <string>
 
+#include <rail_contact/format.hpp>
+
 namespace rail::ros_glue {
 
 namespace coupling = rail::core::coupling;
 
+using contact::formatNumber;
 using coupling::Result;
 using coupling::Status;
 
@@ -22,9 +25,7 @@ bool stampOf(double t, ros::Time& stamp) {
 }
 
 Result badTime(double t) {
-  char buf[96];
-  std::snprintf(buf, sizeof(buf), "frame time %.9g s is not a valid ROS stamp (0 .. 2^32 s)", t);
-  return {Status::kError, buf};
+  return {Status::kError, "frame time " + formatNumber(t) + " s is not a valid ROS stamp (0 .. 2^32 s)"};
 }
 
 Result badId(std::uint32_t id) {
@@ -49,10 +50,10 @@ Result checkIncoming(std::uint64_t step, const ros::Time& stamp, std::size_t cou
   const bool valid = stampOf(t, expected);
   const std::int64_t diff = static_cast<std::int64_t>(stamp.toNSec()) - static_cast<std::int64_t>(expected.toNSec());
   if (!valid || diff > 1 || diff < -1) {
-    char buf[200];
-    std::snprintf(buf, sizeof(buf), "%s: stamp %u.%09u s of step %llu differs from step x track_step = %.9g s", source,
-                  stamp.sec, stamp.nsec, static_cast<unsigned long long>(step), t);
-    return {Status::kRefused, buf};
+    char when[40];
+    std::snprintf(when, sizeof(when), "%u.%09u", stamp.sec, stamp.nsec);
+    return {Status::kRefused, std::string(source) + ": stamp " + when + " s of step " + std::to_string(step) +
+                                  " differs from step x track_step = " + formatNumber(t) + " s"};
   }
   return {};
 }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include <rail_msgs/WheelStates.h>
+#include <rail_contact/format.hpp>
 
 namespace rail::ros_glue {
 
@@ -24,7 +25,7 @@ core::coupling::RecordedStates readRecordedStates(const std::string& bag_path, i
     const rail_msgs::WheelStates::ConstPtr msg = m.instantiate<rail_msgs::WheelStates>();
     if (!msg) continue;
     if (static_cast<int>(msg->wheels.size()) != wheel_count) {
-      throw std::runtime_error(bag_path + ": /wheel_states at t = " + std::to_string(msg->header.stamp.toSec()) +
+      throw std::runtime_error(bag_path + ": /wheel_states at t = " + contact::formatNumber(msg->header.stamp.toSec()) +
                                " s has " + std::to_string(msg->wheels.size()) + " wheels, the scene's vehicle " +
                                std::to_string(wheel_count));
     }

@@ -1,9 +1,10 @@
 #include "rail_ros/ros_transport_options.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 #include <string>
+
+#include <rail_contact/format.hpp>
 
 #include <ros/master.h>
 #include <ros/this_node.h>
@@ -14,22 +15,17 @@
 
 namespace rail::ros_glue {
 
-namespace {
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.9g", v);
-  return buf;
-}
-}  // namespace
+using contact::formatNumber;
 
 void checkOptions(const RosTransportOptions& o, const char* what) {
   if (!(o.track_step > 0.0) || !std::isfinite(o.track_step))
-    throw std::runtime_error(std::string(what) + ": track_step must be > 0 s (got " + num(o.track_step) + ")");
+    throw std::runtime_error(std::string(what) + ": track_step must be > 0 s (got " + formatNumber(o.track_step) + ")");
   if (o.wheel_capacity < 1 || o.wheel_capacity > 256)
     throw std::runtime_error(std::string(what) + ": wheel_capacity must be in 1..256 (got " +
                              std::to_string(o.wheel_capacity) + ")");
   if (!(o.attach_timeout > 0.0) || !std::isfinite(o.attach_timeout))
-    throw std::runtime_error(std::string(what) + ": attach_timeout must be > 0 s (got " + num(o.attach_timeout) + ")");
+    throw std::runtime_error(std::string(what) + ": attach_timeout must be > 0 s (got " +
+                             formatNumber(o.attach_timeout) + ")");
 }
 
 namespace detail {

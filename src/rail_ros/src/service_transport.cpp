@@ -1,13 +1,13 @@
 #include "rail_ros/service_transport.hpp"
 
 #include <condition_variable>
-#include <cstdio>
 #include <mutex>
 #include <thread>
 
 #include <rail_msgs/Lockstep.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <rail_contact/format.hpp>
 
 #include "rail_ros/frame_messages.hpp"
 #include "ros_transport_util.hpp"
@@ -16,6 +16,7 @@ namespace rail::ros_glue {
 
 namespace coupling = rail::core::coupling;
 
+using contact::formatNumber;
 using coupling::Clock;
 using coupling::Deadline;
 using coupling::Result;
@@ -26,12 +27,6 @@ using detail::nodeLabel;
 using detail::sliceEnd;
 
 namespace {
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.9g", v);
-  return buf;
-}
 
 Deadline after(double seconds) {
   return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
@@ -237,7 +232,7 @@ bool ServiceTransport::TrackEnd::serve(
   if (phase != Phase::kAnswered) {
     res.ok = false;
     res.error = closed ? "the track closed the connection"
-                       : "the track gave no answer within " + num(o.reply_timeout) + " s (reply_timeout)";
+                       : "the track gave no answer within " + formatNumber(o.reply_timeout) + " s (reply_timeout)";
   }
   request = nullptr;
   response = nullptr;
@@ -280,7 +275,8 @@ Result ServiceTransport::TrackEnd::send(const coupling::WrenchFrame& frame) {
   if (phase != Phase::kTaken) {
     if (phase == Phase::kNone)
       return {Status::kTimeout, "the call of step " + std::to_string(step) + " on " + where() +
-                                    " stopped waiting for its answer (reply_timeout " + num(o.reply_timeout) + " s)"};
+                                    " stopped waiting for its answer (reply_timeout " + formatNumber(o.reply_timeout) +
+                                    " s)"};
     return {Status::kError, "send_wrenches called without receive_states"};
   }
   Result r = toMessage(frame, response->wrenches);
@@ -310,7 +306,8 @@ void ServiceTransport::TrackEnd::close() {
 ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOptions& options) : role_(options.role) {
   checkOptions(options, "service transport");
   if (!(options.reply_timeout > 0.0))
-    throw std::runtime_error("service transport: reply_timeout must be > 0 s (got " + num(options.reply_timeout) + ")");
+    throw std::runtime_error("service transport: reply_timeout must be > 0 s (got " +
+                             formatNumber(options.reply_timeout) + ")");
   const std::string service = nh.resolveName(options.service);
   if (role_ == Role::kVehicle) {
     auto v = std::make_shared<VehicleEnd>();
@@ -326,9 +323,9 @@ ServiceTransport::ServiceTransport(ros::NodeHandle& nh, const ServiceTransportOp
         throw coupling::CouplingError(Status::kInterrupted,
                                       "vehicle: interrupted while waiting for service " + service);
       if (Clock::now() >= deadline)
-        throw coupling::CouplingError(Status::kTimeout, "vehicle: the track's service " + service +
-                                                            " did not appear within " + num(options.attach_timeout) +
-                                                            " s (solver.handshake_timeout)");
+        throw coupling::CouplingError(Status::kTimeout,
+                                      "vehicle: the track's service " + service + " did not appear within " +
+                                          formatNumber(options.attach_timeout) + " s (solver.handshake_timeout)");
       std::this_thread::sleep_for(detail::kSlice);
     }
     v->peer = options.peer_node.empty() ? detail::serviceProvider(service) : options.peer_node;

@@ -1,10 +1,10 @@
 #include "rail_ros/topic_transport.hpp"
 
-#include <cstdio>
 #include <vector>
 
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <rail_contact/format.hpp>
 
 #include "rail_ros/frame_messages.hpp"
 #include "ros_transport_util.hpp"
@@ -13,6 +13,7 @@ namespace rail::ros_glue {
 
 namespace coupling = rail::core::coupling;
 
+using contact::formatNumber;
 using coupling::Clock;
 using coupling::Deadline;
 using coupling::Result;
@@ -22,12 +23,6 @@ using detail::interrupted;
 using detail::nodeLabel;
 
 namespace {
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.9g", v);
-  return buf;
-}
 
 ros::WallDuration wall(Clock::duration d) {
   return d <= Clock::duration::zero() ? ros::WallDuration(0.0)
@@ -270,7 +265,7 @@ TopicTransport::TopicTransport(ros::NodeHandle& nh, const TopicTransportOptions&
       throw coupling::CouplingError(Status::kTimeout, std::string(coupling::toString(d.role)) + ": " +
                                                           nodeLabel(options.peer_node, coupling::peerOf(d.role)) +
                                                           " did not subscribe to " + d.out_topic + " within " +
-                                                          num(options.attach_timeout) +
+                                                          formatNumber(options.attach_timeout) +
                                                           " s (solver.handshake_timeout)");
     d.link_queue.callAvailable(ros::WallDuration(0.01));
   }

@@ -157,7 +157,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
+  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;  // ROS remappings too
   std::vector<std::string> args;
   const ros::M_string remap = remappings(argc, argv, args);
   char* end = nullptr;

@@ -179,9 +179,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
-  rail::tools::refuseOptions(argc, argv, kUsage);
-  rail::tools::atMostArguments(argc, argv, 3, kUsage);
+  if (rail::tools::startTool(argc, argv, kUsage, 3)) return 0;
   const int steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 1, 500, 10, kUsage));
   const int window_steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20000, 0, kUsage));
   g_cost = rail::tools::positionalNumber(argc, argv, 3, 0, 0, kUsage) != 0;

@@ -27,9 +27,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
-  rail::tools::refuseOptions(argc, argv, kUsage);
-  rail::tools::atMostArguments(argc, argv, 2, kUsage);
+  if (rail::tools::startTool(argc, argv, kUsage, 2)) return 0;
   std::string path = argc > 1 ? argv[1] : "";
   if (path.empty()) {
     const std::string here = __FILE__;

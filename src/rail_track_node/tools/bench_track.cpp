@@ -43,9 +43,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
-  rail::tools::refuseOptions(argc, argv, kUsage);
-  rail::tools::atMostArguments(argc, argv, 3, kUsage);
+  if (rail::tools::startTool(argc, argv, kUsage, 3)) return 0;
   const double lengths[3] = {100.0, 500.0, 2000.0};
   int steps[3] = {2000, 500, 100};
   for (int i = 0; i < 3; ++i)

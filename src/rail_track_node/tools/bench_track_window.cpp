@@ -124,9 +124,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
-  rail::tools::refuseOptions(argc, argv, kUsage);
-  rail::tools::atMostArguments(argc, argv, 2, kUsage);
+  if (rail::tools::startTool(argc, argv, kUsage, 2)) return 0;
   const int steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 1, 300, 10, kUsage));
   const int full_long_steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20, 0, kUsage));
   rt::TrackWindowSettings set;

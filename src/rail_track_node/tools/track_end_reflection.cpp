@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include <rail_contact/tool_args.hpp>
+
 #include "rail_track_node/end_reflection.hpp"
 #include "rail_track_node/track_data.hpp"
 
@@ -51,16 +53,13 @@ double number(const std::string& key, const std::string& text) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;
   std::string track = defaultTrackFile(), csv;
   std::vector<double> freqs = {300, 400, 500, 700, 1000, 1500, 2000};
   int cycles = 5;
   bool damping = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
     auto next = [&]() -> std::string {
       if (i + 1 >= argc) usage(a + " needs a value");
       return argv[++i];

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include <rail_contact/tool_args.hpp>
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_track_node/receptance.hpp"
@@ -58,6 +59,7 @@ double number(const std::string& key, const char* text) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;
   std::string track = defaultTrackFile(), csv = "receptance.csv";
   double length = 80.0, gauge = 1.668, f_min = 10.0, f_max = 3000.0;
   int points = 160;
@@ -65,10 +67,6 @@ int main(int argc, char** argv) {
   double rail_beta = -1.0;  // < 0: the data file's
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
     auto next = [&]() -> const char* {
       if (i + 1 >= argc) usage(a + " needs a value");
       return argv[++i];

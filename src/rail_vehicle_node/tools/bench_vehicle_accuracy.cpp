@@ -152,8 +152,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
-  rail::tools::refuseOptions(argc, argv, kUsage);
+  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kAnyCount)) return 0;
   if (argc < 3) {
     std::fputs(kUsage, stderr);
     return 2;

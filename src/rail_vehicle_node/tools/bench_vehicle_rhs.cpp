@@ -56,9 +56,7 @@ const char* const kUsage =
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::helpRequested(argc, argv, kUsage)) return 0;
-  rail::tools::refuseOptions(argc, argv, kUsage);
-  rail::tools::atMostArguments(argc, argv, 2, kUsage);
+  if (rail::tools::startTool(argc, argv, kUsage, 2)) return 0;
   const std::string path = argc > 1 ? argv[1] : std::string(RAIL_VEHICLE_CONFIG_DIR) + "/paper_coach.yaml";
   const int evaluations = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20000, 1, kUsage));
   try {

@@ -3,10 +3,13 @@
 // read as 0 by atoi.
 #pragma once
 
+#include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+
+#include "rail_contact/format.hpp"
 
 namespace rail {
 namespace tools {
@@ -43,7 +46,8 @@ inline double positionalNumber(int argc, char** argv, int i, double fallback, do
   char* end = nullptr;
   const double v = std::strtod(text, &end);
   if (end == text || *end != '\0' || !std::isfinite(v) || v < min_value) {
-    std::fprintf(stderr, "%s: argument %d: '%s' is not a number >= %g\n%s", argv[0], i, text, min_value, usage);
+    std::fprintf(stderr, "%s: argument %d: '%s' is not a number >= %s\n%s", argv[0], i, text,
+                 contact::formatNumber(min_value).c_str(), usage);
     std::exit(2);
   }
   return v;
@@ -55,6 +59,22 @@ inline void atMostArguments(int argc, char** argv, int max_positional, const cha
     std::fprintf(stderr, "%s: unexpected argument '%s'\n%s", argv[0], argv[max_positional + 1], usage);
     std::exit(2);
   }
+}
+
+/// startTool's max_positional for a tool that parses its own options (only -h / --help is handled) and for
+/// one that takes any number of positional arguments.
+constexpr int kOwnOptions = -1;
+constexpr int kAnyCount = INT_MAX;
+
+/// A tool's argument prologue in one call, `if (startTool(argc, argv, usage, n)) return 0;`: true after
+/// printing the usage for -h / --help; else, unless n is kOwnOptions, an option or more than n arguments
+/// exits 2.
+inline bool startTool(int argc, char** argv, const char* usage, int max_positional) {
+  if (helpRequested(argc, argv, usage)) return true;
+  if (max_positional == kOwnOptions) return false;
+  refuseOptions(argc, argv, usage);
+  atMostArguments(argc, argv, max_positional, usage);
+  return false;
 }
 
 }  // namespace tools

@@ -5,7 +5,11 @@
 #include <stdexcept>
 #include <string>
 
+#include <rail_contact/format.hpp>
+
 namespace rail::core::coupling {
+
+using contact::formatNumber;
 
 namespace {
 
@@ -14,18 +18,14 @@ std::string hex(std::uint64_t v) {
   std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(v));
   return buf;
 }
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%.9g", v);
-  return buf;
-}
 std::string u64(std::uint64_t v) { return std::to_string(v); }
 
 void checkConfig(const CouplingConfig& c) {
   if (!(c.track_step > 0.0) || !std::isfinite(c.track_step))
-    throw std::runtime_error("coupling: solver.track_step must be > 0 s (got " + num(c.track_step) + ")");
+    throw std::runtime_error("coupling: solver.track_step must be > 0 s (got " + formatNumber(c.track_step) + ")");
   if (!(c.exchange_timeout > 0.0) || !std::isfinite(c.exchange_timeout))
-    throw std::runtime_error("coupling: solver.exchange_timeout must be > 0 s (got " + num(c.exchange_timeout) + ")");
+    throw std::runtime_error("coupling: solver.exchange_timeout must be > 0 s (got " +
+                             formatNumber(c.exchange_timeout) + ")");
   if (c.wheel_count <= 0)
     throw std::runtime_error("coupling: wheel count must be > 0 (got " + std::to_string(c.wheel_count) + ")");
 }
@@ -50,7 +50,7 @@ Result fail(const Result& r, Role self, const char* doing, std::uint64_t step, c
   std::string what;
   switch (r.status) {
     case Status::kTimeout:
-      what = std::string("the ") + peer + " did not answer within " + num(budget.seconds) + " s" +
+      what = std::string("the ") + peer + " did not answer within " + formatNumber(budget.seconds) + " s" +
              (budget.is_exchange_timeout ? " (solver.exchange_timeout)" : "");
       break;
     case Status::kPeerClosed:
@@ -88,8 +88,8 @@ Result checkStamp(const FrameStamp& got, std::uint32_t count, const CouplingConf
         got.step > step ? "step skipped" : (got.step + 1 == step ? "step repeated" : "step out of order");
     msg += "step " + u64(got.step) + " received, " + u64(step) + " expected (" + kind + ")";
   } else if (!time_ok) {
-    msg += "time " + num(got.time) + " s received, " + num(t) + " s expected (step " + u64(step) + " x track_step " +
-           num(c.track_step) + " s)";
+    msg += "time " + formatNumber(got.time) + " s received, " + formatNumber(t) + " s expected (step " + u64(step) +
+           " x track_step " + formatNumber(c.track_step) + " s)";
   } else {
     msg += std::to_string(count) + " wheels received, " + std::to_string(c.wheel_count) + " expected";
   }

@@ -1,20 +1,13 @@
 #include "rail_core/coupling/replay_transport.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <stdexcept>
+
+#include <rail_contact/format.hpp>
 
 namespace rail::core::coupling {
 
-namespace {
-
-std::string seconds(double t) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.6g", t);
-  return text;
-}
-
-}  // namespace
+using contact::formatNumber;
 
 ReplayTransport::ReplayTransport(RecordedStates recording, double track_step, std::uint64_t scene_hash, double t_end)
     : recording_(std::move(recording)), h_(track_step), hash_(scene_hash) {
@@ -26,16 +19,16 @@ ReplayTransport::ReplayTransport(RecordedStates recording, double track_step, st
   if (recording_.frames.size() < 2)
     throw std::runtime_error(src + ": the wheel states have one instant; a replay needs two");
   if (recording_.times.front() > 0.5 * h_) {
-    throw std::runtime_error(src + ": the wheel states start at t = " + seconds(recording_.times.front()) +
+    throw std::runtime_error(src + ": the wheel states start at t = " + formatNumber(recording_.times.front()) +
                              " s; a replay starts at t = 0");
   }
   for (std::size_t i = 1; i < recording_.times.size(); ++i) {
     if (!(recording_.times[i] > recording_.times[i - 1])) {
       throw std::runtime_error(
-          src + ": the wheel states' times do not increase at t = " + seconds(recording_.times[i]) + " s");
+          src + ": the wheel states' times do not increase at t = " + formatNumber(recording_.times[i]) + " s");
     }
     if (recording_.frames[i].count != recording_.frames[0].count) {
-      throw std::runtime_error(src + ": the wheel states at t = " + seconds(recording_.times[i]) + " s have " +
+      throw std::runtime_error(src + ": the wheel states at t = " + formatNumber(recording_.times[i]) + " s have " +
                                std::to_string(recording_.frames[i].count) + " wheels, the first " +
                                std::to_string(recording_.frames[0].count));
     }

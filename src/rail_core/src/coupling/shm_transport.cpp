@@ -18,9 +18,12 @@
 #include <new>
 #include <thread>
 
+#include <rail_contact/format.hpp>
+
 namespace rail::core::coupling {
 
 using namespace shm;
+using contact::formatNumber;
 
 namespace {
 
@@ -34,11 +37,6 @@ constexpr auto kIncompleteHeaderGrace = std::chrono::milliseconds(1000);
 std::string hex(std::uint64_t v) {
   char buf[24];
   std::snprintf(buf, sizeof(buf), "%016llx", static_cast<unsigned long long>(v));
-  return buf;
-}
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof(buf), "%g", v);
   return buf;
 }
 std::string sysError(const std::string& what) { return what + ": " + std::strerror(errno); }
@@ -353,7 +351,7 @@ ShmRegion ShmRegion::attach(const Spec& spec, Deadline deadline, Role peer, doub
                                                     std::string(toString(peer)) + "'s region " + spec.name);
     if (Clock::now() >= deadline)
       throw CouplingError(Status::kTimeout, "shm transport: the " + std::string(toString(peer)) + "'s region " +
-                                                spec.name + " did not appear within " + num(timeout_s) + " s" +
+                                                spec.name + " did not appear within " + formatNumber(timeout_s) + " s" +
                                                 (last_seen.empty() ? "" : " (" + last_seen + ")"));
     std::this_thread::sleep_for(kAttachPoll);
   }
@@ -367,7 +365,8 @@ ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
     throw std::runtime_error("shm transport: wheel capacity must be > 0 (got " +
                              std::to_string(options.wheel_capacity) + ")");
   if (!(options.attach_timeout >= 0.0))
-    throw std::runtime_error("shm transport: attach timeout must be >= 0 s (got " + num(options.attach_timeout) + ")");
+    throw std::runtime_error("shm transport: attach timeout must be >= 0 s (got " +
+                             formatNumber(options.attach_timeout) + ")");
   if (options.spin_iterations < 0)
     throw std::runtime_error("shm transport: spin iterations must be >= 0 (got " +
                              std::to_string(options.spin_iterations) + ")");

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <rail_contact/format.hpp>
+
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/track_mesh.hpp"
 #include "rail_track_node/track_model.hpp"
@@ -78,8 +80,8 @@ EndReflectionResult measureEndReflection(const TrackData& data, const EndReflect
   r.cut_off_frequency = wave.cutOff();
   r.group_velocity = wave.groupVelocity(o.frequency);
   if (!(o.frequency > 1.05 * r.cut_off_frequency))
-    throw std::invalid_argument("measureEndReflection: " + std::to_string(o.frequency) +
-                                " Hz is not above the cut-off of " + std::to_string(r.cut_off_frequency) +
+    throw std::invalid_argument("measureEndReflection: " + contact::formatNumber(o.frequency) +
+                                " Hz is not above the cut-off of " + contact::formatNumber(r.cut_off_frequency) +
                                 " Hz: no flexural wave propagates to the end");
 
   // The burst's main lobe spans f (1 -+ 2 / cycles); its slow part sets the window (the echo of the right

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "rail_contact/beam_shape.hpp"
+#include "rail_contact/format.hpp"
 
 namespace rail {
 namespace track {
@@ -39,7 +40,8 @@ NewmarkIntegrator::NewmarkIntegrator(const LinearSystem& sys, double dt, bool in
       damped_(sys.C.nonZeros() > 0),
       cost_(cost),
       end_dashpots_(end_dashpots) {
-  if (!(dt > 0.0)) throw std::runtime_error("NewmarkIntegrator: time step must be positive, got " + std::to_string(dt));
+  if (!(dt > 0.0))
+    throw std::runtime_error("NewmarkIntegrator: time step must be positive, got " + contact::formatNumber(dt));
   const int n = sys.size();
   if (sys.K.rows() != n || sys.C.rows() != n || (include_gravity && sys.f_gravity.size() != n))
     throw std::runtime_error("NewmarkIntegrator: M, C, K and f_gravity sizes differ");

@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include <rail_contact/format.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
 
@@ -26,8 +27,8 @@ TrackData sceneTrackData(const Scene& scene, const rc::GeometrySpec& geometry, c
   if (!(options.rail_height > data.layout.rail_centroid_height))
     throw SceneError(scene.file + ": track.data: " + scene.track.data.path +
                      ": layout.rail_centroid_height: must lie below the rail height (" +
-                     std::to_string(options.rail_height) + " m), got " +
-                     std::to_string(data.layout.rail_centroid_height));
+                     rc::formatNumber(options.rail_height) + " m), got " +
+                     rc::formatNumber(data.layout.rail_centroid_height));
   TrackLayout& L = data.layout;
   L.sleeper_spacing = scene.track.sleeper_spacing;
   L.rail_elements_between_sleepers = scene.track.rail_elements_between_sleepers;
@@ -35,9 +36,9 @@ TrackData sceneTrackData(const Scene& scene, const rc::GeometrySpec& geometry, c
   L.rail_lateral_offset =
       geometry.rail_half_spacing + (L.pad_thickness + options.rail_height) * std::sin(L.rail_inclination);
   if (!(L.rail_lateral_offset < 0.5 * L.sleeper_length))
-    throw SceneError(scene.file + ": track.gauge: the rail seats (" + std::to_string(L.rail_lateral_offset) +
+    throw SceneError(scene.file + ": track.gauge: the rail seats (" + rc::formatNumber(L.rail_lateral_offset) +
                      " m from the centre) lie beyond the sleeper ends (track.data: " + scene.track.data.path +
-                     ": layout.sleeper_length " + std::to_string(L.sleeper_length) + " m)");
+                     ": layout.sleeper_length " + rc::formatNumber(L.sleeper_length) + " m)");
   if (!scene.effects.track_damping) removeTrackDamping(data);
   data.absorbing_ends.enabled = scene.effects.absorbing_ends;
   return data;

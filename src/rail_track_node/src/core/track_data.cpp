@@ -9,8 +9,12 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <rail_contact/format.hpp>
+
 namespace rail {
 namespace track {
+
+using contact::formatNumber;
 
 namespace {
 
@@ -19,12 +23,6 @@ std::string describe(const YAML::Node& node) {
   if (node.IsScalar()) return "'" + node.Scalar() + "'";
   if (node.IsSequence()) return "a list";
   return "a map";
-}
-
-std::string fmt(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
 }
 
 // A YAML map being read: remembers the keys consumed to reject unknown ones.
@@ -62,16 +60,16 @@ class MapReader {
   // above it (and inf) are refused, never clamped.
   double positive(const std::string& key, double max, const char* unit) {
     const double x = number(key);
-    if (!(x > 0.0)) fail(keyPath(key), "must be positive", fmt(x));
-    if (!(x <= max)) fail(keyPath(key), "must be at most " + fmt(max) + " " + unit, fmt(x));
+    if (!(x > 0.0)) fail(keyPath(key), "must be positive", formatNumber(x));
+    if (!(x <= max)) fail(keyPath(key), "must be at most " + formatNumber(max) + " " + unit, formatNumber(x));
     return x;
   }
 
   // A number in [0, max], as positive().
   double nonNegative(const std::string& key, double max, const char* unit) {
     const double x = number(key);
-    if (!(x >= 0.0)) fail(keyPath(key), "must not be negative", fmt(x));
-    if (!(x <= max)) fail(keyPath(key), "must be at most " + fmt(max) + " " + unit, fmt(x));
+    if (!(x >= 0.0)) fail(keyPath(key), "must not be negative", formatNumber(x));
+    if (!(x <= max)) fail(keyPath(key), "must be at most " + formatNumber(max) + " " + unit, formatNumber(x));
     return x;
   }
 
@@ -212,15 +210,15 @@ TrackData parseTrackData(const std::string& yaml_text, const std::string& source
   L.sleeper_inner_node_offset = g.positive("sleeper_inner_node_offset", kMaxTrackLength, "m");
   L.ballast_nodes = g.intList("ballast_nodes");
   if (L.rail_inclination >= 0.5)
-    g.fail(g.keyPath("rail_inclination"), "must be a small angle in rad (below 0.5)", fmt(L.rail_inclination));
+    g.fail(g.keyPath("rail_inclination"), "must be a small angle in rad (below 0.5)", formatNumber(L.rail_inclination));
   if (!(L.rail_lateral_offset < 0.5 * L.sleeper_length))
     g.fail(g.keyPath("rail_lateral_offset"),
-           "must be smaller than half of layout.sleeper_length (" + fmt(L.sleeper_length) + " / 2)",
-           fmt(L.rail_lateral_offset));
+           "must be smaller than half of layout.sleeper_length (" + formatNumber(L.sleeper_length) + " / 2)",
+           formatNumber(L.rail_lateral_offset));
   if (!(L.sleeper_inner_node_offset < L.rail_lateral_offset))
     g.fail(g.keyPath("sleeper_inner_node_offset"),
-           "must be smaller than rail_lateral_offset (" + fmt(L.rail_lateral_offset) + ")",
-           fmt(L.sleeper_inner_node_offset));
+           "must be smaller than rail_lateral_offset (" + formatNumber(L.rail_lateral_offset) + ")",
+           formatNumber(L.sleeper_inner_node_offset));
   if (L.ballast_nodes.empty()) g.fail(g.keyPath("ballast_nodes"), "must list at least one sleeper node", "[]");
   std::set<int> seen;
   for (int n : L.ballast_nodes) {

@@ -13,6 +13,7 @@
 #include <utility>
 
 #include <rail_contact/beam_shape.hpp>
+#include <rail_contact/format.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
 
@@ -22,6 +23,7 @@ namespace rail {
 namespace track {
 
 namespace rc = rail::contact;
+using rail::contact::formatNumber;
 using rail::core::Scene;
 using rail::core::SceneError;
 using Clock = std::chrono::steady_clock;
@@ -71,12 +73,6 @@ bool sameShape(const TrackMesh& a, const TrackMesh& b) {
 // Bays (whole, rounded up) needed for a length (m).
 int baysFor(double length, double spacing) { return static_cast<int>(std::ceil(length / spacing - 1e-9)); }
 
-std::string fmt(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
-
 }  // namespace
 
 // One window: its model, the Newmark integrator over it (K_eff factor) and its self-weight static state.
@@ -102,7 +98,7 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
     : settings_(settings), geometry_(rail::core::buildTrackGeometry(scene)) {
   const TrackWindowSettings& S = settings_;
   auto refuse = [&scene](const std::string& field, const std::string& what, double value) {
-    throw std::runtime_error(scene.file + ": track window: " + field + " " + what + ", got " + fmt(value));
+    throw std::runtime_error(scene.file + ": track window: " + field + " " + what + ", got " + formatNumber(value));
   };
   if (!(S.behind >= 0.0) || !std::isfinite(S.behind)) refuse("behind", "must be finite and >= 0 m", S.behind);
   if (!(S.ahead >= 0.0) || !std::isfinite(S.ahead)) refuse("ahead", "must be finite and >= 0 m", S.ahead);
@@ -131,7 +127,7 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
       throw SceneError(scene.file +
                        ": track.data: absorbing_ends.design_frequency must be > 0 Hz for the window's "
                        "absorbing ends, got " +
-                       fmt(data_.absorbing_ends.design_frequency));
+                       formatNumber(data_.absorbing_ends.design_frequency));
     c_end_ = absorbingEndDashpots(data_.rail, k_lat, k_vert, 2.0 * kPi * data_.absorbing_ends.design_frequency);
   }
   data_.absorbing_ends.enabled = false;  // the window places its own end dashpots (buildWindow)
@@ -139,7 +135,7 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
   if (S.condensed_ends) {
     if (!(S.boundary_length >= data_.layout.sleeper_spacing) || !std::isfinite(S.boundary_length))
       refuse("boundary_length",
-             "must be finite and at least one sleeper bay (" + fmt(data_.layout.sleeper_spacing) + " m)",
+             "must be finite and at least one sleeper bay (" + formatNumber(data_.layout.sleeper_spacing) + " m)",
              S.boundary_length);
     const int nb = baysFor(S.boundary_length, data_.layout.sleeper_spacing);
     condensed_[0] = condenseEnd(data_, nb, false);
@@ -150,8 +146,8 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
   s_line_ = scene.track.start_arc_length;
   line_bays_ = static_cast<int>(std::floor(scene.track.length() / a + 1e-9));
   if (line_bays_ < 1)
-    throw SceneError(scene.file + ": track: the line is shorter than one sleeper bay (" + fmt(a) + " m), got " +
-                     fmt(scene.track.length()));
+    throw SceneError(scene.file + ": track: the line is shorter than one sleeper bay (" + formatNumber(a) +
+                     " m), got " + formatNumber(scene.track.length()));
   shift_bays_ = std::max(1, baysFor(S.shift, a));
   const int min_bays = std::max(1, baysFor(S.vehicle_length + S.behind + S.ahead + shift_bays_ * a, a));
   min_length_ = min_bays * a;

@@ -10,9 +10,13 @@
 #include <utility>
 #include <vector>
 
+#include <rail_contact/format.hpp>
+
 #include "rail_core/yaml_duplicates.hpp"
 
 namespace rail::vehicle {
+
+using contact::formatNumber;
 namespace {
 
 std::string describe(const YAML::Node& node) {
@@ -38,12 +42,6 @@ constexpr double kMaxInertia = 1e8;     // kg m^2, |principal moment| or |produc
 constexpr double kMinInertia = 1e-6;
 constexpr double kMaxGravity = 1e3;        // m/s^2, |component| of the gravity vector
 constexpr double kMaxAxisComponent = 1e6;  // dimensionless, |component| of a direction before normalising
-
-std::string format(double v) {
-  std::ostringstream os;
-  os << v;
-  return os.str();
-}
 
 class Reader {
  public:
@@ -94,7 +92,7 @@ class Reader {
     const double value = number(node, path);
     if (!(std::abs(value) <= max_abs)) {
       const std::string unit_text = *unit ? std::string(" ") + unit : std::string();
-      fail(node, path, "magnitude must be <= " + format(max_abs) + unit_text, describe(node));
+      fail(node, path, "magnitude must be <= " + formatNumber(max_abs) + unit_text, describe(node));
     }
     return value;
   }
@@ -234,7 +232,7 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
     if (!(body.mass > 0.0))
       reader.fail(node["mass"], join(where, "mass"), "mass must be > 0 kg", describe(node["mass"]));
     if (!(body.mass <= kMaxMass)) {
-      reader.fail(node["mass"], join(where, "mass"), "mass must be <= " + format(kMaxMass) + " kg",
+      reader.fail(node["mass"], join(where, "mass"), "mass must be <= " + formatNumber(kMaxMass) + " kg",
                   describe(node["mass"]));
     }
     body.r_reference = reader.vec3(node, where, "centre_of_mass", kMaxPosition, "m");
@@ -248,7 +246,7 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
       if (!(principal[i] >= kMinInertia)) {
         reader.fail(node["inertia"][static_cast<std::size_t>(i)],
                     join(where, "inertia") + "[" + std::to_string(i) + "]",
-                    "moment of inertia must be >= " + format(kMinInertia) + " kg m^2",
+                    "moment of inertia must be >= " + formatNumber(kMinInertia) + " kg m^2",
                     describe(node["inertia"][static_cast<std::size_t>(i)]));
       }
     }
