@@ -7,13 +7,15 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rail_contact/format.hpp"
+
 namespace rail {
 namespace contact {
 
 namespace {
 [[noreturn]] void fail(const char* field, double value, const char* rule) {
   std::ostringstream m;
-  m << "WheelContactOptions: " << field << " = " << value << " " << rule;
+  m << "WheelContactOptions: " << field << " = " << formatNumber(value) << " " << rule;
   throw std::runtime_error(m.str());
 }
 }  // namespace

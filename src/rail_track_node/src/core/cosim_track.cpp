@@ -14,6 +14,7 @@
 #include <utility>
 
 #include <rail_contact/beam_shape.hpp>
+#include <rail_contact/format.hpp>
 #include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
 
@@ -129,7 +130,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
       std::ostringstream os;
       os << "CosimTrackOptions::window.vehicle_length: the vehicle's wheel span (m, > 0) is needed for the track "
             "window (the vehicle node sends it in the handshake), got "
-         << ws.vehicle_length;
+         << rc::formatNumber(ws.vehicle_length);
       throw std::invalid_argument(os.str());
     }
     const double s_front = scene.vehicle.start_arc_length;

@@ -11,6 +11,7 @@
 #include <memory>
 #include <string>
 
+#include <rail_contact/format.hpp>
 #include <rail_contact/irregularities.hpp>
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/timed_transport.hpp>
@@ -83,7 +84,7 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
       sim.method() == rv::IntegrationMethod::kBdf ? "BDF" : "Adams", scene.solver.vehicle_rtol,
       scene.solver.vehicle_atol, sim.maxStep(),
       cosim ? (std::string("; co-simulation with the track over ") + toString(scene.solver.transport) +
-               ", track step " + std::to_string(scene.solver.track_step) + " s")
+               ", track step " + rail::contact::formatNumber(scene.solver.track_step) + " s")
                   .c_str()
             : "");
   rv::VehicleOutputs outputs(nh, pnh, scene, sim, cosim, cost, clock);
