@@ -255,7 +255,7 @@ class TestCli(unittest.TestCase):
             ("wheelsets 3 of a 4-wheelset file", ("  speed: 30.5556\n", "  speed: 30.5556\n  wheelsets: 3\n"),
              "4 wheelsets (bodies with two wheel centres), the scene says vehicle.wheelsets: 3"),
             ("1e308 m segment", ("length: 60.0", "length: 1e308"),
-             "track.segments[0].length: must be <= 1e+06 m"),
+             "track.segments[0].length: must be at most 1e+06 m"),
         ]
         for what, sub, msg in cases:
             extra = []

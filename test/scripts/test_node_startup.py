@@ -66,7 +66,7 @@ class NodeStartup(unittest.TestCase):
         for pkg, exe in (("rail_vehicle_node", "vehicle_node"), ("rail_track_node", "track_node")):
             rc, out = finish(start(pkg, exe, "bad_" + exe, "/bad"))
             self.assertEqual(rc, EXIT_BAD_INPUT, out)
-            self.assertIn("scene refused: " + path + ": track.segments[2].radius: must be > 0, got -500", out)
+            self.assertIn("scene refused: " + path + ": track.segments[2].radius: must be positive, got -500", out)
 
     def test_missing_scene_parameter_is_named(self):
         rc, out = finish(start("rail_vehicle_node", "vehicle_node", "lonely", "/nothing_here"))

@@ -10,7 +10,7 @@
 
 #include "rail_core/scene.hpp"
 #include "rail_core/scene_loader.hpp"
-#include "yaml_reader.hpp"
+#include "rail_core/yaml_reader.hpp"
 
 namespace rail::core {
 
@@ -370,8 +370,8 @@ std::string describe(const Scene& s, Role role) {
   flag("floor_acceleration_output", f.floor_acceleration_output && s.has_vehicle);
   flag("pad_force_output", f.pad_force_output && s.effects.track_model == TrackModel::kFlexible);
   flag("energy_output", f.energy_output && s.has_vehicle);
-  o << "effects on: " << detail::join(on) << "\n";
-  o << "effects off: " << (off.empty() ? "none" : detail::join(off)) << "\n";
+  o << "effects on: " << join(on) << "\n";
+  o << "effects off: " << (off.empty() ? "none" : join(off)) << "\n";
   const Solver& v = s.solver;
   o << "solver: "
     << (v.end.kind == EndKind::kTime ? "until t = " + fixed(v.end.value, 3) + " s"

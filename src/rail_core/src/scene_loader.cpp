@@ -16,15 +16,20 @@
 
 #include <rail_contact/format.hpp>
 
-#include "rail_core/yaml_duplicates.hpp"
-#include "yaml_reader.hpp"
+#include "rail_core/yaml_reader.hpp"
 
 namespace rail::core {
 
 using contact::formatNumber;
-using detail::failAt;
-using detail::join;
-using detail::MapReader;
+
+namespace {
+[[noreturn]] void raiseSceneError(const std::string& message) { throw SceneError(message); }
+
+// "<file>: <path>: <what> (line N)" as a SceneError.
+[[noreturn]] void failScene(const std::string& file, const std::string& path, const std::string& what, int line) {
+  failAt(file, path, what, line, raiseSceneError);
+}
+}  // namespace
 
 const std::vector<std::string> kKnownTopics = {
     "wheel_states", "contact_wrenches",    "contact_points", "rail_deflection", "wheelset_kinematics", "markers", "tf",
@@ -50,10 +55,10 @@ std::string got(double v) { return ", got " + formatNumber(v); }
 
 // Value checks: each names the rule and the offending value.
 void positive(MapReader& r, const char* key, double v) {
-  if (!(v > 0.0)) r.fail(key, "must be > 0" + got(v));
+  if (!(v > 0.0)) r.fail(key, "must be positive" + got(v));
 }
 void nonNegative(MapReader& r, const char* key, double v) {
-  if (!(v >= 0.0)) r.fail(key, "must be >= 0" + got(v));
+  if (!(v >= 0.0)) r.fail(key, "must not be negative" + got(v));
 }
 void inRange(MapReader& r, const char* key, double v, double lo, double hi, const char* unit) {
   if (!(v >= lo && v <= hi)) {
@@ -70,7 +75,7 @@ constexpr double kMaxTrackLength = 1e6;  // [m]
 constexpr double kMinCurveRadius = 10.0;  // [m]
 void minRadius(MapReader& r, const char* key, double v) {
   if (v < kMinCurveRadius) {
-    r.fail(key, "must be >= " + formatNumber(kMinCurveRadius) + " m (0 = straight where allowed)" + got(v));
+    r.fail(key, "must be at least " + formatNumber(kMinCurveRadius) + " m (0 = straight where allowed)" + got(v));
   }
 }
 
@@ -117,7 +122,7 @@ void readDirection(MapReader& r, Segment& seg, bool required) {
 }
 
 Segment readSegment(const YAML::Node& node, const std::string& path, const Context& ctx) {
-  MapReader r(node, path, ctx.file);
+  MapReader r(node, path, ctx.file, raiseSceneError);
   Segment seg;
   r.require("type");
   r.choice("type", seg.type,
@@ -128,8 +133,8 @@ Segment readSegment(const YAML::Node& node, const std::string& path, const Conte
   r.number("length", seg.length);
   positive(r, "length", seg.length);
   if (seg.length > kMaxTrackLength) {
-    r.fail("length",
-           "must be <= " + formatNumber(kMaxTrackLength) + " m (the longest track a run builds)" + got(seg.length));
+    r.fail("length", "must be at most " + formatNumber(kMaxTrackLength) + " m (the longest track a run builds)" +
+                         got(seg.length));
   }
   r.number("gradient", seg.gradient);
   inRange(r, "gradient", seg.gradient, -0.1, 0.1, "(rise over run)");
@@ -180,20 +185,20 @@ void checkChain(const Track& t, const YAML::Node& seq, const std::string& file) 
     const int line = seq[i].Mark().line >= 0 ? seq[i].Mark().line + 1 : 0;
     const double k0 = a.curvatureAtEnd(), k1 = b.curvatureAtStart();
     if (std::abs(k0 - k1) > 1e-9) {
-      failAt(file, path,
-             "curvature jumps at its start from " + formatNumber(k0) + " to " + formatNumber(k1) + " 1/m (" + prev +
-                 " ends there); make the chain continuous (a transition) or mark the "
-                 "jump with jump_allowed: true",
-             line);
+      failScene(file, path,
+                "curvature jumps at its start from " + formatNumber(k0) + " to " + formatNumber(k1) + " 1/m (" + prev +
+                    " ends there); make the chain continuous (a transition) or mark the "
+                    "jump with jump_allowed: true",
+                line);
     }
     const double c0 = a.signedCantAtEnd(), c1 = b.signedCantAtStart();
     if (std::abs(c0 - c1) > 1e-6) {
-      failAt(file, path,
-             "cant jumps at its start from " + formatNumber(std::abs(c0)) + " to " + formatNumber(std::abs(c1)) +
-                 " m (" + prev +
-                 " ends there); make the chain continuous (a cant ramp) or mark the jump with "
-                 "jump_allowed: true",
-             line);
+      failScene(file, path,
+                "cant jumps at its start from " + formatNumber(std::abs(c0)) + " to " + formatNumber(std::abs(c1)) +
+                    " m (" + prev +
+                    " ends there); make the chain continuous (a cant ramp) or mark the jump with "
+                    "jump_allowed: true",
+                line);
     }
   }
 }
@@ -220,7 +225,7 @@ double parseInclination(MapReader& r, const char* key, double fallback) {
 }
 
 void readTrack(MapReader& root, Scene& s, const Context& ctx) {
-  MapReader r(root.requireChild("track"), "track", ctx.file);
+  MapReader r(root.requireChild("track"), "track", ctx.file, raiseSceneError);
   Track& t = s.track;
   r.number("gauge", t.gauge);
   inRange(r, "gauge", t.gauge, 0.6, 2.0, "m");
@@ -268,7 +273,7 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
 
   Irregularities& irr = t.irregularities;
   if (const YAML::Node n = r.child("irregularities")) {
-    MapReader ir(n, "track.irregularities", ctx.file);
+    MapReader ir(n, "track.irregularities", ctx.file, raiseSceneError);
     ir.choice(
         "source", irr.source,
         {{"none", IrregularitySource::kNone}, {"file", IrregularitySource::kFile}, {"psd", IrregularitySource::kPsd}});
@@ -285,8 +290,8 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
       positive(ir, "wavelength_min", irr.wavelength_min);
       ir.number("wavelength_max", irr.wavelength_max);
       if (!(irr.wavelength_max > irr.wavelength_min)) {
-        ir.fail("wavelength_max",
-                "must be > wavelength_min (" + formatNumber(irr.wavelength_min) + ")" + got(irr.wavelength_max));
+        ir.fail("wavelength_max", "must be greater than wavelength_min (" + formatNumber(irr.wavelength_min) + ")" +
+                                      got(irr.wavelength_max));
       }
     }
     ir.finish();
@@ -295,7 +300,7 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
 }
 
 void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
-  MapReader r(root.child("vehicle"), "vehicle", ctx.file);
+  MapReader r(root.child("vehicle"), "vehicle", ctx.file, raiseSceneError);
   Vehicle& v = s.vehicle;
   v.data = readFileKey(r, "data", true, ctx);
   r.require("start_arc_length");
@@ -328,12 +333,12 @@ void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
 void readContact(MapReader& root, Scene& s) {
   const YAML::Node n = root.child("contact");
   if (!n) return;
-  MapReader r(n, "contact", root.file());
+  MapReader r(n, "contact", root.file(), raiseSceneError);
   Contact& c = s.contact;
   // Bounds: a friction coefficient above 1 is not a wheel on a rail (sanded dry rail reaches ~0.5); e is a
   // ratio of velocities; the floor keeps eq. 9's damping finite and below a penetration rate of 10 m/s.
   r.number("friction", c.friction);
-  if (!(c.friction > 0.0 && c.friction <= 1.0)) r.fail("friction", "must be > 0 and <= 1" + got(c.friction));
+  if (!(c.friction > 0.0 && c.friction <= 1.0)) r.fail("friction", "must be positive and at most 1" + got(c.friction));
   r.number("restitution", c.restitution);
   inRange(r, "restitution", c.restitution, 0.0, 1.0, "(-)");
   r.number("impact_velocity_floor", c.impact_velocity_floor);
@@ -342,7 +347,7 @@ void readContact(MapReader& root, Scene& s) {
 }
 
 void readMovingLoads(MapReader& root, Scene& s, const Context& ctx) {
-  MapReader r(root.child("moving_loads"), "moving_loads", ctx.file);
+  MapReader r(root.child("moving_loads"), "moving_loads", ctx.file, raiseSceneError);
   MovingLoads& m = s.moving_loads;
   r.number("start_arc_length", m.start_arc_length);
   if (m.start_arc_length < s.track.start_arc_length || m.start_arc_length > s.track.endArcLength()) {
@@ -353,7 +358,7 @@ void readMovingLoads(MapReader& root, Scene& s, const Context& ctx) {
   const YAML::Node seq = r.requireChild("loads");
   if (!seq.IsSequence() || seq.size() == 0) r.fail("loads", "must be a non-empty list of loads");
   for (std::size_t i = 0; i < seq.size(); ++i) {
-    MapReader lr(seq[i], "moving_loads.loads[" + std::to_string(i) + "]", ctx.file);
+    MapReader lr(seq[i], "moving_loads.loads[" + std::to_string(i) + "]", ctx.file, raiseSceneError);
     MovingLoad l;
     lr.number("offset", l.offset);
     nonNegative(lr, "offset", l.offset);
@@ -371,7 +376,7 @@ void readMovingLoads(MapReader& root, Scene& s, const Context& ctx) {
 void readEffects(MapReader& root, Scene& s) {
   const YAML::Node n = root.child("effects");
   if (!n) return;
-  MapReader r(n, "effects", root.file());
+  MapReader r(n, "effects", root.file(), raiseSceneError);
   Effects& e = s.effects;
   r.choice("track_model", e.track_model,
            {{"rigid", TrackModel::kRigid}, {"rigid_fe", TrackModel::kRigidFe}, {"flexible", TrackModel::kFlexible}});
@@ -394,7 +399,7 @@ void readSolver(MapReader& root, Scene& s) {
   const YAML::Node n = root.child("solver");
   Solver& v = s.solver;
   if (!n) return;
-  MapReader r(n, "solver", root.file());
+  MapReader r(n, "solver", root.file(), raiseSceneError);
   r.number("track_step", v.track_step);
   inRange(r, "track_step", v.track_step, 1e-7, 1e-2, "s");
   r.number("vehicle_rtol", v.vehicle_rtol);
@@ -412,7 +417,7 @@ void readSolver(MapReader& root, Scene& s) {
   r.number("handshake_timeout", v.handshake_timeout);
   inRange(r, "handshake_timeout", v.handshake_timeout, 0.01, 3600.0, "s");
   if (const YAML::Node wn = r.child("track_window")) {
-    MapReader wr(wn, "solver.track_window", root.file());
+    MapReader wr(wn, "solver.track_window", root.file(), raiseSceneError);
     TrackWindow& w = v.track_window;
     wr.boolean("enabled", w.enabled);
     wr.number("behind", w.behind);
@@ -426,7 +431,7 @@ void readSolver(MapReader& root, Scene& s) {
     wr.finish();
   }
   if (const YAML::Node en = r.child("end")) {
-    MapReader er(en, "solver.end", root.file());
+    MapReader er(en, "solver.end", root.file(), raiseSceneError);
     const bool has_time = er.has("time"), has_s = er.has("arc_length");
     if (has_time == has_s) er.failHere("give exactly one of time [s] or arc_length [m]");
     if (has_time) {
@@ -445,7 +450,7 @@ void readSolver(MapReader& root, Scene& s) {
 void readOutput(MapReader& root, Scene& s) {
   const YAML::Node n = root.child("output");
   if (!n) return;
-  MapReader r(n, "output", root.file());
+  MapReader r(n, "output", root.file(), raiseSceneError);
   Output& o = s.output;
   r.string("bag", o.bag);
   r.number("rate", o.rate);
@@ -482,19 +487,20 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     return n.IsDefined() && n.Mark().line >= 0 ? n.Mark().line + 1 : 0;
   };
   if (s.moving_loads.present && s.effects.track_model != TrackModel::kFlexible) {
-    failAt(file, "effects.track_model",
-           std::string("moving_loads need the finite-element track (flexible), got ") + toString(s.effects.track_model),
-           line_of("effects", "track_model"));
+    failScene(
+        file, "effects.track_model",
+        std::string("moving_loads need the finite-element track (flexible), got ") + toString(s.effects.track_model),
+        line_of("effects", "track_model"));
   }
   if (s.effects.irregularities && s.track.irregularities.source == IrregularitySource::kNone) {
-    failAt(file, "effects.irregularities", "is on but track.irregularities gives no source (file or psd)",
-           line_of("effects", "irregularities"));
+    failScene(file, "effects.irregularities", "is on but track.irregularities gives no source (file or psd)",
+              line_of("effects", "irregularities"));
   }
   if (s.cosimulation() && s.solver.vehicle_max_step > s.solver.track_step) {
-    failAt(file, "solver.vehicle_max_step",
-           "must be <= solver.track_step (" + formatNumber(s.solver.track_step) + " s) in co-simulation" +
-               got(s.solver.vehicle_max_step),
-           line_of("solver", "vehicle_max_step"));
+    failScene(file, "solver.vehicle_max_step",
+              "must be at most solver.track_step (" + formatNumber(s.solver.track_step) + " s) in co-simulation" +
+                  got(s.solver.vehicle_max_step),
+              line_of("solver", "vehicle_max_step"));
   }
   // End condition: default is the track's end, reached by the leading wheelset (or first load).
   Solver& sol = s.solver;
@@ -503,14 +509,14 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     const double speed = s.has_vehicle ? s.vehicle.speed : s.moving_loads.speed;
     if (sol.end.value == 0.0) sol.end.value = s.track.endArcLength();
     if (sol.end.value <= start || sol.end.value > s.track.endArcLength()) {
-      failAt(file, "solver.end.arc_length",
-             "must lie after the start (" + formatNumber(start) + " m) and on the track (end " +
-                 formatNumber(s.track.endArcLength()) + " m)" + got(sol.end.value),
-             0);
+      failScene(file, "solver.end.arc_length",
+                "must lie after the start (" + formatNumber(start) + " m) and on the track (end " +
+                    formatNumber(s.track.endArcLength()) + " m)" + got(sol.end.value),
+                0);
     }
     if (speed <= 0.0) {
-      failAt(file, s.has_vehicle ? "vehicle.speed" : "moving_loads.speed",
-             "must be > 0 when solver.end is an arc length (the run would never end), got 0", 0);
+      failScene(file, s.has_vehicle ? "vehicle.speed" : "moving_loads.speed",
+                "must be positive when solver.end is an arc length (the run would never end), got 0", 0);
     }
   }
   const Output& o = s.output;
@@ -526,22 +532,22 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
     if (t == "pad_forces" && !s.effects.pad_force_output) needs = "effects.pad_force_output: true";
     if ((t == "vehicle_energy" || t == "track_energy") && !s.effects.energy_output)
       needs = "effects.energy_output: true";
-    if (needs) failAt(file, key, "'" + t + "' is recorded only with " + needs, 0);
+    if (needs) failScene(file, key, "'" + t + "' is recorded only with " + needs, 0);
     if (t == "rail_deflection" && s.effects.track_model == TrackModel::kRigid) {
-      failAt(file, key,
-             "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
-             "move: zeros)",
-             0);
+      failScene(file, key,
+                "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
+                "move: zeros)",
+                0);
     }
     if (t == "track_energy" && s.effects.track_model != TrackModel::kFlexible) {
-      failAt(file, key, "'track_energy' needs the integrated FE track: effects.track_model flexible", 0);
+      failScene(file, key, "'track_energy' needs the integrated FE track: effects.track_model flexible", 0);
     }
     if (t == "pad_forces" && s.effects.track_model != TrackModel::kFlexible) {
-      failAt(file, key, "'pad_forces' needs the integrated FE track: effects.track_model flexible", 0);
+      failScene(file, key, "'pad_forces' needs the integrated FE track: effects.track_model flexible", 0);
     }
     if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches" || t == "floor_accelerations") &&
         !s.has_vehicle) {
-      failAt(file, key, "'" + t + "' needs a vehicle in the scene", 0);
+      failScene(file, key, "'" + t + "' needs a vehicle in the scene", 0);
     }
   }
 }
@@ -605,7 +611,8 @@ void setAt(YAML::Node node, const std::vector<std::string>& parts, std::size_t i
   if (!child.IsDefined() || child.IsNull()) {
     node[parts[i]] = YAML::Node(YAML::NodeType::Map);
   } else if (!child.IsMap()) {
-    failAt(file, item.substr(0, item.find('=')), "override '" + item + "': " + parts[i] + " is not a map of keys", 0);
+    failScene(file, item.substr(0, item.find('=')), "override '" + item + "': " + parts[i] + " is not a map of keys",
+              0);
   }
   setAt(node[parts[i]], parts, i + 1, value, file, item);
 }
@@ -633,7 +640,7 @@ void applyOverride(YAML::Node& doc, const std::string& file, const std::string& 
   const std::size_t eq = item.find('=');
   const std::string key = eq == std::string::npos ? std::string() : item.substr(0, eq);
   if (eq == std::string::npos || key.empty()) {
-    failAt(file, "", "override '" + item + "': expected key=value (e.g. effects.track_model=flexible)", 0);
+    failScene(file, "", "override '" + item + "': expected key=value (e.g. effects.track_model=flexible)", 0);
   }
   // "key=" (nothing after '='): the key keeps the file's value (launch arguments left empty).
   if (eq + 1 == item.size()) return;
@@ -647,7 +654,7 @@ void applyOverride(YAML::Node& doc, const std::string& file, const std::string& 
       value = YAML::Load(spacedColons(item.substr(eq + 1)));
     }
   } catch (const YAML::Exception& e) {
-    failAt(file, key, "override '" + item + "': the value is not valid YAML: " + e.msg, 0);
+    failScene(file, key, "override '" + item + "': the value is not valid YAML: " + e.msg, 0);
   }
   std::vector<std::string> parts;
   for (std::size_t start = 0;;) {
@@ -657,7 +664,7 @@ void applyOverride(YAML::Node& doc, const std::string& file, const std::string& 
     start = dot + 1;
   }
   for (const std::string& part : parts) {
-    if (part.empty()) failAt(file, key, "override '" + item + "': empty key", 0);
+    if (part.empty()) failScene(file, key, "override '" + item + "': empty key", 0);
   }
   setAt(doc, parts, 0, value, file, item);
 }
@@ -666,18 +673,11 @@ void applyOverride(YAML::Node& doc, const std::string& file, const std::string& 
 
 Scene loadSceneText(const std::string& text, const std::string& file, const std::string& base_dir,
                     const SceneOverrides& overrides) {
-  YAML::Node doc;
-  try {
-    doc = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    failAt(file, "", "not valid YAML: " + e.msg, e.mark.line >= 0 ? e.mark.line + 1 : 0);
-  }
-  if (const auto dup = findDuplicateKey(doc)) failAt(file, dup->field, dup->describe(), dup->second_line);
-  if (!doc.IsDefined() || doc.IsNull()) failAt(file, "", "is empty", 0);
-  if (!overrides.empty() && !doc.IsMap()) failAt(file, "", "must be a map of keys to values", 1);
+  YAML::Node doc = parseYaml(text, file, raiseSceneError);
+  if (!overrides.empty() && !doc.IsMap()) failScene(file, "", "must be a map of keys to values", 1);
   for (const std::string& item : overrides) applyOverride(doc, file, item);
   const Context ctx{file, base_dir.empty() ? "." : base_dir};
-  MapReader root(doc, "", file);
+  MapReader root(doc, "", file, raiseSceneError);
   Scene s;
   s.file = file;
   s.name = stemOf(file);
@@ -689,7 +689,7 @@ Scene loadSceneText(const std::string& text, const std::string& file, const std:
   s.has_vehicle = root.has("vehicle");
   s.moving_loads.present = root.has("moving_loads");
   if (s.has_vehicle == s.moving_loads.present) {
-    failAt(file, "", "a scene has exactly one of vehicle (a run with a train) or moving_loads (the track alone)", 0);
+    failScene(file, "", "a scene has exactly one of vehicle (a run with a train) or moving_loads (the track alone)", 0);
   }
   readTrack(root, s, ctx);
   if (s.has_vehicle) {
@@ -699,7 +699,7 @@ Scene loadSceneText(const std::string& text, const std::string& file, const std:
   } else {
     root.child("vehicle");
     if (root.has("contact")) {
-      failAt(file, "contact", "a moving-load scene has no wheel-rail contact; remove the section", 0);
+      failScene(file, "contact", "a moving-load scene has no wheel-rail contact; remove the section", 0);
     }
     readMovingLoads(root, s, ctx);
   }

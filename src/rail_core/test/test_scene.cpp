@@ -148,7 +148,7 @@ struct Malformed {
 TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
   const std::vector<Malformed> cases = {
       {"negative radius", replaced(kBase, "radius: 500.0, cant: 0.1}", "radius: -500, cant: 0.1}"),
-       "scene.yaml: track.segments[2].radius: must be > 0, got -500 (line 8)"},
+       "scene.yaml: track.segments[2].radius: must be positive, got -500 (line 8)"},
       {"unknown key", kBase + "effects2: 1\n",
        "scene.yaml: effects2: unknown key (known here: contact, description, effects, moving_loads, name, output, "
        "solver, track, vehicle) (line 21)"},
@@ -157,17 +157,17 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        "creep_law, energy_output, flange_contact, floor_acceleration_output, irregularities, pad_force_output, "
        "rail_deflection_output, rviz_markers, spin_creepage, track_damping, track_model) (line 16)"},
       {"missing field", replaced(kBase, "  speed: 30.0\n", ""),
-       "scene.yaml: vehicle.speed: missing (required) (line 10)"},
+       "scene.yaml: vehicle.speed: required key missing (line 10)"},
       {"wrong type", replaced(kBase, "speed: 30.0", "speed: fast"),
        "scene.yaml: vehicle.speed: must be a number, got 'fast' (line 12)"},
       {"wrong type: map for a number", replaced(kBase, "gauge: 1.668", "gauge: {value: 1.668}"),
-       "scene.yaml: track.gauge: must be a single value, got a map (line 3)"},
+       "scene.yaml: track.gauge: must be a number, got {value: 1.668} (line 3)"},
       {"not finite", replaced(kBase, "speed: 30.0", "speed: .nan"),
        "scene.yaml: vehicle.speed: must be a finite number, got .nan (line 12)"},
       {"negative length", replaced(kBase, "length: 50.0", "length: -50.0"),
-       "scene.yaml: track.segments[0].length: must be > 0, got -50 (line 6)"},
+       "scene.yaml: track.segments[0].length: must be positive, got -50 (line 6)"},
       {"zero speed where one is needed", replaced(kBase, "speed: 30.0", "speed: 0"),
-       "scene.yaml: vehicle.speed: must be > 0 when solver.end is an arc length (the run would never end), got 0"},
+       "scene.yaml: vehicle.speed: must be positive when solver.end is an arc length (the run would never end), got 0"},
       {"bad choice", replaced(kBase, "track_model: rigid_fe", "track_model: elastic"),
        "scene.yaml: effects.track_model: must be one of rigid, rigid_fe, flexible, got 'elastic' (line 15)"},
       {"curvature jump", replaced(kBase, "radius_end: 500.0", "radius_end: 400.0"),
@@ -183,7 +183,7 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        "scene.yaml: track.rail_profile: cannot read 'worn.prr' (resolved to " + kData +
            "/worn.prr): No such file or directory (line 4)"},
       {"vehicle step above the track step", replaced(kBase, "vehicle_max_step: 1.0e-5", "vehicle_max_step: 5.0e-5"),
-       "scene.yaml: solver.vehicle_max_step: must be <= solver.track_step (2e-05 s) in co-simulation, got 5e-05 "
+       "scene.yaml: solver.vehicle_max_step: must be at most solver.track_step (2e-05 s) in co-simulation, got 5e-05 "
        "(line 18)"},
       {"output needs a track node",
        replaced(replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, rail_deflection]"),
@@ -214,7 +214,7 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
        replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states]\n  pad_force_margin: -1"),
        "scene.yaml: output.pad_force_margin: must be between 0 and 100 m, got -1 (line 21)"},
       {"friction above 1", kBase + "contact: {friction: 1.5}\n",
-       "scene.yaml: contact.friction: must be > 0 and <= 1, got 1.5 (line 21)"},
+       "scene.yaml: contact.friction: must be positive and at most 1, got 1.5 (line 21)"},
       {"restitution not a number", kBase + "contact:\n  restitution: high\n",
        "scene.yaml: contact.restitution: must be a number, got 'high' (line 22)"},
       {"zero impact-velocity floor", kBase + "contact: {impact_velocity_floor: 0}\n",
@@ -230,9 +230,9 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
            "track_model: rigid_fe", "track_model: flexible"),
        "scene.yaml: contact: a moving-load scene has no wheel-rail contact; remove the section"},
       {"radius of a few nanometres", replaced(kBase, "radius: 500.0, cant: 0.1}", "radius: 1e-300, cant: 0.1}"),
-       "scene.yaml: track.segments[2].radius: must be >= 10 m (0 = straight where allowed), got 1e-300 (line 8)"},
+       "scene.yaml: track.segments[2].radius: must be at least 10 m (0 = straight where allowed), got 1e-300 (line 8)"},
       {"transition to a 5 m radius", replaced(kBase, "radius_end: 500.0", "radius_end: 5.0"),
-       "scene.yaml: track.segments[1].radius_end: must be >= 10 m (0 = straight where allowed), got 5 (line 7)"},
+       "scene.yaml: track.segments[1].radius_end: must be at least 10 m (0 = straight where allowed), got 5 (line 7)"},
       {"gauge left to its default under a wide cant reference",
        replaced(kBase, "  gauge: 1.668\n", "  cant_reference_width: 1.733\n"),
        "scene.yaml: track.cant_reference_width: must be between track.gauge (1.435 m) and track.gauge + 0.2 m, got "
@@ -363,5 +363,5 @@ TEST(Scene, AFlowMapOverrideWithoutSpacesReadsAsWritten) {
 
 TEST(Scene, TrackLengthsThatWouldOverflowACountAreRefused) {
   const std::string e = errorOf(replaced(kBase, "length: 50.0", "length: 1e308"));
-  EXPECT_NE(e.find("track.segments[0].length: must be <= 1e+06 m"), std::string::npos) << e;
+  EXPECT_NE(e.find("track.segments[0].length: must be at most 1e+06 m"), std::string::npos) << e;
 }

@@ -1,5 +1,5 @@
 // Track data file: the shipped paper_track.yaml loads with the paper's Table 1 / Table 2 values, and bad
-// input throws with "<file>: <key.path>: <what>, got <value>".
+// input throws with "<file>: <key.path>: <what>, got <value> (line N)", the form of every input file.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -78,9 +78,12 @@ TEST(TrackData, PaperFileHasTableValues) {
 
 TEST(TrackData, UnknownKeyThrows) {
   const std::string text = readFile(paperTrackPath());
-  EXPECT_EQ(errorOf(text + "\nextra_section: 1\n"), "track.yaml: (root): unknown key, got 'extra_section'");
+  EXPECT_EQ(errorOf(text + "\nextra_section: 1\n"),
+            "track.yaml: extra_section: unknown key (known here: absorbing_ends, ballast, layout, pad, rail, sleeper, "
+            "sleeper_interaction) (line 94)");
   EXPECT_EQ(errorOf(replaced(text, "  mass: 226.41", "  mass: 226.41\n  colour: 3")),
-            "track.yaml: ballast: unknown key, got 'colour'");
+            "track.yaml: ballast.colour: unknown key (known here: c_longitudinal, c_transversal, c_vertical, "
+            "k_longitudinal, k_transversal, k_vertical, mass) (line 58)");
 }
 
 // yaml-cpp would keep the first of two equal keys: the second must not be silently dropped.
@@ -94,47 +97,48 @@ TEST(TrackData, KeyGivenTwiceThrowsNamingBothLines) {
 TEST(TrackData, MissingKeyThrows) {
   const std::string text = readFile(paperTrackPath());
   EXPECT_EQ(errorOf(replaced(text, "  sleeper_spacing: 0.60", "")),
-            "track.yaml: layout.sleeper_spacing: missing key, got nothing");
+            "track.yaml: layout.sleeper_spacing: required key missing (line 72)");
   // A misspelt key is reported as the missing required key first.
-  EXPECT_EQ(errorOf(replaced(text, "  k_roll:", "  k_rol:")), "track.yaml: pad.k_roll: missing key, got nothing");
+  EXPECT_EQ(errorOf(replaced(text, "  k_roll:", "  k_rol:")), "track.yaml: pad.k_roll: required key missing (line 40)");
 }
 
 TEST(TrackData, WrongTypeThrows) {
   const std::string text = readFile(paperTrackPath());
   EXPECT_EQ(errorOf(replaced(text, "  rho: 7860.0", "  rho: heavy")),
-            "track.yaml: rail.rho: expected a number, got 'heavy'");
+            "track.yaml: rail.rho: must be a number, got 'heavy' (line 16)");
   EXPECT_EQ(errorOf(replaced(text, "rail_elements_between_sleepers: 6", "rail_elements_between_sleepers: 6.5")),
-            "track.yaml: layout.rail_elements_between_sleepers: expected an integer, got '6.5'");
+            "track.yaml: layout.rail_elements_between_sleepers: must be a whole number, got '6.5' (line 78)");
   EXPECT_EQ(errorOf(replaced(text, "  enabled: true", "  enabled: [1]")),
-            "track.yaml: absorbing_ends.enabled: expected true or false, got a list");
+            "track.yaml: absorbing_ends.enabled: must be a single value, got [1] (line 91)");
 }
 
 TEST(TrackData, NonPositiveThrows) {
   const std::string text = readFile(paperTrackPath());
   EXPECT_EQ(errorOf(replaced(text, "  k_vertical: 6.19e7", "  k_vertical: -6.19e7")),
-            "track.yaml: ballast.k_vertical: must be positive, got -6.19e+07");
-  EXPECT_EQ(errorOf(replaced(text, "  E: 3.10e10", "  E: 0")), "track.yaml: sleeper.E: must be positive, got 0");
+            "track.yaml: ballast.k_vertical: must be positive, got -6.19e+07 (line 51)");
+  EXPECT_EQ(errorOf(replaced(text, "  E: 3.10e10", "  E: 0")),
+            "track.yaml: sleeper.E: must be positive, got 0 (line 27)");
   EXPECT_EQ(errorOf(replaced(text, "ballast_nodes: [0, 1, 4, 5]", "ballast_nodes: [0, 7]")),
-            "track.yaml: layout.ballast_nodes: entries must be distinct sleeper node indices 0..5, got 7");
+            "track.yaml: layout.ballast_nodes: entries must be distinct sleeper node indices 0..5, got 7 (line 86)");
 }
 
 // Values above a physical bound (and inf) are refused naming the key and the bound, never clamped.
 TEST(TrackData, AbsurdOrInfiniteThrows) {
   const std::string text = readFile(paperTrackPath());
   EXPECT_EQ(errorOf(replaced(text, "  rho: 7860.0", "  rho: .inf")),
-            "track.yaml: rail.rho: must be at most 100000 kg/m^3, got inf");
+            "track.yaml: rail.rho: must be a finite number, got .inf (line 16)");
   EXPECT_EQ(errorOf(replaced(text, "sleeper_length: 2.60", "sleeper_length: 1e300")),
-            "track.yaml: layout.sleeper_length: must be at most 10 m, got 1e+300");
+            "track.yaml: layout.sleeper_length: must be at most 10 m, got 1e+300 (line 79)");
   EXPECT_EQ(errorOf(replaced(text, "  k_vertical: 1.30e8", "  k_vertical: 2e12")),
-            "track.yaml: pad.k_vertical: must be at most 1e+12 N/m, got 2e+12");
+            "track.yaml: pad.k_vertical: must be at most 1e+12 N/m, got 2e+12 (line 40)");
   EXPECT_EQ(errorOf(replaced(text, "rayleigh_alpha: 0.94", "rayleigh_alpha: .inf")),
-            "track.yaml: rail.rayleigh_alpha: must be at most 10000 1/s, got inf");
+            "track.yaml: rail.rayleigh_alpha: must be a finite number, got .inf (line 21)");
   EXPECT_EQ(errorOf(replaced(text, "design_frequency: 500.0", "design_frequency: .inf")),
-            "track.yaml: absorbing_ends.design_frequency: must be at most 100000 Hz, got inf");
+            "track.yaml: absorbing_ends.design_frequency: must be a finite number, got .inf (line 92)");
   // A sleeper too short for the rail seats: the message names both keys.
   EXPECT_EQ(errorOf(replaced(text, "sleeper_length: 2.60", "sleeper_length: 1e-300")),
             "track.yaml: layout.rail_lateral_offset: must be smaller than half of layout.sleeper_length "
-            "(1e-300 / 2), got 0.87");
+            "(1e-300 / 2), got 0.87 (line 72)");
   // At the bound: accepted.
   EXPECT_EQ(errorOf(replaced(text, "  k_vertical: 1.30e8", "  k_vertical: 1e12")), "no exception");
 }

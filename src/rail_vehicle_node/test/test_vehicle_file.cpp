@@ -183,7 +183,7 @@ TEST(VehicleLoader, NamesAnUndefinedBodyOfAJoint) {
   const std::string path = writeTemp("undefined_body.yaml", std::string(kTwoBodies) + R"(joints:
   - {name: bearing, type: revolute, body_i: ws, body_j: axlebox_9, position: [0, 1, 0.445], axis: [0, 1, 0]}
 )");
-  EXPECT_EQ(loadError(path), path + ": joints[0].body_j: no body of that name is defined, got axlebox_9 (line 5)");
+  EXPECT_EQ(loadError(path), path + ": joints[0].body_j: no body of that name is defined, got 'axlebox_9' (line 5)");
 }
 
 // yaml-cpp would keep the first of two equal keys: a key given twice is refused, naming both lines.
@@ -205,14 +205,14 @@ TEST(VehicleLoader, RejectsNonPhysicalMass) {
   const std::string path = writeTemp("negative_mass.yaml", R"(bodies:
   - {name: ws, mass: -5, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 900]}
 )");
-  EXPECT_EQ(loadError(path), path + ": bodies[0].mass: mass must be > 0 kg, got -5 (line 2)");
+  EXPECT_EQ(loadError(path), path + ": bodies[0].mass: must be positive, got -5 (line 2)");
 }
 
 TEST(VehicleLoader, RejectsMissingKeyUnknownKeyAndBadNumber) {
   const std::string missing = writeTemp("missing.yaml", R"(bodies:
   - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445]}
 )");
-  EXPECT_EQ(loadError(missing), missing + ": bodies[0].inertia: required key missing, got nothing (line 2)");
+  EXPECT_EQ(loadError(missing), missing + ": bodies[0].inertia: required key missing (line 2)");
   const std::string typo = writeTemp("typo.yaml", std::string(kTwoBodies) + R"(forces:
   - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], stifness: [1, 2, 3]}
 )");
@@ -220,12 +220,12 @@ TEST(VehicleLoader, RejectsMissingKeyUnknownKeyAndBadNumber) {
   const std::string not_number = writeTemp("not_number.yaml", R"(bodies:
   - {name: ws, mass: heavy, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 900]}
 )");
-  EXPECT_EQ(loadError(not_number), not_number + ": bodies[0].mass: expected a number, got heavy (line 2)");
+  EXPECT_EQ(loadError(not_number), not_number + ": bodies[0].mass: must be a number, got 'heavy' (line 2)");
   const std::string short_vector = writeTemp("short_vector.yaml", R"(bodies:
   - {name: ws, mass: 1800, centre_of_mass: [0, 0.445], inertia: [900, 10, 900]}
 )");
   EXPECT_EQ(loadError(short_vector),
-            short_vector + ": bodies[0].centre_of_mass: expected a list of 3 numbers, got [0, 0.445] (line 2)");
+            short_vector + ": bodies[0].centre_of_mass: must be a list of 3 numbers, got [0, 0.445] (line 2)");
 }
 
 TEST(VehicleLoader, RejectsBadBumpStopTableAndNegativeStiffness) {
@@ -239,11 +239,11 @@ TEST(VehicleLoader, RejectsBadBumpStopTableAndNegativeStiffness) {
     table: [[0.025, 0], [0.030, 600], [0.028, 900]]
 )");
   EXPECT_EQ(loadError(table),
-            table + ": forces[0].table[2][0]: deflection not increasing (after 0.030), got 0.028 (line 11)");
+            table + ": forces[0].table[2][0]: deflection not increasing (after 0.03), got 0.028 (line 11)");
   const std::string negative = writeTemp("negative_k.yaml", std::string(kTwoBodies) + R"(forces:
   - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], stiffness: [1, -2, 3]}
 )");
-  EXPECT_EQ(loadError(negative), negative + ": forces[0].stiffness[1]: must be >= 0, got -2 (line 5)");
+  EXPECT_EQ(loadError(negative), negative + ": forces[0].stiffness[1]: must not be negative, got -2 (line 5)");
 }
 
 // Finite but absurd values are refused naming the key path and line: positions beyond 1 km, forces beyond
@@ -252,43 +252,45 @@ TEST(VehicleLoader, RejectsAbsurdMagnitudes) {
   const std::string far = writeTemp("far_com.yaml", R"(bodies:
   - {name: ws, mass: 1800, centre_of_mass: [0, 0, -1e300], inertia: [900, 10, 900]}
 )");
-  EXPECT_EQ(loadError(far), far + ": bodies[0].centre_of_mass[2]: magnitude must be <= 1000 m, got -1e300 (line 2)");
+  EXPECT_EQ(loadError(far),
+            far + ": bodies[0].centre_of_mass[2]: magnitude must be at most 1000 m, got -1e+300 (line 2)");
   const std::string heavy = writeTemp("heavy.yaml", R"(bodies:
   - {name: ws, mass: 2e6, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 900]}
 )");
-  EXPECT_EQ(loadError(heavy), heavy + ": bodies[0].mass: mass must be <= 1e+06 kg, got 2e6 (line 2)");
+  EXPECT_EQ(loadError(heavy), heavy + ": bodies[0].mass: must be at most 1e+06 kg, got 2e+06 (line 2)");
   const std::string inertia = writeTemp("inertia.yaml", R"(bodies:
   - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445], inertia: [900, 1e300, 900]}
 )");
   EXPECT_EQ(loadError(inertia),
-            inertia + ": bodies[0].inertia[1]: magnitude must be <= 1e+08 kg m^2, got 1e300 (line 2)");
+            inertia + ": bodies[0].inertia[1]: magnitude must be at most 1e+08 kg m^2, got 1e+300 (line 2)");
   const std::string tiny = writeTemp("tiny_inertia.yaml", R"(bodies:
   - {name: ws, mass: 1800, centre_of_mass: [0, 0, 0.445], inertia: [900, 10, 1e-300]}
 )");
-  EXPECT_EQ(loadError(tiny),
-            tiny + ": bodies[0].inertia[2]: moment of inertia must be >= 1e-06 kg m^2, got 1e-300 (line 2)");
+  EXPECT_EQ(loadError(tiny), tiny + ": bodies[0].inertia[2]: must be at least 1e-06 kg m^2, got 1e-300 (line 2)");
   const std::string preload = writeTemp("preload.yaml", std::string(kTwoBodies) + R"(forces:
   - {name: spring, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], preload: [-1e300, 0, 0]}
 )");
-  EXPECT_EQ(loadError(preload), preload + ": forces[0].preload[0]: magnitude must be <= 1e+08 N, got -1e300 (line 5)");
+  EXPECT_EQ(loadError(preload),
+            preload + ": forces[0].preload[0]: magnitude must be at most 1e+08 N, got -1e+300 (line 5)");
   const std::string stiff = writeTemp("stiff.yaml", std::string(kTwoBodies) + R"(forces:
   - {name: link, type: point_to_point, body_i: ws, body_j: box, position_i: [0, 0, 0.445], position_j: [0, 1, 0.445],
      stiffness: 1e300}
 )");
-  EXPECT_EQ(loadError(stiff), stiff + ": forces[0].stiffness: magnitude must be <= 1e+12 N/m, got 1e300 (line 6)");
+  EXPECT_EQ(loadError(stiff),
+            stiff + ": forces[0].stiffness: magnitude must be at most 1e+12 N/m, got 1e+300 (line 6)");
 }
 
 TEST(VehicleLoader, RejectsAJointOrForceThatIsNotAMap) {
   const std::string joint = writeTemp("joint_scalar.yaml", std::string(kTwoBodies) + "joints:\n  - bearing\n");
-  EXPECT_EQ(loadError(joint), joint + ": joints[0]: expected a map, got bearing (line 5)");
+  EXPECT_EQ(loadError(joint), joint + ": joints[0]: must be a map of keys to values, got 'bearing' (line 5)");
   const std::string force = writeTemp("force_list.yaml", std::string(kTwoBodies) + "forces:\n  - [1, 2]\n");
-  EXPECT_EQ(loadError(force), force + ": forces[0]: expected a map, got [1, 2] (line 5)");
+  EXPECT_EQ(loadError(force), force + ": forces[0]: must be a map of keys to values, got [1, 2] (line 5)");
 }
 
 TEST(VehicleLoader, ReportsSyntaxErrorsAndMissingFiles) {
   const std::string bad = writeTemp("syntax.yaml", "bodies:\n  - {name: ws, mass: [1800\n");
   EXPECT_EQ(loadError(bad).rfind(bad + ":", 0), 0u);
-  EXPECT_NE(loadError(bad).find("YAML syntax error"), std::string::npos);
+  EXPECT_NE(loadError(bad).find(": not valid YAML: "), std::string::npos) << loadError(bad);
   EXPECT_EQ(loadError("/nonexistent/vehicle.yaml"), "/nonexistent/vehicle.yaml: cannot open the file");
 }
 

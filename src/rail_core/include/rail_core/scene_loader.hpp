@@ -10,7 +10,7 @@
 namespace rail::core {
 
 // A scene (or one of its data files) that cannot be used. The message names the file and the field:
-//   "scene.yaml: track.segments[2].radius: must be > 0, got -500 (line 23)".
+//   "scene.yaml: track.segments[2].radius: must be positive, got -500 (line 23)".
 class SceneError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
