@@ -2,6 +2,7 @@
 
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
+#include <sys/stat.h>
 
 #include <csignal>
 
@@ -10,6 +11,7 @@
 #include "rail_core/exit_codes.hpp"
 #include "rail_core/handshake.hpp"
 #include "rail_ros/master_watch.hpp"
+#include "rail_ros/scene_param.hpp"
 
 namespace rail::ros_glue {
 
@@ -70,6 +72,21 @@ void installStopSignals() {
   nodeStop();  // constructed before a signal can arrive
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
+}
+
+int startNode(int argc, char** argv, const char* name, const char* what, core::Role role, core::Scene& scene) {
+  if (nodeHelpRequested(argc, argv, name, what)) return core::kExitOk;
+  ros::init(argc, argv, name, ros::init_options::NoSigintHandler);
+  ::umask(077);  // the shm region is 0600 already
+  installStopSignals();
+  const std::string& me = ros::this_node::getName();
+  if (const int rc = waitForMaster(me, nodeStop().signal); rc != 0) return rc;
+  // Started here rather than by the first NodeHandle, so that the node outlives this function's handle.
+  ros::start();
+  ros::NodeHandle pnh("~");
+  if (!readScene(pnh, scene)) return core::kExitBadInput;
+  ROS_INFO_STREAM(me << ": will simulate\n" << core::describe(scene, role));
+  return -1;
 }
 
 int handshakeAsVehicle(const core::Scene& scene, double wheel_span, std::string& peer) {

@@ -20,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -27,6 +28,7 @@
 
 #include <rail_core/exit_codes.hpp>
 #include "rail_vehicle_node/cosim_vehicle.hpp"
+#include "rail_vehicle_node/vehicle_loader.hpp"
 #include "rail_vehicle_node/vehicle_run.hpp"
 #include "rail_vehicle_node/vehicle_simulator.hpp"
 
@@ -235,6 +237,53 @@ TEST(CosimVehicle, ReproducesTheVehicleAloneOnTheRigidTrack) {
   EXPECT_LT(d_lat, 2.5e-5);
   EXPECT_LT(d_yaw_deg, 4.7e-4);
   EXPECT_LT(d_vert, 8e-8);
+}
+
+// The node builds the vehicle first, sends the handshake the model's wheel span, then connects the
+// transport: that run is the run of a vehicle built connected, bit for bit.
+TEST(CosimVehicle, BuildingBeforeConnectingGivesTheSameRun) {
+  const core::Scene scene = cosimScene(0.02);
+  auto runOf = [&scene](bool connect_later, std::vector<double>& lateral) {
+    cc::LoopbackLink link(scene.wheelCount());
+    std::unique_ptr<CosimVehicle> v;
+    if (connect_later) {
+      v = std::make_unique<CosimVehicle>(scene);
+      EXPECT_FALSE(v->connected());
+      EXPECT_EQ(v->stepsExchanged(), 0u);
+      // What the node sends in the handshake: the span of the model it built, the span of the file.
+      EXPECT_EQ(v->simulator().model().wheelSpan(), loadVehicleModel(scene.vehicle.data.path).wheelSpan());
+      v->connect(link.vehicleEnd());
+      EXPECT_THROW(v->connect(link.vehicleEnd()), std::logic_error);
+    } else {
+      v = std::make_unique<CosimVehicle>(scene, link.vehicleEnd());
+    }
+    EXPECT_TRUE(v->connected());
+    v->resetState(shifted(v->simulator(), kShift));
+    RigidTrackPeer peer(scene, v->simulator().contactModel().wheels(), link.trackEnd());
+    std::thread track([&peer] { peer.run(); });
+    RunStatus s = v->start();
+    while (s == RunStatus::kRunning) {
+      s = v->step();
+      lateral.push_back(v->simulator().wheelsets()[0].lateral);
+      lateral.push_back(v->simulator().wheelsets()[0].vertical);
+    }
+    v->close();
+    track.join();
+    EXPECT_EQ(s, RunStatus::kFinished) << v->message();
+    EXPECT_EQ(peer.error(), "");
+  };
+  std::vector<double> connected_at_build, connected_later;
+  runOf(false, connected_at_build);
+  runOf(true, connected_later);
+  ASSERT_GT(connected_at_build.size(), 100u);
+  EXPECT_EQ(connected_later, connected_at_build);
+}
+
+TEST(CosimVehicle, StartBeforeConnectIsRefused) {
+  CosimVehicle v(cosimScene(0.01));
+  EXPECT_EQ(v.start(), RunStatus::kIntegratorFailed);
+  EXPECT_EQ(v.message(), "cosim vehicle: Start() before connect()");
+  v.close();  // nothing to tell: no transport
 }
 
 TEST(CosimVehicle, RefusesAScene) {

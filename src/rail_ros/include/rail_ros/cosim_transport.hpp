@@ -10,6 +10,7 @@
 #include <rail_core/coupling/protocol.hpp>
 #include <rail_core/coupling/shm_transport.hpp>
 #include <rail_core/coupling/transport.hpp>
+#include <rail_core/exit_codes.hpp>
 #include <rail_core/scene.hpp>
 #include <rail_ros/service_transport.hpp>
 #include <rail_ros/topic_transport.hpp>
@@ -94,6 +95,26 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> makeTransport(const
     }
   }
   throw std::runtime_error("solver.transport: unknown transport");
+}
+
+// makeTransport with the nodes' report of a failure: 0 and the transport in `out`, else the exit code
+// (4 peer gone or timed out, 3 refused, 2 bad options) after one FATAL line naming the node, the transport
+// and the peer.
+inline int openTransport(const rail::core::Scene& scene, rail::core::coupling::Role role, ros::NodeHandle& nh,
+                         ros::NodeHandle& pnh, const std::string& peer_node, const std::atomic<bool>* interrupt,
+                         std::unique_ptr<rail::core::coupling::FrameTransport>& out) {
+  const std::string& me = ros::this_node::getName();
+  const char* transport = rail::core::toString(scene.solver.transport);
+  try {
+    out = makeTransport(scene, role, nh, pnh, peer_node, interrupt);
+    return rail::core::kExitOk;
+  } catch (const rail::core::coupling::CouplingError& e) {
+    ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), transport, peer_node.c_str(), e.what());
+    return rail::core::coupling::exitCode(e.status());
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: cannot open the %s transport: %s", me.c_str(), transport, e.what());
+    return rail::core::kExitBadInput;
+  }
 }
 
 }  // namespace rail::ros_glue

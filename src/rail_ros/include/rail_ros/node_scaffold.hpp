@@ -9,6 +9,7 @@
 #include <string>
 
 #include "rail_core/scene.hpp"
+#include "rail_core/scene_loader.hpp"
 
 namespace rail::ros_glue {
 
@@ -27,6 +28,13 @@ NodeStop& nodeStop();
 
 // SIGINT and SIGTERM set node_stop() (the run loop then closes the bags and exits 5).
 void installStopSignals();
+
+// The start both nodes share: answers -h/--help; ros::init without roscpp's SIGINT handler (the stop flag
+// takes the signals); umask 077 (bags and cost profiles are the user's alone); the stop signals; the
+// master wait; ros::start(); the scene from the parameter server, validated, and the "will simulate"
+// report for `role`. Returns -1 when the node goes on with `scene`, else the exit code to return (0 after
+// --help).
+int startNode(int argc, char** argv, const char* name, const char* what, core::Role role, core::Scene& scene);
 
 // The vehicle's side: waits for the track's service (up to solver.handshake_timeout; a track node that died
 // meanwhile is reported at once with its exit code) and calls it. Returns 0 and the track node's name in

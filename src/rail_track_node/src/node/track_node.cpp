@@ -7,7 +7,6 @@
 //  - in a moving-load scene: runMovingLoads (moving_load_run.hpp).
 // Physics and run rules live in the ROS-free core (cosim_track.hpp, cosim_track_run.hpp, track_simulator.hpp).
 #include <ros/ros.h>
-#include <sys/stat.h>
 
 #include <chrono>
 #include <memory>
@@ -82,15 +81,10 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       }
     }
   }
-  try {
-    if (!transport) transport = ros_glue::makeTransport(scene, cc::Role::kTrack, nh, pnh, peer, &stop.requested);
-  } catch (const cc::CouplingError& e) {
-    ROS_FATAL("%s: cannot open the %s transport to %s: %s", me.c_str(), toString(scene.solver.transport), peer.c_str(),
-              e.what());
-    return cc::exitCode(e.status());
-  } catch (const std::exception& e) {
-    ROS_FATAL("%s: cannot open the %s transport: %s", me.c_str(), toString(scene.solver.transport), e.what());
-    return kExitBadInput;
+  if (!transport) {
+    if (const int rc = ros_glue::openTransport(scene, cc::Role::kTrack, nh, pnh, peer, &stop.requested, transport);
+        rc != kExitOk)
+      return rc;
   }
   ROS_INFO("%s: %s track built (%d wheels); serving the %s transport, track step %g s", me.c_str(),
            track->flexible() ? "flexible" : "rigid", track->wheelCount(), toString(scene.solver.transport),
@@ -131,22 +125,15 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (ros_glue::nodeHelpRequested(argc, argv, "rail_track",
-                                  "the track side of a railsim run (FE track and the wheel-rail contact in "
-                                  "co-simulation, moving loads, replay)"))
-    return 0;
-  ros::init(argc, argv, "rail_track", ros::init_options::NoSigintHandler);
-  // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
-  ::umask(077);
-  ros_glue::installStopSignals();
-  if (const int rc = ros_glue::waitForMaster(ros::this_node::getName(), ros_glue::nodeStop().signal); rc != 0) {
+  Scene scene;
+  if (const int rc = ros_glue::startNode(argc, argv, "rail_track",
+                                         "the track side of a railsim run (FE track and the wheel-rail contact in "
+                                         "co-simulation, moving loads, replay)",
+                                         Role::kTrack, scene);
+      rc >= 0)
     return rc;
-  }
   ros::NodeHandle nh, pnh("~");
   const std::string me = ros::this_node::getName();
-  Scene scene;
-  if (!ros_glue::readScene(pnh, scene)) return kExitBadInput;
-  ROS_INFO_STREAM(me << ": will simulate\n" << describe(scene, Role::kTrack));
   if (!scene.needsTrackNode()) {
     ROS_INFO("%s: track_model is rigid: the vehicle runs alone, nothing to do here", me.c_str());
     return kExitOk;

@@ -3,7 +3,7 @@
 // through a rail_core::coupling::VehicleCoupling over any FrameTransport.
 //
 // Loop (the caller owns it):
-//   CosimVehicle v(scene, transport);
+//   CosimVehicle v(scene, transport);   // or CosimVehicle v(scene); ... v.connect(transport);
 //   v.Start();                       // step 0: initial wheel states at t = 0, wrenches of step 0
 //   while (v.Step() == RunStatus::kRunning) {}   // integrate to t_{k+1}, interpolate, exchange
 //   v.Close();
@@ -28,20 +28,28 @@ namespace rail::vehicle {
 class CosimVehicle {
  public:
   // scene: a resolved co-simulation scene (effects.track_model rigid_fe or flexible) with
-  // 0 < solver.vehicle_max_step <= solver.track_step. transport: the vehicle end, must outlive this
-  // object. Throws std::runtime_error naming the field for a scene that does not qualify (and whatever
+  // 0 < solver.vehicle_max_step <= solver.track_step. Builds the vehicle; the transport is bound later
+  // with connect(), so that a node can build first and send the handshake what the model says (its wheel
+  // span). Throws std::runtime_error naming the field for a scene that does not qualify (and whatever
   // VehicleSimulator throws).
+  explicit CosimVehicle(const core::Scene& scene, const SimulatorSettings& settings = {});
+  // Builds and connects: transport is the vehicle end and must outlive this object.
   CosimVehicle(const core::Scene& scene, core::coupling::FrameTransport& transport,
                const SimulatorSettings& settings = {});
   ~CosimVehicle();
   CosimVehicle(const CosimVehicle&) = delete;
   CosimVehicle& operator=(const CosimVehicle&) = delete;
 
+  // Binds the transport (the vehicle end, must outlive this object); once, before start(). Until then the
+  // wheels carry no wrench, as before the first exchange. Throws std::logic_error when called twice.
+  void connect(core::coupling::FrameTransport& transport);
+  bool connected() const { return coupling_ != nullptr; }
+
   // Replaces the state before Start() (e.g. an initial lateral offset); throws after Start().
   void resetState(const Eigen::VectorXd& y);
 
   // Step 0 at t = 0: sends the initial wheel states, receives the wrenches of step 0. kRunning on success,
-  // kIntegratorFailed with message() naming the exchange failure otherwise.
+  // kIntegratorFailed with message() naming the exchange failure (or a missing connect()) otherwise.
   RunStatus start();
   // One track step: integrates to t_{k} = k h (the next exchange), interpolates the wheel states there
   // (dense output), exchanges them for the wrenches of step k. Returns kRunning, kFinished once
@@ -55,8 +63,8 @@ class CosimVehicle {
   const std::string& message() const { return message_; }
   core::coupling::Status exchangeStatus() const { return exchange_status_; }
   double time() const { return sim_->time(); }
-  std::uint64_t stepsExchanged() const { return coupling_->nextStep(); }  // exchanges done so far
-  double trackStep() const { return track_step_; }                        // h [s]
+  std::uint64_t stepsExchanged() const { return coupling_ ? coupling_->nextStep() : 0; }  // exchanges done so far
+  double trackStep() const { return track_step_; }                                        // h [s]
   // Largest internal CVODE step seen after any AdvanceTo (last step of each call) [s].
   double maxInternalStep() const { return max_internal_step_; }
 
@@ -78,7 +86,8 @@ class CosimVehicle {
   RunStatus exchange();
 
   double track_step_ = 0.0;
-  std::unique_ptr<core::coupling::VehicleCoupling> coupling_;
+  core::coupling::CouplingConfig config_;
+  std::unique_ptr<core::coupling::VehicleCoupling> coupling_;  // null until connect()
   std::unique_ptr<CouplingSource> source_;
   std::unique_ptr<VehicleSimulator> sim_;
   std::unique_ptr<VehicleData> data_;  // kinematics of the interpolated state

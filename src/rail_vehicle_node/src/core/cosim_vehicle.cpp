@@ -12,16 +12,22 @@ namespace rail::vehicle {
 
 namespace cc = rail::core::coupling;
 
-// The coupling's extrapolated wrench as the simulator's wheel-wrench source.
+// The coupling's extrapolated wrench as the simulator's wheel-wrench source; zero until connected, as the
+// coupling gives before its first exchange.
 class CosimVehicle::CouplingSource : public WheelWrenchSource {
  public:
-  explicit CouplingSource(const cc::VehicleCoupling& coupling) : coupling_(coupling) {}
+  void bind(const cc::VehicleCoupling& coupling) { coupling_ = &coupling; }
   void wheelWrenchAt(double t, int wheel, Vector3& force_in_world, Vector3& moment_in_world) const noexcept override {
-    coupling_.wrenchAt(t, wheel, force_in_world, moment_in_world);
+    if (coupling_ == nullptr) {
+      force_in_world.setZero();
+      moment_in_world.setZero();
+      return;
+    }
+    coupling_->wrenchAt(t, wheel, force_in_world, moment_in_world);
   }
 
  private:
-  const cc::VehicleCoupling& coupling_;
+  const cc::VehicleCoupling* coupling_ = nullptr;
 };
 
 namespace {
@@ -48,15 +54,14 @@ const core::Scene& checkCosimScene(const core::Scene& scene) {
 
 }  // namespace
 
-CosimVehicle::CosimVehicle(const core::Scene& scene, cc::FrameTransport& transport, const SimulatorSettings& settings)
-    : track_step_(checkCosimScene(scene).solver.track_step) {
-  coupling_ = std::make_unique<cc::VehicleCoupling>(cc::couplingConfig(scene), transport);
-  source_ = std::make_unique<CouplingSource>(*coupling_);
+CosimVehicle::CosimVehicle(const core::Scene& scene, const SimulatorSettings& settings)
+    : track_step_(checkCosimScene(scene).solver.track_step), config_(cc::couplingConfig(scene)) {
+  source_ = std::make_unique<CouplingSource>();
   SimulatorSettings s = settings;
   s.wheel_wrench_source = source_.get();
   sim_ = std::make_unique<VehicleSimulator>(scene, s);
   const int n_wheels = sim_->contactModel().nWheels();
-  if (n_wheels != scene.wheelCount() || coupling_->states().capacity() < n_wheels) {
+  if (n_wheels != scene.wheelCount() || n_wheels != config_.wheel_count) {
     std::ostringstream os;
     os << scene.file << ": the vehicle has " << n_wheels << " wheels, the scene's frames carry " << scene.wheelCount();
     throw std::runtime_error(os.str());
@@ -67,7 +72,18 @@ CosimVehicle::CosimVehicle(const core::Scene& scene, cc::FrameTransport& transpo
   for (std::size_t i = 0; i < wheel_s_.size(); ++i) wheel_s_[i] = sim_->wheels()[i].arc_length;
 }
 
+CosimVehicle::CosimVehicle(const core::Scene& scene, cc::FrameTransport& transport, const SimulatorSettings& settings)
+    : CosimVehicle(scene, settings) {
+  connect(transport);
+}
+
 CosimVehicle::~CosimVehicle() = default;
+
+void CosimVehicle::connect(cc::FrameTransport& transport) {
+  if (coupling_) throw std::logic_error("cosim vehicle: connect() called twice");
+  coupling_ = std::make_unique<cc::VehicleCoupling>(config_, transport);
+  source_->bind(*coupling_);
+}
 
 void CosimVehicle::resetState(const Eigen::VectorXd& y) {
   if (started_) throw std::runtime_error("cosim vehicle: ResetState after Start()");
@@ -112,6 +128,10 @@ RunStatus CosimVehicle::start() {
     message_ = "cosim vehicle: Start() called twice";
     return RunStatus::kIntegratorFailed;
   }
+  if (!coupling_) {
+    message_ = "cosim vehicle: Start() before connect()";
+    return RunStatus::kIntegratorFailed;
+  }
   started_ = true;
   fillWheelStates(sim_->state(), coupling_->states());
   const RunStatus s = exchange();
@@ -145,6 +165,8 @@ RunStatus CosimVehicle::step() {
   return run;
 }
 
-void CosimVehicle::close() { coupling_->close(); }
+void CosimVehicle::close() {
+  if (coupling_) coupling_->close();
+}
 
 }  // namespace rail::vehicle

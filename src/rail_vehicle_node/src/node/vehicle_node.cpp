@@ -1,11 +1,11 @@
 // rail_vehicle node: ROS wiring of the vehicle side. Reads the scene from the parameter server, validates
 // it and reports what it will simulate. On the rigid track (effects.track_model: rigid) it runs the
-// VehicleSimulator to solver.end; in a co-simulation (rigid_fe or flexible) it checks with the track node
-// that both run the same scene (handshake), opens the scene's transport (service, topic or shm) and runs
-// the CosimVehicle in lockstep with the track. Either way a VehicleRun owns the loop and the
+// VehicleSimulator to solver.end; in a co-simulation (rigid_fe or flexible) it builds the CosimVehicle,
+// checks with the track node that both run the same scene (handshake, which also gives the track the
+// model's wheel span), opens the scene's transport (service, topic or shm) and runs in lockstep with the
+// track. Either way a VehicleRun owns the loop and the
 // VehicleOutputs publish and record each output instant. Physics and run rules live in the core.
 #include <ros/ros.h>
-#include <sys/stat.h>
 
 #include <chrono>
 #include <memory>
@@ -23,7 +23,6 @@
 #include <rail_ros/run_output.hpp>
 #include <rail_ros/scene_param.hpp>
 #include <rail_vehicle_node/cosim_vehicle.hpp>
-#include <rail_vehicle_node/vehicle_loader.hpp>
 #include <rail_vehicle_node/vehicle_run.hpp>
 #include <rail_vehicle_node/vehicle_simulator.hpp>
 
@@ -37,8 +36,8 @@ namespace rv = rail::vehicle;
 namespace {
 
 // Runs the vehicle to solver.end: alone on the rigid track, or (scene.cosimulation()) as the vehicle side of
-// the co-simulation with the track node `peer` over the scene's transport. Returns the exit code.
-int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, const std::string& peer) {
+// the co-simulation with the track node over the scene's transport. Returns the exit code.
+int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   const std::string node = ros::this_node::getName();
   const bool cosim = scene.cosimulation();
   ros_glue::NodeStop& stop = ros_glue::nodeStop();
@@ -54,29 +53,28 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   std::unique_ptr<rv::VehicleSimulator> alone;
   try {
     if (cosim) {
-      transport = ros_glue::makeTransport(scene, cc::Role::kVehicle, nh, pnh, peer, &stop.requested);
-    }
-  } catch (const cc::CouplingError& e) {
-    ROS_FATAL("%s: cannot open the %s transport to the track node: %s", node.c_str(), toString(scene.solver.transport),
-              e.what());
-    return cc::exitCode(e.status());
-  } catch (const std::exception& e) {
-    ROS_FATAL("%s: cannot open the %s transport: %s", node.c_str(), toString(scene.solver.transport), e.what());
-    return kExitBadInput;
-  }
-  try {
-    if (cosim) {
-      timed_transport = std::make_unique<cc::TimedTransport>(*transport, cost);
-      cosim_vehicle = std::make_unique<rv::CosimVehicle>(scene, *timed_transport, settings);
+      cosim_vehicle = std::make_unique<rv::CosimVehicle>(scene, settings);
     } else {
       alone = std::make_unique<rv::VehicleSimulator>(scene, settings);
     }
   } catch (const std::exception& e) {
     ROS_FATAL("%s: cannot build the %svehicle: %s", node.c_str(), cosim ? "co-simulated " : "", e.what());
-    if (transport) transport->close();
     return kExitBadInput;
   }
   rv::VehicleSimulator& sim = cosim ? cosim_vehicle->simulator() : *alone;
+  std::string peer;
+  double peer_wait = 0.0;  // the handshake waits for the track node: not the vehicle's set-up
+  if (cosim) {
+    const auto wait0 = std::chrono::steady_clock::now();
+    const int rc = ros_glue::handshakeAsVehicle(scene, sim.model().wheelSpan(), peer);
+    if (rc != kExitOk) return rc;
+    peer_wait = std::chrono::duration<double>(std::chrono::steady_clock::now() - wait0).count();
+    if (const int rc = ros_glue::openTransport(scene, cc::Role::kVehicle, nh, pnh, peer, &stop.requested, transport);
+        rc != kExitOk)
+      return rc;
+    timed_transport = std::make_unique<cc::TimedTransport>(*transport, cost);
+    cosim_vehicle->connect(*timed_transport);
+  }
   ROS_INFO(
       "%s: vehicle settled on the rails (lowered %.4f mm, wheel loads %.1f N of %.1f N); integrating with "
       "%s, rtol %g, atol %g, max step %g s (0: none)%s",
@@ -93,7 +91,7 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
   const rv::VehicleRunOptions options{&stop.requested, &cost};
   rv::VehicleRun run = cosim ? rv::VehicleRun(scene, *cosim_vehicle, options) : rv::VehicleRun(scene, sim, options);
   const auto wall0 = std::chrono::steady_clock::now();
-  cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count());
+  cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count() - peer_wait);
   const long long irregularity_stations0 = rail::contact::Irregularities::stationsEvaluated();
   ros_glue::ProgressLine progress(node, sim.endTimeEstimate());
   char where[64];
@@ -140,42 +138,22 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh, co
 
 }  // namespace
 int main(int argc, char** argv) {
-  if (ros_glue::nodeHelpRequested(argc, argv, "rail_vehicle",
-                                  "the vehicle side of a railsim run (multibody vehicle on CVODE; alone on the rigid "
-                                  "track or co-simulated with rail_track)"))
-    return 0;
-  ros::init(argc, argv, "rail_vehicle", ros::init_options::NoSigintHandler);
-  // Bags, cost profiles and their directories are the user's alone (the shm region is 0600 already).
-  ::umask(077);
-  ros_glue::installStopSignals();
-  if (const int rc = ros_glue::waitForMaster(ros::this_node::getName(), ros_glue::nodeStop().signal); rc != 0) {
+  Scene scene;
+  if (const int rc = ros_glue::startNode(argc, argv, "rail_vehicle",
+                                         "the vehicle side of a railsim run (multibody vehicle on CVODE; alone on the "
+                                         "rigid track or co-simulated with rail_track)",
+                                         Role::kVehicle, scene);
+      rc >= 0)
     return rc;
-  }
   ros::NodeHandle nh;
   ros::NodeHandle pnh("~");
-  Scene scene;
-  if (!ros_glue::readScene(pnh, scene)) return kExitBadInput;
-  ROS_INFO_STREAM(ros::this_node::getName() << ": will simulate\n" << describe(scene, Role::kVehicle));
   if (!scene.has_vehicle) {
     ROS_INFO("%s: the scene has no vehicle (moving loads on the track alone): nothing to do",
              ros::this_node::getName().c_str());
     return kExitOk;
   }
   if (pnh.param("validate_only", false)) return kExitOk;
-  std::string peer;
-  if (scene.cosimulation()) {
-    // The track sizes its window by the vehicle's wheel span: the vehicle's own data says it.
-    double wheel_span = 0.0;
-    try {
-      wheel_span = rv::loadVehicleModel(scene.vehicle.data.path).wheelSpan();
-    } catch (const std::exception& e) {
-      ROS_FATAL("%s: %s", ros::this_node::getName().c_str(), e.what());
-      return kExitBadInput;
-    }
-    const int rc = ros_glue::handshakeAsVehicle(scene, wheel_span, peer);
-    if (rc != kExitOk) return rc;
-  }
-  const int rc = runVehicle(scene, nh, pnh, peer);
+  const int rc = runVehicle(scene, nh, pnh);
   ros::shutdown();
   return rc;
 }
