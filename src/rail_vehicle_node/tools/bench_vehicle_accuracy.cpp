@@ -1,8 +1,9 @@
 // Accuracy of the vehicle alone against a reference run (prints its figures; not a test):
-//   bench_vehicle_accuracy <scene.yaml> <reference.csv> [method max_step rtol atol] ...
+//   bench_vehicle_accuracy [--sample DT] <scene.yaml> <reference.csv> [method max_step rtol atol] ...
 // The reference is the scene run with Adams capped at 5e-6 s (written to reference.csv on the first call,
 // read back afterwards); each candidate (default: the scene's own settings, the vehicle alone uncapped) runs
-// the whole scene. Both are sampled every 1 ms (the node's output rate). Printed per candidate: wall time
+// the whole scene. Both are sampled every DT (default 1 ms, the node's output rate; a finer DT resolves the
+// flange impacts, which last about a millisecond). Printed per candidate: wall time
 // per simulated second, and against the reference the largest difference of the leading wheelset's
 // lateral and vertical displacement and attack angle on the straights and in the steady curve, and the
 // count, peak and mean of its flange-force bursts (runs of samples with flange contact) in the transitions.
@@ -36,7 +37,7 @@ struct Candidate {
   double max_step = 0.0, rtol = 0.0, atol = 0.0;
 };
 
-std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double& wall_per_s) {
+std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double sample, double& wall_per_s) {
   core::Scene scene = base;
   scene.effects.track_model = core::TrackModel::kRigid;
   scene.solver.vehicle_method = c.method == "bdf"     ? core::VehicleMethod::kBdf
@@ -51,7 +52,7 @@ std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double
   const auto t0 = std::chrono::steady_clock::now();
   vehicle::RunStatus status = vehicle::RunStatus::kRunning;
   for (int i = 1; status == vehicle::RunStatus::kRunning; ++i) {
-    status = sim.advanceTo(1e-3 * i);
+    status = sim.advanceTo(sample * i);
     const vehicle::WheelsetTrackOutput& w = sim.wheelsets().front();
     Sample x;
     x.t = sim.time();
@@ -144,28 +145,48 @@ Bursts flangeBursts(const std::vector<Sample>& v, double t0, double t1) {
 
 namespace {
 const char* const kUsage =
-    "usage: bench_vehicle_accuracy scene.yaml reference.csv [method max_step rtol atol] ...\n"
+    "usage: bench_vehicle_accuracy [--sample DT] scene.yaml reference.csv [method max_step rtol atol] ...\n"
     "Accuracy of the vehicle alone against a reference run (Adams capped at 5e-6 s, written to reference.csv\n"
     "on the first call): per candidate the wall time per simulated second and the largest differences of the\n"
     "leading wheelset on the straights and the steady curve, and its flange-force bursts in the transitions.\n"
-    "method: bdf | adams | auto; max_step 0 = none; rtol/atol 0 = the scene's.\n";
+    "method: bdf | adams | auto; max_step 0 = none; rtol/atol 0 = the scene's. --sample: the sampling\n"
+    "interval of both runs in s (default 1e-3; a reference.csv is reused only with the same interval).\n";
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kAnyCount)) return 0;
-  if (argc < 3) {
+  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;
+  double sample = 1e-3;
+  int first = 1;
+  if (argc > 2 && std::string(argv[1]) == "--sample") {
+    char* end = nullptr;
+    sample = std::strtod(argv[2], &end);
+    if (end == argv[2] || *end != '\0' || !(sample > 0.0 && sample <= 0.1)) {
+      std::fprintf(stderr, "bench_vehicle_accuracy: --sample: expected an interval in (0, 0.1] s, got '%s'\n", argv[2]);
+      return 2;
+    }
+    first = 3;
+  }
+  std::vector<char*> rest{argv[0]};  // the arguments after --sample
+  for (int i = first; i < argc; ++i) rest.push_back(argv[i]);
+  rail::tools::refuseOptions(static_cast<int>(rest.size()), rest.data(), kUsage);
+  if (argc - first < 2) {
     std::fputs(kUsage, stderr);
     return 2;
   }
-  const core::Scene scene = core::loadSceneFile(argv[1]);
+  const core::Scene scene = core::loadSceneFile(argv[first]);
+  const std::string reference_path = argv[first + 1];
   std::vector<Sample> ref;
-  if (!read(argv[2], ref)) {
+  if (!read(reference_path, ref)) {
     double wall = 0.0;
-    ref = simulate(scene, Candidate{"adams", 5e-6, 0.0, 0.0}, wall);
-    write(argv[2], ref);
+    ref = simulate(scene, Candidate{"adams", 5e-6, 0.0, 0.0}, sample, wall);
+    write(reference_path, ref);
+  } else if (ref.size() > 1 && std::abs((ref[1].t - ref[0].t) - sample) > 1e-3 * sample) {
+    std::fprintf(stderr, "bench_vehicle_accuracy: %s was sampled every %g s, not every %g s (--sample)\n",
+                 reference_path.c_str(), ref[1].t - ref[0].t, sample);
+    return 2;
   }
   std::vector<Candidate> candidates;
-  for (int i = 3; i + 3 < argc; i += 4) {
+  for (int i = first + 2; i + 3 < argc; i += 4) {
     candidates.push_back(Candidate{argv[i], std::atof(argv[i + 1]), std::atof(argv[i + 2]), std::atof(argv[i + 3])});
   }
   if (candidates.empty()) candidates.push_back(Candidate{});
@@ -180,7 +201,7 @@ int main(int argc, char** argv) {
   const Window transitions[] = {{"entry transition", 100.0, 220.0}, {"exit transition", 380.0, 485.0}};
   for (const Candidate& c : candidates) {
     double wall = 0.0;
-    const std::vector<Sample> run = simulate(scene, c, wall);
+    const std::vector<Sample> run = simulate(scene, c, sample, wall);
     const std::size_t n = std::min(run.size(), ref.size());
     std::printf("| window | max |d lateral| [m] | max |d vertical| [m] | max |d attack| [deg] |\n|---|---|---|---|\n");
     for (const Window& w : steady) {
