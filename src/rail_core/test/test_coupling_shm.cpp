@@ -590,6 +590,17 @@ TEST_F(ShmTest, BadOptionsAreRefused) {
   o = options(Role::kTrack);
   o.wheel_capacity = 0;
   EXPECT_THROW(ShmTransport t(o), std::runtime_error);
+  for (const double spin_time : {-1e-6, 2.0}) {
+    o = options(Role::kTrack);
+    o.spin_time = spin_time;
+    try {
+      ShmTransport t(o);
+      FAIL() << "spin time " << spin_time << " accepted";
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), "shm transport: spin time must be in [0, 1] s (got " +
+                                           std::string(spin_time < 0.0 ? "-1e-06" : "2") + ")");
+    }
+  }
 }
 
 // After all of the above, nothing of this test program is left in /dev/shm.

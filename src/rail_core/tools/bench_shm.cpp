@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -78,12 +79,12 @@ void report(const char* what, std::vector<double>& rtt) {
               1e6 * at(0.5), 1e6 * at(0.99), 1e6 * sum / static_cast<double>(rtt.size()), 1e6 * rtt.back());
 }
 
-bool benchShm(const char* what, long warmup, long steps, int spin) {
+bool benchShm(const char* what, long warmup, long steps, double spin_time) {
   ShmOptions o;
   o.scene_hash = benchConfig().scene_hash;
   o.wheel_capacity = kWheels;
   o.run_id = "bench" + std::to_string(getpid());
-  o.spin_iterations = spin;
+  o.spin_time = spin_time;
   ShmOptions track_options = o;
   track_options.role = Role::kTrack;
   const pid_t child = fork();
@@ -141,18 +142,11 @@ int main(int argc, char** argv) {
   const long warmup = std::min(steps / 10, 10000L);
   std::printf("round trip of one exchange, %d wheels, %u hardware threads\n", kWheels,
               std::thread::hardware_concurrency());
-#if defined(__x86_64__) || defined(__i386__)
-  {  // how long the default spin lasts on this machine (the same pause loop as the transport's)
-    const int spins = ShmOptions{}.spin_iterations;
-    const auto t0 = Clock::now();
-    for (int rep = 0; rep < 100; ++rep)
-      for (int i = 0; i < spins; ++i) __builtin_ia32_pause();
-    std::printf("default spin: %d pause iterations = %.2f us\n", spins,
-                1e6 * std::chrono::duration<double>(Clock::now() - t0).count() / 100);
-  }
-#endif
-  bool ok = benchShm("shm, 2 processes (spin 2000, then futex)", warmup, steps, 2000);
-  ok = benchShm("shm, 2 processes (futex only, no spin)", warmup, steps, 0) && ok;
+  const double spin_time = ShmOptions{}.spin_time;
+  const std::string spin_label =
+      "shm, 2 processes (spin " + std::to_string(std::lround(spin_time * 1e6)) + " us, then futex)";
+  bool ok = benchShm(spin_label.c_str(), warmup, steps, spin_time);
+  ok = benchShm("shm, 2 processes (futex only, no spin)", warmup, steps, 0.0) && ok;
   ok = benchLoopback(warmup, steps) && ok;
   return ok ? 0 : 1;
 }

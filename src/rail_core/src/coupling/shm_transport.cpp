@@ -367,9 +367,10 @@ ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
   if (!(options.attach_timeout >= 0.0))
     throw std::runtime_error("shm transport: attach timeout must be >= 0 s (got " +
                              formatNumber(options.attach_timeout) + ")");
-  if (options.spin_iterations < 0)
-    throw std::runtime_error("shm transport: spin iterations must be >= 0 (got " +
-                             std::to_string(options.spin_iterations) + ")");
+  if (!(options.spin_time >= 0.0 && options.spin_time <= 1.0))
+    throw std::runtime_error("shm transport: spin time must be in [0, 1] s (got " + formatNumber(options.spin_time) +
+                             ")");
+  spin_budget_ = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.spin_time));
   checkNamePart(options.run_id, "run id", 48);
   checkNamePart(options.name_prefix, "name prefix", 32);
   const std::string host = thisHost();
@@ -429,11 +430,17 @@ Result ShmTransport::waitTurn(ShmRegion& region, bool want_reader_turn, std::uin
                               Deadline deadline) {
   std::atomic<std::uint32_t>& word = region.header().state;
   auto ready = [&](std::uint32_t s) { return ((s & kTurnReader) != 0) == want_reader_turn; };
-  for (int i = 0; i < options_.spin_iterations; ++i) {
-    const std::uint32_t s = word.load(std::memory_order_acquire);
-    if (ready(s)) return {};
-    if (s & peer_closed_bit) break;
-    cpuRelax();
+  // Spins for spin_time of wall, not a count of pauses: a pause lasts 10 to 140 cycles by CPU, and a
+  // spin that ends before the peer's step does costs a futex wake-up (tens of us on a virtual machine).
+  if (spin_budget_.count() > 0) {
+    const auto spin_end = Clock::now() + spin_budget_;
+    for (unsigned i = 1;; ++i) {
+      const std::uint32_t s = word.load(std::memory_order_acquire);
+      if (ready(s)) return {};
+      if (s & peer_closed_bit) break;
+      cpuRelax();
+      if (i % 64 == 0 && Clock::now() >= spin_end) break;
+    }
   }
   bool slept_a_slice = false;  // the peer's process is only looked at after a whole slice of waiting
   for (;;) {
