@@ -590,15 +590,23 @@ TEST_F(ShmTest, BadOptionsAreRefused) {
   o = options(Role::kTrack);
   o.wheel_capacity = 0;
   EXPECT_THROW(ShmTransport t(o), std::runtime_error);
-  for (const double spin_time : {-1e-6, 2.0}) {
+  for (const double bad : {-1e-6, 2.0}) {
+    const std::string got = bad < 0.0 ? "-1e-06" : "2";
     o = options(Role::kTrack);
-    o.spin_time = spin_time;
+    o.spin_time = bad;
     try {
       ShmTransport t(o);
-      FAIL() << "spin time " << spin_time << " accepted";
+      FAIL() << "spin time " << bad << " accepted";
     } catch (const std::runtime_error& e) {
-      EXPECT_EQ(std::string(e.what()), "shm transport: spin time must be in [0, 1] s (got " +
-                                           std::string(spin_time < 0.0 ? "-1e-06" : "2") + ")");
+      EXPECT_EQ(std::string(e.what()), "shm transport: spin time must be in [0, 1] s (got " + got + ")");
+    }
+    o = options(Role::kTrack);
+    o.yield_time = bad;
+    try {
+      ShmTransport t(o);
+      FAIL() << "yield time " << bad << " accepted";
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), "shm transport: yield time must be in [0, 1] s (got " + got + ")");
     }
   }
 }

@@ -79,12 +79,13 @@ void report(const char* what, std::vector<double>& rtt) {
               1e6 * at(0.5), 1e6 * at(0.99), 1e6 * sum / static_cast<double>(rtt.size()), 1e6 * rtt.back());
 }
 
-bool benchShm(const char* what, long warmup, long steps, double spin_time) {
+bool benchShm(const char* what, long warmup, long steps, double spin_time, double yield_time) {
   ShmOptions o;
   o.scene_hash = benchConfig().scene_hash;
   o.wheel_capacity = kWheels;
   o.run_id = "bench" + std::to_string(getpid());
   o.spin_time = spin_time;
+  o.yield_time = yield_time;
   ShmOptions track_options = o;
   track_options.role = Role::kTrack;
   const pid_t child = fork();
@@ -133,7 +134,7 @@ namespace {
 const char* const kUsage =
     "usage: railsim_bench_shm [exchanges]\n"
     "Round-trip time of one co-simulation exchange (8 wheel states, 8 wrenches) over shared memory between\n"
-    "two processes (spin then futex; futex only) and in-process between two threads. Default 100000.\n";
+    "two processes (spin, yield, then futex; futex only) and in-process between two threads. Default 100000.\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -142,11 +143,11 @@ int main(int argc, char** argv) {
   const long warmup = std::min(steps / 10, 10000L);
   std::printf("round trip of one exchange, %d wheels, %u hardware threads\n", kWheels,
               std::thread::hardware_concurrency());
-  const double spin_time = ShmOptions{}.spin_time;
-  const std::string spin_label =
-      "shm, 2 processes (spin " + std::to_string(std::lround(spin_time * 1e6)) + " us, then futex)";
-  bool ok = benchShm(spin_label.c_str(), warmup, steps, spin_time);
-  ok = benchShm("shm, 2 processes (futex only, no spin)", warmup, steps, 0.0) && ok;
+  const ShmOptions defaults;
+  const std::string label = "shm, 2 processes (spin " + std::to_string(std::lround(defaults.spin_time * 1e6)) +
+                            " us, yield to " + std::to_string(std::lround(defaults.yield_time * 1e6)) + " us)";
+  bool ok = benchShm(label.c_str(), warmup, steps, defaults.spin_time, defaults.yield_time);
+  ok = benchShm("shm, 2 processes (futex only)", warmup, steps, 0.0, 0.0) && ok;
   ok = benchLoopback(warmup, steps) && ok;
   return ok ? 0 : 1;
 }

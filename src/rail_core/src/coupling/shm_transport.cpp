@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <linux/futex.h>
+#include <sched.h>
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
@@ -370,7 +371,11 @@ ShmTransport::ShmTransport(const ShmOptions& options) : options_(options) {
   if (!(options.spin_time >= 0.0 && options.spin_time <= 1.0))
     throw std::runtime_error("shm transport: spin time must be in [0, 1] s (got " + formatNumber(options.spin_time) +
                              ")");
+  if (!(options.yield_time >= 0.0 && options.yield_time <= 1.0))
+    throw std::runtime_error("shm transport: yield time must be in [0, 1] s (got " + formatNumber(options.yield_time) +
+                             ")");
   spin_budget_ = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.spin_time));
+  yield_budget_ = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.yield_time));
   checkNamePart(options.run_id, "run id", 48);
   checkNamePart(options.name_prefix, "name prefix", 32);
   const std::string host = thisHost();
@@ -432,15 +437,31 @@ Result ShmTransport::waitTurn(ShmRegion& region, bool want_reader_turn, std::uin
   auto ready = [&](std::uint32_t s) { return ((s & kTurnReader) != 0) == want_reader_turn; };
   // Spins for spin_time of wall, not a count of pauses: a pause lasts 10 to 140 cycles by CPU, and a
   // spin that ends before the peer's step does costs a futex wake-up (tens of us on a virtual machine).
+  const auto wait0 = Clock::now();
+  bool peer_closed = false;
   if (spin_budget_.count() > 0) {
-    const auto spin_end = Clock::now() + spin_budget_;
+    const auto spin_end = wait0 + spin_budget_;
     for (unsigned i = 1;; ++i) {
       const std::uint32_t s = word.load(std::memory_order_acquire);
       if (ready(s)) return {};
-      if (s & peer_closed_bit) break;
+      if (s & peer_closed_bit) {
+        peer_closed = true;
+        break;
+      }
       cpuRelax();
       if (i % 64 == 0 && Clock::now() >= spin_end) break;
     }
+  }
+  // Then yields: a peer step of a few ms (the flexible track's) is met without a wake-up, and a CPU
+  // another process needs is given up at once.
+  if (!peer_closed && yield_budget_.count() > 0) {
+    const auto yield_end = std::min(wait0 + yield_budget_, deadline);
+    do {
+      const std::uint32_t s = word.load(std::memory_order_acquire);
+      if (ready(s)) return {};
+      if (s & peer_closed_bit) break;
+      sched_yield();
+    } while (Clock::now() < yield_end);
   }
   bool slept_a_slice = false;  // the peer's process is only looked at after a whole slice of waiting
   for (;;) {

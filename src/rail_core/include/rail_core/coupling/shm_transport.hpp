@@ -1,8 +1,8 @@
 // Shared-memory transport (paper section 5.2, Figure 13): one region per direction under /dev/shm
 // (shm_open + mmap), each carrying a header (shm_layout.hpp) and one frame. The turn flag in the header is
 // the binary semaphore: the writer waits for its turn, writes the frame and gives the turn to the reader;
-// the reader copies the frame out and gives the turn back. Waits spin for a bounded time, then sleep on a
-// process-shared futex, always with a deadline.
+// the reader copies the frame out and gives the turn back. Waits spin for a bounded time, then yield the
+// CPU for a bounded time, then sleep on a process-shared futex, always with a deadline.
 //
 // Each node creates the region it writes ("v2t" by the vehicle, "t2v" by the track; mode 0600) and
 // attaches the one it reads, waiting for it up to the attach timeout. A region left by a crashed run
@@ -25,7 +25,8 @@ struct ShmOptions {
   std::string run_id;                            // same on both nodes, [A-Za-z0-9_.-], 1..48 chars: separates runs
   double attach_timeout = 30.0;                  // longest wait for the peer's region [s] (solver.handshake_timeout)
   std::string peer_host;                         // the peer's host name if the caller knows it; empty = unknown
-  double spin_time = 100e-6;                     // busy-wait before sleeping on the futex [s], 0: none
+  double spin_time = 100e-6;                     // busy-wait before yielding [s], 0: none
+  double yield_time = 2e-3;                      // then sched_yield() up to this wait [s] before the futex
   const std::atomic<bool>* interrupt = nullptr;  // optional: ends any wait with kInterrupted
   std::string name_prefix = "railsim";           // [A-Za-z0-9_.-], first part of the region names
 };
@@ -111,9 +112,10 @@ class ShmTransport : public FrameTransport {
   Result misuse(const char* call) const;
 
   ShmOptions options_;
-  Clock::duration spin_budget_{};  // options_.spin_time
-  ShmRegion write_;                // the region this side writes (and created)
-  ShmRegion read_;                 // the peer's region
+  Clock::duration spin_budget_{};   // options_.spin_time
+  Clock::duration yield_budget_{};  // options_.yield_time
+  ShmRegion write_;                 // the region this side writes (and created)
+  ShmRegion read_;                  // the peer's region
   std::int64_t peer_pid_ = 0;
   std::uint64_t peer_start_time_ = 0;
   bool closed_ = false;
