@@ -510,8 +510,9 @@ Result tooMany(std::uint32_t count, std::uint32_t capacity, const char* where) {
 }
 }  // namespace
 
-Result ShmTransport::sendStates(const WheelStateFrame& frame, Deadline deadline) {
-  if (closed_ || options_.role != Role::kVehicle) return misuse("send_states");
+template <class Record, class Frame, class Convert>
+Result ShmTransport::sendFrame(const Frame& frame, Role sender, const char* call, Deadline deadline, Convert convert) {
+  if (closed_ || options_.role != sender) return misuse(call);
   const std::uint32_t cap = write_.header().wheel_capacity;
   if (frame.count > cap || frame.count > static_cast<std::uint32_t>(frame.capacity()))
     return tooMany(frame.count, cap, "region's");
@@ -519,93 +520,74 @@ Result ShmTransport::sendStates(const WheelStateFrame& frame, Deadline deadline)
   if (!r) return r;
   unsigned char* p = write_.payload();
   writeStamp(p, frame, frame.count);
-  auto* rec = reinterpret_cast<ShmWheelState*>(p + sizeof(ShmFrameHead));
-  for (std::uint32_t i = 0; i < frame.count; ++i) {
-    const WheelState& w = frame.wheels[i];
-    ShmWheelState& o = rec[i];
-    o.id = w.id;
-    o.reserved = 0;
-    o.arc_length = w.arc_length;
-    put(o.p_wheel_in_world, w.p_wheel_in_world);
-    put(o.q_wheelset_to_world, wireOrientation(w.R_wheelset_to_world).coeffs());  // x, y, z, w
-    put(o.v_wheel_in_world, w.v_wheel_in_world);
-    put(o.omega_wheelset_in_world, w.omega_wheelset_in_world);
-  }
+  auto* rec = reinterpret_cast<Record*>(p + sizeof(ShmFrameHead));
+  for (std::uint32_t i = 0; i < frame.count; ++i) convert(frame.wheels[i], rec[i]);
   changeState(write_.header().state, kTurnReader, 0);
   return {};
+}
+
+template <class Record, class Frame, class Convert>
+Result ShmTransport::receiveFrame(Frame& frame, Role receiver, const char* call, Deadline deadline, Convert convert) {
+  if (closed_ || options_.role != receiver) return misuse(call);
+  Result r = waitTurn(read_, true, kWriterClosed, deadline);
+  if (!r) return r;
+  const unsigned char* p = read_.payload();
+  FrameStamp stamp;
+  const std::uint32_t count = readStamp(p, stamp);
+  if (count > read_.header().wheel_capacity || count > static_cast<std::uint32_t>(frame.capacity()))
+    return tooMany(count, static_cast<std::uint32_t>(frame.capacity()), "receiving");
+  static_cast<FrameStamp&>(frame) = stamp;
+  frame.count = count;
+  const auto* rec = reinterpret_cast<const Record*>(p + sizeof(ShmFrameHead));
+  for (std::uint32_t i = 0; i < count; ++i) convert(rec[i], frame.wheels[i]);
+  changeState(read_.header().state, 0, kTurnReader);
+  return {};
+}
+
+Result ShmTransport::sendStates(const WheelStateFrame& frame, Deadline deadline) {
+  return sendFrame<ShmWheelState>(frame, Role::kVehicle, "send_states", deadline,
+                                  [](const WheelState& w, ShmWheelState& o) {
+                                    o.id = w.id;
+                                    o.reserved = 0;
+                                    o.arc_length = w.arc_length;
+                                    put(o.p_wheel_in_world, w.p_wheel_in_world);
+                                    put(o.q_wheelset_to_world, wireOrientation(w.R_wheelset_to_world).coeffs());
+                                    put(o.v_wheel_in_world, w.v_wheel_in_world);
+                                    put(o.omega_wheelset_in_world, w.omega_wheelset_in_world);
+                                  });
 }
 
 Result ShmTransport::receiveStates(WheelStateFrame& frame, Deadline deadline) {
-  if (closed_ || options_.role != Role::kTrack) return misuse("receive_states");
-  Result r = waitTurn(read_, true, kWriterClosed, deadline);
-  if (!r) return r;
-  const unsigned char* p = read_.payload();
-  FrameStamp stamp;
-  const std::uint32_t count = readStamp(p, stamp);
-  if (count > read_.header().wheel_capacity || count > static_cast<std::uint32_t>(frame.capacity()))
-    return tooMany(count, static_cast<std::uint32_t>(frame.capacity()), "receiving");
-  static_cast<FrameStamp&>(frame) = stamp;
-  frame.count = count;
-  const auto* rec = reinterpret_cast<const ShmWheelState*>(p + sizeof(ShmFrameHead));
-  for (std::uint32_t i = 0; i < count; ++i) {
-    const ShmWheelState& o = rec[i];
-    WheelState& w = frame.wheels[i];
-    w.id = o.id;
-    w.arc_length = o.arc_length;
-    get(o.p_wheel_in_world, w.p_wheel_in_world);
-    Eigen::Quaterniond q;
-    get(o.q_wheelset_to_world, q.coeffs());
-    w.R_wheelset_to_world = orientationFromWire(q);
-    get(o.v_wheel_in_world, w.v_wheel_in_world);
-    get(o.omega_wheelset_in_world, w.omega_wheelset_in_world);
-  }
-  changeState(read_.header().state, 0, kTurnReader);
-  return {};
+  return receiveFrame<ShmWheelState>(frame, Role::kTrack, "receive_states", deadline,
+                                     [](const ShmWheelState& o, WheelState& w) {
+                                       w.id = o.id;
+                                       w.arc_length = o.arc_length;
+                                       get(o.p_wheel_in_world, w.p_wheel_in_world);
+                                       Eigen::Quaterniond q;
+                                       get(o.q_wheelset_to_world, q.coeffs());  // x, y, z, w
+                                       w.R_wheelset_to_world = orientationFromWire(q);
+                                       get(o.v_wheel_in_world, w.v_wheel_in_world);
+                                       get(o.omega_wheelset_in_world, w.omega_wheelset_in_world);
+                                     });
 }
 
 Result ShmTransport::sendWrenches(const WrenchFrame& frame, Deadline deadline) {
-  if (closed_ || options_.role != Role::kTrack) return misuse("send_wrenches");
-  const std::uint32_t cap = write_.header().wheel_capacity;
-  if (frame.count > cap || frame.count > static_cast<std::uint32_t>(frame.capacity()))
-    return tooMany(frame.count, cap, "region's");
-  Result r = waitTurn(write_, false, kReaderClosed, deadline);
-  if (!r) return r;
-  unsigned char* p = write_.payload();
-  writeStamp(p, frame, frame.count);
-  auto* rec = reinterpret_cast<ShmWheelWrench*>(p + sizeof(ShmFrameHead));
-  for (std::uint32_t i = 0; i < frame.count; ++i) {
-    const WheelWrench& w = frame.wheels[i];
-    ShmWheelWrench& o = rec[i];
-    o.id = w.id;
-    o.reserved = 0;
-    put(o.f_wheel_in_world, w.f_wheel_in_world);
-    put(o.n_wheel_in_world, w.n_wheel_in_world);
-  }
-  changeState(write_.header().state, kTurnReader, 0);
-  return {};
+  return sendFrame<ShmWheelWrench>(frame, Role::kTrack, "send_wrenches", deadline,
+                                   [](const WheelWrench& w, ShmWheelWrench& o) {
+                                     o.id = w.id;
+                                     o.reserved = 0;
+                                     put(o.f_wheel_in_world, w.f_wheel_in_world);
+                                     put(o.n_wheel_in_world, w.n_wheel_in_world);
+                                   });
 }
 
 Result ShmTransport::receiveWrenches(WrenchFrame& frame, Deadline deadline) {
-  if (closed_ || options_.role != Role::kVehicle) return misuse("receive_wrenches");
-  Result r = waitTurn(read_, true, kWriterClosed, deadline);
-  if (!r) return r;
-  const unsigned char* p = read_.payload();
-  FrameStamp stamp;
-  const std::uint32_t count = readStamp(p, stamp);
-  if (count > read_.header().wheel_capacity || count > static_cast<std::uint32_t>(frame.capacity()))
-    return tooMany(count, static_cast<std::uint32_t>(frame.capacity()), "receiving");
-  static_cast<FrameStamp&>(frame) = stamp;
-  frame.count = count;
-  const auto* rec = reinterpret_cast<const ShmWheelWrench*>(p + sizeof(ShmFrameHead));
-  for (std::uint32_t i = 0; i < count; ++i) {
-    const ShmWheelWrench& o = rec[i];
-    WheelWrench& w = frame.wheels[i];
-    w.id = o.id;
-    get(o.f_wheel_in_world, w.f_wheel_in_world);
-    get(o.n_wheel_in_world, w.n_wheel_in_world);
-  }
-  changeState(read_.header().state, 0, kTurnReader);
-  return {};
+  return receiveFrame<ShmWheelWrench>(frame, Role::kVehicle, "receive_wrenches", deadline,
+                                      [](const ShmWheelWrench& o, WheelWrench& w) {
+                                        w.id = o.id;
+                                        get(o.f_wheel_in_world, w.f_wheel_in_world);
+                                        get(o.n_wheel_in_world, w.n_wheel_in_world);
+                                      });
 }
 
 }  // namespace rail::core::coupling

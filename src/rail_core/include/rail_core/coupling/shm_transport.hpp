@@ -110,6 +110,12 @@ class ShmTransport : public FrameTransport {
   // Wait until the region's turn flag equals `want_reader_turn`; the peer's closed bit ends the wait.
   Result waitTurn(ShmRegion& region, bool want_reader_turn, std::uint32_t peer_closed_bit, Deadline deadline);
   Result misuse(const char* call) const;
+  // One frame out or in, the same for states and wrenches: the role and capacity checks, the turn, the stamp
+  // and count, each record through `convert` (Record: the region's record type), the turn handed over.
+  template <class Record, class Frame, class Convert>
+  Result sendFrame(const Frame& frame, Role sender, const char* call, Deadline deadline, Convert convert);
+  template <class Record, class Frame, class Convert>
+  Result receiveFrame(Frame& frame, Role receiver, const char* call, Deadline deadline, Convert convert);
 
   ShmOptions options_;
   Clock::duration spin_budget_{};   // options_.spin_time
