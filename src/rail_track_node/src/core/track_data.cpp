@@ -4,9 +4,7 @@
 
 #include "rail_core/yaml_reader.hpp"
 
-#include <fstream>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 
 #include <rail_contact/format.hpp>
@@ -65,10 +63,20 @@ SpringDamperData readSpring(MapReader r, bool has_roll, bool has_mass) {
   return d;
 }
 
+TrackData readTrackData(const YAML::Node& root, const std::string& source_name);
+
 }  // namespace
 
 TrackData parseTrackData(const std::string& yaml_text, const std::string& source_name) {
-  const YAML::Node root = core::parseYaml(yaml_text, source_name);
+  return readTrackData(core::parseYaml(yaml_text, source_name), source_name);
+}
+
+TrackData loadTrackData(const std::string& path) { return readTrackData(core::loadYamlFile(path), path); }
+
+namespace {
+
+// The track data of a parsed file.
+TrackData readTrackData(const YAML::Node& root, const std::string& source_name) {
   MapReader r(root, "", source_name);
   TrackData data;
   data.rail = readBeam(r.map("rail"));
@@ -116,13 +124,7 @@ TrackData parseTrackData(const std::string& yaml_text, const std::string& source
   return data;
 }
 
-TrackData loadTrackData(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open the file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parseTrackData(text.str(), path);
-}
+}  // namespace
 
 void removeTrackDamping(TrackData& data) {
   for (BeamSection* b : {&data.rail, &data.sleeper}) {

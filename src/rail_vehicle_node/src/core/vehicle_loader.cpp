@@ -133,17 +133,17 @@ void readJoint(MapReader& r, VehicleModel& model, std::set<std::string>& names) 
   const int body_j = bodyOf(r, model, "body_j", true);
   if (body_i == body_j) r.fail("body_j", "a joint needs two different bodies, got " + describe(r.node("body_j")));
   const Vector3 p = r.vector3("position", kMaxPosition, "m");
-  if (type == "revolute") {
-    const Vector3 axis = axisOf(r, "axis");
-    r.finish();
-    build(r, [&] { model.addRevoluteJointAt(name, body_i, body_j, p, axis.normalized()); });
-  } else if (type == "spherical") {
-    r.finish();
-    build(r, [&] { model.addSphericalJointAt(name, body_i, body_j, p); });
-  } else {
-    r.finish();
-    build(r, [&] { model.addFixedJointAt(name, body_i, body_j, p); });
-  }
+  const Vector3 axis = type == "revolute" ? axisOf(r, "axis") : Vector3::Zero();
+  r.finish();
+  build(r, [&] {
+    if (type == "revolute") {
+      model.addRevoluteJointAt(name, body_i, body_j, p, axis.normalized());
+    } else if (type == "spherical") {
+      model.addSphericalJointAt(name, body_i, body_j, p);
+    } else {
+      model.addFixedJointAt(name, body_i, body_j, p);
+    }
+  });
 }
 
 // A bump stop's characteristic: rows [deflection, force], the first [clearance >= 0, 0], deflection
