@@ -22,11 +22,12 @@
 namespace {
 const char* const kUsage =
     "usage: bench_vehicle_simulator scene.yaml seconds [bdf|adams|auto] [max_step] [flange 0|1] [spin 0|1]\n"
-    "                               [start_s] [cost 0|1] [coloured|dq] [klu|dense] [runs]\n"
+    "                               [start_s] [cost 0|1] [coloured|dq] [klu|dense] [runs] [carry 0|1]\n"
     "The vehicle alone on the rigid track: per run the wall time per simulated second, CVODE steps, RHS and\n"
     "Jacobian evaluations, then the median of the runs. max_step: the vehicle-alone cap (0 = none);\n"
     "start_s < 0 keeps the scene's; cost 1 passes a cost clock; coloured|dq: BDF's Jacobian; klu|dense: the\n"
-    "linear solver with the coloured Jacobian.\n";
+    "linear solver with the coloured Jacobian; carry 0: no Jacobian carried with the wheelsets' spin (CVODE's\n"
+    "own reuse policy).\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -54,6 +55,7 @@ int main(int argc, char** argv) {
   if (argc > 9 && std::string(argv[9]) == "dq") settings.jacobian = vehicle::JacobianKind::kDenseDifferenceQuotient;
   if (argc > 10 && std::string(argv[10]) == "dense") settings.linear_solver = vehicle::LinearSolverKind::kDense;
   const int runs = argc > 11 ? std::max(1, std::atoi(argv[11])) : 1;
+  if (argc > 12) settings.carry_jacobian_with_spin = std::atoi(argv[12]) != 0;
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = duration;
   std::vector<double> walls;
@@ -75,16 +77,18 @@ int main(int argc, char** argv) {
     std::printf(
         "%s: %s, max_step %g, jacobian %s, linear solver %s, flange %d, spin %d: %.3f s simulated in %.2f s "
         "wall (%.3f s per simulated s, real-time factor %.2f; build %.2f s); steps %ld, RHS %ld + %ld for %ld "
-        "Jacobians, error-test failures %ld, nonlinear failures %ld, projections %ld, Adams fallbacks %ld, contact "
+        "Jacobians (%ld carried with the spin), error-test failures %ld, nonlinear failures %ld, projections %ld, "
+        "Adams fallbacks %ld, contact "
         "evaluations %lld; "
         "cost clock %s; status %s %s\n",
         scene.name.c_str(), sim.method() == vehicle::IntegrationMethod::kBdf ? "BDF" : "Adams", sim.maxStep(),
         settings.jacobian == vehicle::JacobianKind::kColoured ? "coloured" : "dense-dq",
         settings.linear_solver == vehicle::LinearSolverKind::kSparseKlu ? "klu" : "dense", scene.effects.flange_contact,
         scene.effects.spin_creepage, sim.time(), wall, wall / sim.time(), sim.time() / wall, build, c.steps,
-        c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals, c.error_test_failures, c.nonlinear_convergence_failures,
-        c.projections, c.adams_fallbacks, sim.contactData().evaluations, with_cost ? "on" : "off",
-        status == vehicle::RunStatus::kFinished ? "finished" : "stopped", sim.message().c_str());
+        c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals, c.jacobian_carries, c.error_test_failures,
+        c.nonlinear_convergence_failures, c.projections, c.adams_fallbacks, sim.contactData().evaluations,
+        with_cost ? "on" : "off", status == vehicle::RunStatus::kFinished ? "finished" : "stopped",
+        sim.message().c_str());
     std::fflush(stdout);
   }
   std::vector<double> sorted = walls;

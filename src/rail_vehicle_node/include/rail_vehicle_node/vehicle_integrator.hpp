@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <vector>
 
 #include <rail_core/cost_profile.hpp>
 
@@ -39,6 +40,14 @@ struct IntegratorSettings {
   IntegrationMethod method = IntegrationMethod::kBdf;
   JacobianKind jacobian = JacobianKind::kColoured;                // BDF only
   LinearSolverKind linear_solver = LinearSolverKind::kSparseKlu;  // BDF with kColoured only
+  // BDF with kColoured only: bodies that turn fast about their own y axis and whose dynamics do not change
+  // with that turn (the wheelsets). Between evaluations the Jacobian is carried along with their turn
+  // (SpinTransport) at every linear-solver set-up, one every linear_setup_interval steps; a new one is
+  // evaluated after jacobian_max_age steps or when Newton failed with the carried one. Empty: CVODE's own
+  // policy (a Jacobian kept up to 51 steps, a set-up every 20).
+  std::vector<int> spin_bodies;
+  int jacobian_max_age = 50;      // [steps]; CVODE's own limit is 51
+  int linear_setup_interval = 5;  // [steps]; 3 to 7 measured, 5 fastest on the paper scene (doc/simulator.md)
   // BDF only: when CVODE gives up within an AdvanceTo (repeated error-test or convergence failures, as at
   // some flange onsets with tolerances below 1e-6), Adams integrates the rest of that interval from the
   // last successful step and BDF restarts after it (counted in IntegratorCounters::adams_fallbacks).
@@ -63,6 +72,7 @@ struct IntegratorCounters {
   long rhs_evals_jacobian = 0;  // right-hand side evaluations for difference-quotient Jacobians (coloured:
                                 // each perturbed evaluation, most of them without the contact)
   long jacobian_evals = 0;      // Jacobian evaluations
+  long jacobian_carries = 0;    // Jacobians carried along with the spin instead (IntegratorSettings::spin_bodies)
   long error_test_failures = 0;
   long nonlinear_iterations = 0;
   long nonlinear_convergence_failures = 0;

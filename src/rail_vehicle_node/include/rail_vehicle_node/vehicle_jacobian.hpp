@@ -72,4 +72,41 @@ int evaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, 
                      const Eigen::Ref<const Eigen::VectorXd>& y, const Eigen::Ref<const Eigen::VectorXd>& weight,
                      double min_increment, VehicleData& data, JacobianWork& work, core::CostClock* cost = nullptr);
 
+// A Jacobian carried along with the wheelsets' spin. A wheelset turns about its axle (its body y axis) at
+// V / r, 69 rad/s at 110 km/h, while the rest of its state changes slowly; with body-frame angular
+// velocities and Euler parameters as states its rows and columns of J turn with it, and a Jacobian a few
+// steps old (0.2-0.3 rad) no longer lets Newton converge (doc/simulator.md). A body whose dynamics do not
+// change when it turns about its own y axis (inertia symmetric about y, joints revolute about y, wheels of
+// revolution, loads on the axle line) has f(T y) = T f(y) for T turning its Euler parameters
+// p -> p (x) q_y(phi) and its angular velocity omega' -> R_y(phi)^T omega'; so J(T y) = T J(y) T^T.
+// For a body that is not exactly invariant the carried J is only an approximation: Newton may then need a
+// new evaluation, the solution is the same.
+class SpinTransport {
+ public:
+  // Throws std::invalid_argument when a body's Euler-parameter or angular-velocity columns do not share
+  // their rows in the pattern (never for a JacobianPattern of the same model).
+  SpinTransport(const VehicleModel& model, const JacobianPattern& pattern, const std::vector<int>& spin_bodies);
+
+  bool empty() const { return bodies_.empty(); }
+  // The state the carried Jacobian was evaluated at.
+  void setReference(const Eigen::Ref<const Eigen::VectorXd>& y);
+  // values_out = T values T^T in the pattern's order, T turning each spin body about its y axis by its turn
+  // from the reference state to y. values_out must have the pattern's size; no allocation.
+  void transport(const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<double>& values,
+                 std::vector<double>& values_out) const;
+  // The turn about y of spin body k from the reference to y [rad], in (-pi, pi].
+  double turn(int k, const Eigen::Ref<const Eigen::VectorXd>& y) const;
+
+ private:
+  struct SpinBody {
+    int euler_column = 0;  // first of the 4 Euler-parameter columns (and rows)
+    int omega_column = 0;  // first of the 3 angular-velocity columns (and rows)
+    Vector4 p_reference = Vector4(1.0, 0.0, 0.0, 0.0);
+    std::vector<int> euler_rows_at;  // positions of the 4-row Euler block, one per column holding it
+    std::vector<int> omega_rows_at;  // positions of the 3-row angular-velocity block
+  };
+  std::vector<SpinBody> bodies_;
+  std::vector<int> col_start_;
+};
+
 }  // namespace rail::vehicle

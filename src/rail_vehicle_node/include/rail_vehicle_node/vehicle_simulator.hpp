@@ -69,6 +69,9 @@ struct SimulatorSettings {
   // BDF's Jacobian and linear solver (vehicle_integrator.hpp).
   JacobianKind jacobian = JacobianKind::kColoured;
   LinearSolverKind linear_solver = LinearSolverKind::kSparseKlu;
+  // Carry BDF's Jacobian along with the wheelsets' spin between evaluations (IntegratorSettings::spin_bodies),
+  // for every wheelset whose inertia is symmetric about its axle; false: CVODE's own Jacobian policy.
+  bool carry_jacobian_with_spin = true;
   // Optional cost clock (must outlive the simulator): from the end of the build on, right-hand sides
   // (vehicle_rhs / vehicle_jacobian, including the one of each UpdateOutputs), the contact evaluations in
   // them (contact_detection / contact_forces, flange searches, spin evaluations) and floor accelerations.

@@ -46,7 +46,13 @@ struct VehicleIntegrator::Impl {
   std::unique_ptr<JacobianPattern> pattern;  // coloured Jacobian (BDF)
   std::unique_ptr<JacobianWork> jacobian_work;
   long coloured_jacobian_rhs = 0;  // evaluations of the coloured Jacobians since construction
-  void* adams = nullptr;           // BDF's fallback (IntegratorSettings::adams_fallback), made at first use
+  // Carrying the Jacobian along with the spin (IntegratorSettings::spin_bodies).
+  std::unique_ptr<SpinTransport> spin;
+  std::vector<double> carried_values;  // the Jacobian handed to CVODE, in the pattern's order
+  bool has_reference = false;          // a Jacobian evaluated since the last (re-)initialisation
+  long steps_at_evaluation = 0, steps_at_last_call = -1, failures_at_last_call = 0;
+  long coloured_jacobians = 0, carried_jacobians = 0;
+  void* adams = nullptr;  // BDF's fallback (IntegratorSettings::adams_fallback), made at first use
   SUNNonlinearSolver adams_solver = nullptr;
   IntegratorCounters base;             // counters accumulated before the last re-initialisation
   std::array<char, 512> last_error{};  // CVODE's last message (fixed buffer: no allocation)
@@ -120,11 +126,34 @@ struct VehicleIntegrator::Impl {
     const Eigen::Map<const Eigen::VectorXd> y_map(N_VGetArrayPointer(y), n);
     const Eigen::Map<const Eigen::VectorXd> w_map(N_VGetArrayPointer(self->error_weights), n);
     JacobianWork& work = *self->jacobian_work;
-    try {
-      self->coloured_jacobian_rhs += evaluateJacobian(self->model, *self->pattern, t, y_map, w_map, min_increment,
-                                                      self->data, work, self->settings.cost);
-    } catch (...) {
-      return -1;
+    // Carry the last Jacobian along with the spin unless it is too old or Newton failed with what CVODE had
+    // (a second call within one step, or a convergence failure since the last call).
+    long steps = 0, failures = 0;
+    CVodeGetNumSteps(self->cvode, &steps);
+    CVodeGetNumNonlinSolvConvFails(self->cvode, &failures);
+    const bool carry = self->spin != nullptr && self->has_reference && steps != self->steps_at_last_call &&
+                       failures == self->failures_at_last_call &&
+                       steps - self->steps_at_evaluation < self->settings.jacobian_max_age;
+    self->steps_at_last_call = steps;
+    self->failures_at_last_call = failures;
+    const std::vector<double>* values = &work.values;
+    if (carry) {
+      self->spin->transport(y_map, work.values, self->carried_values);
+      values = &self->carried_values;
+      ++self->carried_jacobians;
+    } else {
+      try {
+        self->coloured_jacobian_rhs += evaluateJacobian(self->model, *self->pattern, t, y_map, w_map, min_increment,
+                                                        self->data, work, self->settings.cost);
+      } catch (...) {
+        return -1;
+      }
+      ++self->coloured_jacobians;
+      if (self->spin != nullptr) {
+        self->spin->setReference(y_map);
+        self->has_reference = true;
+        self->steps_at_evaluation = steps;
+      }
     }
     const auto& col_start = self->pattern->colStart();
     const auto& row_index = self->pattern->rowIndex();
@@ -132,20 +161,20 @@ struct VehicleIntegrator::Impl {
     if (SUNMatGetID(J) == SUNMATRIX_SPARSE) {
       sunindextype* pointers = SUNSparseMatrix_IndexPointers(J);
       sunindextype* indices = SUNSparseMatrix_IndexValues(J);
-      realtype* values = SUNSparseMatrix_Data(J);
+      realtype* values_out = SUNSparseMatrix_Data(J);
       for (int j = 0; j <= n; ++j) pointers[j] = col_start[static_cast<std::size_t>(j)];
       for (std::size_t k = 0; k < row_index.size(); ++k) {
         indices[k] = row_index[k];
-        values[k] = work.values[k];
-        finite = finite && std::isfinite(values[k]);
+        values_out[k] = (*values)[k];
+        finite = finite && std::isfinite(values_out[k]);
       }
     } else {
       SUNMatZero(J);
       for (int j = 0; j < n; ++j) {
         realtype* column = SUNDenseMatrix_Column(J, j);
         for (int k = col_start[static_cast<std::size_t>(j)]; k < col_start[static_cast<std::size_t>(j + 1)]; ++k) {
-          column[row_index[static_cast<std::size_t>(k)]] = work.values[static_cast<std::size_t>(k)];
-          finite = finite && std::isfinite(work.values[static_cast<std::size_t>(k)]);
+          column[row_index[static_cast<std::size_t>(k)]] = (*values)[static_cast<std::size_t>(k)];
+          finite = finite && std::isfinite((*values)[static_cast<std::size_t>(k)]);
         }
       }
     }
@@ -239,6 +268,10 @@ struct VehicleIntegrator::Impl {
     accumulateCounters();
     check(CVodeReInit(cvode, t, y), "CVodeReInit");
     stepped_since_init = false;
+    // CVODE's step count restarts: the next call evaluates.
+    has_reference = false;
+    steps_at_last_call = -1;
+    failures_at_last_call = 0;
     ls_counters_stale = true;
   }
 };
@@ -302,6 +335,16 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
     }
     s.check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
     s.check(CVodeSetJacFn(s.cvode, &Impl::colouredJacobian), "CVodeSetJacFn");
+    if (!settings.spin_bodies.empty()) {
+      if (settings.jacobian_max_age < 1 || settings.linear_setup_interval < 1) {
+        throw std::runtime_error("vehicle integrator: jacobian_max_age and linear_setup_interval must be >= 1");
+      }
+      s.spin = std::make_unique<SpinTransport>(model, *s.pattern, settings.spin_bodies);
+      s.carried_values.assign(static_cast<std::size_t>(s.pattern->nonzeros()), 0.0);
+      // CVODE asks for a Jacobian at every set-up; colouredJacobian decides between carrying and evaluating.
+      s.check(CVodeSetJacEvalFrequency(s.cvode, 1), "CVodeSetJacEvalFrequency");
+      s.check(CVodeSetLSetupFrequency(s.cvode, settings.linear_setup_interval), "CVodeSetLSetupFrequency");
+    }
   } else if (settings.method == IntegrationMethod::kBdf) {
     s.jacobian = SUNDenseMatrix(n, n, s.context);
     s.linear_solver = SUNLinSol_Dense(s.y, s.jacobian, s.context);
@@ -410,6 +453,11 @@ IntegratorCounters VehicleIntegrator::counters() const {
   c.nonlinear_iterations += now.nonlinear_iterations;
   c.nonlinear_convergence_failures += now.nonlinear_convergence_failures;
   c.rhs_evals_jacobian += s.coloured_jacobian_rhs;
+  if (s.pattern != nullptr) {
+    // CVODE counts every call of colouredJacobian; the carried ones are not evaluations.
+    c.jacobian_evals = s.coloured_jacobians;
+    c.jacobian_carries = s.carried_jacobians;
+  }
   c.adams_fallbacks = s.base.adams_fallbacks;
   c.last_order = now.last_order;
   c.last_step = now.last_step;

@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <set>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
 
 #include "rail_vehicle_node/multibody_dynamics.hpp"
 
@@ -161,6 +164,121 @@ int evaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, 
     }
   }
   return evaluations;
+}
+
+namespace {
+
+// Positions of the rows first_row .. first_row + size - 1 in every column that holds them, checking that
+// they come as one block (rows are sorted within a column).
+std::vector<int> blockPositions(const JacobianPattern& pattern, int first_row, int size) {
+  std::vector<int> at;
+  const auto& start = pattern.colStart();
+  const auto& rows = pattern.rowIndex();
+  for (int j = 0; j < pattern.size(); ++j) {
+    for (int k = start[static_cast<std::size_t>(j)]; k < start[static_cast<std::size_t>(j + 1)]; ++k) {
+      if (rows[static_cast<std::size_t>(k)] != first_row) continue;
+      for (int i = 1; i < size; ++i) {
+        if (k + i >= start[static_cast<std::size_t>(j + 1)] || rows[static_cast<std::size_t>(k + i)] != first_row + i) {
+          throw std::invalid_argument("spin transport: rows " + std::to_string(first_row) + ".." +
+                                      std::to_string(first_row + size - 1) + " are not one block in column " +
+                                      std::to_string(j));
+        }
+      }
+      at.push_back(k);
+    }
+  }
+  return at;
+}
+
+// Columns first .. first + size - 1 must hold the same rows, so that they can be mixed entry by entry.
+void requireSameRows(const JacobianPattern& pattern, int first, int size) {
+  const auto& start = pattern.colStart();
+  const auto& rows = pattern.rowIndex();
+  const auto begin = [&](int j) { return rows.begin() + start[static_cast<std::size_t>(j)]; };
+  for (int l = 1; l < size; ++l) {
+    if (!std::equal(begin(first), begin(first + 1), begin(first + l), begin(first + l + 1))) {
+      throw std::invalid_argument("spin transport: columns " + std::to_string(first) + " and " +
+                                  std::to_string(first + l) + " do not hold the same rows");
+    }
+  }
+}
+
+// The turn about y taking p_from to p_to (p_to = p_from (x) q_y), as Euler parameters of the y turn alone.
+Vector4 turnAboutY(const Vector4& p_from, const Vector4& p_to) {
+  const Vector4 conj(p_from[0], -p_from[1], -p_from[2], -p_from[3]);
+  const Vector4 relative = quaternionProduct(conj, p_to);
+  const double half = std::atan2(relative[2], relative[0]);
+  return Vector4(std::cos(half), 0.0, std::sin(half), 0.0);
+}
+
+}  // namespace
+
+SpinTransport::SpinTransport(const VehicleModel& model, const JacobianPattern& pattern,
+                             const std::vector<int>& spin_bodies)
+    : col_start_(pattern.colStart()) {
+  for (int b : spin_bodies) {
+    if (b < 0 || b >= model.nBodies()) {
+      throw std::invalid_argument("spin transport: no body " + std::to_string(b));
+    }
+    SpinBody sb;
+    sb.euler_column = VehicleModel::eulerOffset(b);
+    sb.omega_column = model.angularVelocityOffset(b);
+    requireSameRows(pattern, sb.euler_column, 4);
+    requireSameRows(pattern, sb.omega_column, 3);
+    sb.euler_rows_at = blockPositions(pattern, sb.euler_column, 4);
+    sb.omega_rows_at = blockPositions(pattern, sb.omega_column, 3);
+    bodies_.push_back(std::move(sb));
+  }
+}
+
+void SpinTransport::setReference(const Eigen::Ref<const Eigen::VectorXd>& y) {
+  for (SpinBody& sb : bodies_) sb.p_reference = y.segment<4>(sb.euler_column).normalized();
+}
+
+double SpinTransport::turn(int k, const Eigen::Ref<const Eigen::VectorXd>& y) const {
+  const SpinBody& sb = bodies_[static_cast<std::size_t>(k)];
+  const Vector4 q = turnAboutY(sb.p_reference, y.segment<4>(sb.euler_column).normalized());
+  return 2.0 * std::atan2(q[2], q[0]);
+}
+
+void SpinTransport::transport(const Eigen::Ref<const Eigen::VectorXd>& y, const std::vector<double>& values,
+                              std::vector<double>& values_out) const {
+  std::copy(values.begin(), values.end(), values_out.begin());
+  for (const SpinBody& sb : bodies_) {
+    const Vector4 q = turnAboutY(sb.p_reference, y.segment<4>(sb.euler_column).normalized());
+    // T on the Euler parameters: p -> p (x) q, column m of T_p being e_m (x) q; on omega': R_y^T.
+    Eigen::Matrix4d t_euler;
+    for (int m = 0; m < 4; ++m) t_euler.col(m) = quaternionProduct(Vector4::Unit(m), q);
+    const Matrix3 t_omega = rotationFromEulerParameters(q).transpose();
+    // Columns: (J T^T)(:, l) = sum_m J(:, m) T(l, m).
+    auto mixColumns = [&](int first, const auto& t, auto size_tag) {
+      constexpr int kSize = decltype(size_tag)::value;
+      const int length = col_start_[static_cast<std::size_t>(first + 1)] - col_start_[static_cast<std::size_t>(first)];
+      for (int k = 0; k < length; ++k) {
+        Eigen::Matrix<double, kSize, 1> entries;
+        for (int m = 0; m < kSize; ++m) {
+          entries[m] = values_out[static_cast<std::size_t>(col_start_[static_cast<std::size_t>(first + m)] + k)];
+        }
+        const Eigen::Matrix<double, kSize, 1> mixed = t * entries;
+        for (int l = 0; l < kSize; ++l) {
+          values_out[static_cast<std::size_t>(col_start_[static_cast<std::size_t>(first + l)] + k)] = mixed[l];
+        }
+      }
+    };
+    // Rows: (T J)(l, :) = sum_m T(l, m) J(m, :).
+    auto mixRows = [&](const std::vector<int>& at, const auto& t, auto size_tag) {
+      constexpr int kSize = decltype(size_tag)::value;
+      for (int k : at) {
+        Eigen::Map<Eigen::Matrix<double, kSize, 1>> block(&values_out[static_cast<std::size_t>(k)]);
+        const Eigen::Matrix<double, kSize, 1> mixed = t * block;
+        block = mixed;
+      }
+    };
+    mixColumns(sb.euler_column, t_euler, std::integral_constant<int, 4>());
+    mixColumns(sb.omega_column, t_omega, std::integral_constant<int, 3>());
+    mixRows(sb.euler_rows_at, t_euler, std::integral_constant<int, 4>());
+    mixRows(sb.omega_rows_at, t_omega, std::integral_constant<int, 3>());
+  }
 }
 
 }  // namespace rail::vehicle

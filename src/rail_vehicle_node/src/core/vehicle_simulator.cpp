@@ -411,6 +411,17 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   // 1e-6 threshold re-initialised CVODE (a new Jacobian, order 1) every output interval.
   is.projection_euler_threshold = 1e-3;
   is.linear_solver = settings.linear_solver;
+  if (settings.carry_jacobian_with_spin) {
+    // Only a wheelset whose inertia is symmetric about its axle (body y) keeps its dynamics when it turns.
+    for (int body : wheelset_bodies_) {
+      const Matrix3& inertia = model_.bodies()[static_cast<std::size_t>(body)].inertia_in_body;
+      const double scale = inertia.cwiseAbs().maxCoeff();
+      const bool symmetric =
+          std::abs(inertia(0, 0) - inertia(2, 2)) <= 1e-12 * scale &&
+          std::abs(inertia(0, 1)) + std::abs(inertia(1, 2)) + std::abs(inertia(0, 2)) <= 1e-12 * scale;
+      if (symmetric) is.spin_bodies.push_back(body);
+    }
+  }
   core::Solver solver = scene.solver;
   solver.vehicle_max_step = max_step_;
   method_ = chooseMethod(solver, scene.vehicle.speed, cosimulation);
