@@ -232,6 +232,7 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
       double u_local = 0.0;
       const Vector2d p = profileCurveAt(k, u, u_local).position(u_local);
       samples_[k][i] = {u, p.x(), p.y()};
+      search_lever_[k] = std::max(search_lever_[k], std::abs(p.x()) + 2.2 * std::abs(r0_ - p.y()));
     }
   }
 
@@ -299,34 +300,48 @@ double ContactDetector::railSignedDistance(const Vector2d& p, double* u_closest)
 }
 
 template <class Deformation>
-bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
-                             const Deformation& deformation, Vector4d& x_seed, double& distance,
-                             Vector3d& p_wheel_seed) const noexcept {
-  WheelFrame wf;
-  makeWheelFrame(pose, wf);
-  // Rail cross-section nearest to the wheel centre (one projection step from the hint).
+void ContactDetector::sectionPose(const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
+                                  const Vector3d& c, const Vector3d& a, SectionPose& out) const noexcept {
+  // Rail cross-section nearest to the wheel centre (two projection steps from the hint).
   RailPoint rp;
   double s = std::clamp(pose.arc_length, track.sStart(), track.sEnd());
   for (int k = 0; k < 2; ++k) {
     track.rail(pose.side, s, rp);
     const Vector3d t = rp.dp_origin_ds;
-    s = std::clamp(s + (wf.c - rp.p_origin_in_world).dot(t) / t.squaredNorm(), track.sStart(), track.sEnd());
+    s = std::clamp(s + (c - rp.p_origin_in_world).dot(t) / t.squaredNorm(), track.sStart(), track.sEnd());
   }
   track.rail(pose.side, s, rp);
   const Matrix3d& R = rp.R_rail_to_world;
-  Vector3d o = rp.p_origin_in_world;
-  Vector3d T = R.col(0), Ny = rp.lateral_sign * R.col(1), B = R.col(2);
+  out.s = s;
+  out.o = rp.p_origin_in_world;
+  out.T = R.col(0);
+  out.Ny = rp.lateral_sign * R.col(1);
+  out.B = R.col(2);
   if constexpr (!Deformation::kRigid) {
     // Move the section frame with the rail section (eq. 8).
     RailSectionMotion m;
     deformation.sectionMotion(pose.side, s, m);
     const Matrix3d A = smallRotationMatrix(m.theta);
-    const Vector3d c0 = o + (rp.lateral_sign * section_centre_.x()) * R.col(1) + section_centre_.y() * R.col(2);
-    o = c0 + m.u + A * (o - c0);
-    T = A * T;
-    Ny = A * Ny;
-    B = A * B;
+    const Vector3d c0 = out.o + (rp.lateral_sign * section_centre_.x()) * R.col(1) + section_centre_.y() * R.col(2);
+    out.o = c0 + m.u + A * (out.o - c0);
+    out.T = A * out.T;
+    out.Ny = A * out.Ny;
+    out.B = A * out.B;
   }
+  const Vector3d rel = c - out.o;
+  out.centre = Vector2d(out.Ny.dot(rel), out.B.dot(rel));
+  out.axle = Vector3d(out.T.dot(a), out.Ny.dot(a), out.B.dot(a));
+}
+
+template <class Deformation>
+bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
+                             const Deformation& deformation, Vector4d& x_seed, double& distance, Vector3d& p_wheel_seed,
+                             double& min_distance, SectionPose& section) const noexcept {
+  WheelFrame wf;
+  makeWheelFrame(pose, wf);
+  sectionPose(pose, track, deformation, wf.c, wf.a, section);
+  const double s = section.s;
+  const Vector3d o = section.o, T = section.T, Ny = section.Ny, B = section.B;
   // Lowest circle direction of the wheel with respect to the rail's up axis.
   const double th = std::atan2(-B.dot(wf.f0), -B.dot(wf.d0));
   const Vector3d e_r = std::cos(th) * wf.d0 + std::sin(th) * wf.f0;
@@ -350,6 +365,7 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
     d_prev = d;
   }
   distance = best >= 0 ? best_d : min_any;
+  min_distance = min_any;
   if (best < 0 || !(best_d < 0.9 * options_.search_margin)) return false;
   const Vector3d q = wf.c + (wf.ls * smp[best].y) * wf.a + (r0_ - smp[best].z) * e_r;
   const Vector3d rel = q - o;
@@ -446,6 +462,25 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     return false;
   };
 
+  SectionPose section;
+  if constexpr (Deformation::kRigid) {
+    // The last search failed with every sample at least reference_distance from the rail; each sample has
+    // moved since by at most |d centre| + lever |d axle| relative to the rail section, and the grid's
+    // distance changes by at most sqrt(2) per unit of that (bilinear on a distance field).
+    if (work.skip_far_searches && work.has_search_reference && !work.has_warm_start) {
+      sectionPose(pose, track, deformation, wf.c, wf.a, section);
+      const double moved = std::sqrt(2.0) * ((section.centre - work.reference_centre).norm() +
+                                             search_lever_[k] * (section.axle - work.reference_axle).norm());
+      const double clearance = work.reference_distance - moved;
+      if (clearance > opt.skip_clearance && std::abs(section.axle[2]) < 0.3) {
+        ++work.skipped;
+        out.status = DetectionStatus::kOutOfBounds;
+        out.valid = out.in_contact = false;
+        out.penetration = -std::min(clearance, 1.0);
+        return;
+      }
+    }
+  }
   Vector4d x = work.x;
   bool ok = false;
   DetectionStatus status = DetectionStatus::kConverged;
@@ -456,7 +491,16 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     if (work.has_warm_start) ++work.fallbacks;
     ++work.searches;
     Vector4d seed;
-    if (!search(surface, pose, track, deformation, seed, search_distance, p_seed)) {
+    double min_distance = 0.0;
+    const bool found = search(surface, pose, track, deformation, seed, search_distance, p_seed, min_distance, section);
+    work.has_search_reference = false;
+    if (!found) {
+      if constexpr (Deformation::kRigid) {
+        work.has_search_reference = true;
+        work.reference_distance = min_distance;
+        work.reference_centre = section.centre;
+        work.reference_axle = section.axle;
+      }
       out.status = DetectionStatus::kOutOfBounds;
       out.valid = out.in_contact = false;
       out.penetration = -std::min(search_distance, 1.0);

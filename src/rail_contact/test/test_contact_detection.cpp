@@ -519,6 +519,48 @@ TEST(ContactDetection, ContactLossAndRecontactAndFarOffWheel) {
   EXPECT_FALSE(g.in_contact);
 }
 
+TEST(ContactDetection, AFarFlangeSkipsItsSearchOnlyWhileItCannotReachTheRail) {
+  // The wheelset moved from the centre toward the left flange in 0.1 mm steps, the left flange detected
+  // with and without skipping: the skipped evaluations must be ones the search finds out of contact, with
+  // a gap at least the reported bound, and contact must begin at the same step either way.
+  Scene& s = scene();
+  const rc::ContactDetector& det = s.table.model().detector();
+  rc::DetectionWork skipping, searching;
+  skipping.skip_far_searches = true;
+  rc::ContactGeometry g_skip, g_search;
+  int skipped_steps = 0, contact_steps = 0;
+  double smallest_skipped_gap = 1.0;
+  for (int i = 0; i <= 100; ++i) {
+    const double y = 1e-4 * i;
+    const rc::ContactGeometryRow r = s.table.row(y);
+    rc::WheelState wl, wr;
+    wheelStates(y, r.z - 20e-6, r.roll, wl, wr);  // pressed 20 um into the rails
+    const long long skipped_before = skipping.skipped;
+    det.detect(rc::WheelSurface::kFlange, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
+               skipping, g_skip);
+    det.detect(rc::WheelSurface::kFlange, poseOf(wl, rc::RailSide::kLeft), s.table.track(), rc::RigidRailDeformation(),
+               searching, g_search);
+    ASSERT_EQ(g_skip.in_contact, g_search.in_contact) << "y = " << y;
+    if (g_search.in_contact) ++contact_steps;
+    if (skipping.skipped > skipped_before) {
+      ++skipped_steps;
+      EXPECT_EQ(g_search.status, rc::DetectionStatus::kOutOfBounds) << "y = " << y;
+      // The bound: the gap the search reports (its smallest sample distance) is at least the skip's.
+      EXPECT_GE(-g_search.penetration, -g_skip.penetration - 1e-12) << "y = " << y;
+      EXPECT_GT(-g_skip.penetration, det.options().skip_clearance);
+      smallest_skipped_gap = std::min(smallest_skipped_gap, -g_search.penetration);
+    } else if (!g_search.in_contact) {
+      EXPECT_EQ(g_skip.penetration, g_search.penetration) << "y = " << y;  // searched alike
+    }
+  }
+  EXPECT_EQ(searching.skipped, 0);
+  EXPECT_GT(skipped_steps, 20);  // most of the approach from 6-7 mm away
+  EXPECT_GT(contact_steps, 5);   // and the flange reaches the rail within the 10 mm
+  EXPECT_GT(smallest_skipped_gap, det.options().skip_clearance);
+  std::printf("far flange: %d of 101 evaluations skipped, %d in contact, smallest gap skipped %.2f mm\n", skipped_steps,
+              contact_steps, 1e3 * smallest_skipped_gap);
+}
+
 TEST(DetectionCounts, SumAndDescribeSayWhatApproximateMeans) {
   rc::DetectionWork a, b;
   a.calls = 10;

@@ -349,6 +349,41 @@ Vector3 pointVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::V
          A * y.segment<3>(model.angularVelocityOffset(body)).cross(s_in_body);
 }
 
+TEST(VehicleSimulator, SkippingFarFlangeSearchesChangesNothing) {
+  // A surface far from its rail skips its search (SimulatorSettings::skip_far_searches): it changes no force,
+  // and a skipped search is one that would have found no point pair near enough to seed Newton, so no
+  // warm start differs either. The paper scene's first 4 s (straight, then the entry transition with the
+  // leading wheelset's flange bursts from 2.8 s) with and without it must be the same run to the bit:
+  // the leading wheelset's lateral position, its flange force, and the published flange gap (output
+  // evaluations always search), every millisecond.
+  core::Scene scene = core::fixtures::loadConfigScene("paper_demo.yaml");
+  scene.effects.track_model = core::TrackModel::kRigid;
+  struct Sampled {
+    std::vector<double> lateral, flange_force, flange_gap;
+    long steps = 0;
+  };
+  auto run = [&scene](bool skip) {
+    SimulatorSettings settings;
+    settings.skip_far_searches = skip;
+    VehicleSimulator sim(scene, settings);
+    Sampled out;
+    for (int i = 1; i <= 4000; ++i) {
+      EXPECT_EQ(sim.advanceTo(1e-3 * i), RunStatus::kRunning) << sim.message();
+      out.lateral.push_back(sim.wheelsets().front().lateral);
+      out.flange_force.push_back(sim.contacts()[1].contact[rc::kFlange].N);
+      out.flange_gap.push_back(sim.contacts()[0].contact[rc::kFlange].penetration);
+    }
+    out.steps = sim.counters().steps;
+    return out;
+  };
+  const Sampled skipping = run(true), searching = run(false);
+  EXPECT_EQ(skipping.steps, searching.steps);
+  EXPECT_TRUE(skipping.lateral == searching.lateral);
+  EXPECT_TRUE(skipping.flange_force == searching.flange_force);
+  EXPECT_TRUE(skipping.flange_gap == searching.flange_gap);
+  EXPECT_GT(*std::max_element(searching.flange_force.begin(), searching.flange_force.end()), 50e3);  // bursts
+}
+
 TEST(VehicleSimulator, FloorAccelerometersReadTheDerivativeOfTheFloorVelocityMinusGravity) {
   // The coach starts in the tight curve on the chord placement, so the carbody sways and rolls on its
   // suspension. Each floor point's reading f (effects.floor_acceleration_output) must be A^T (a_P - g)

@@ -66,6 +66,10 @@ struct DetectionOptions {
   /// (rail_vehicle_node doc/simulator.md has the measurements: without it the integrator's step collapses
   /// to ~1e-7 s while a flange-root contact crosses the split).
   double split_overlap = 5e-3;
+  /// Rigid rail, with DetectionWork::skip_far_searches: a surface whose last search found every sample at
+  /// least this much farther from the rail than the wheel can have moved since (relative to the rail
+  /// section) is reported out of contact without a new search, m.
+  double skip_clearance = 1e-3;
 };
 
 /// Caller-owned per-pair state: warm start and counters (one per wheel surface and wheel).
@@ -77,6 +81,16 @@ struct DetectionWork {
   long long searches = 0;           ///< robust searches run (initial and fallback)
   long long fallbacks = 0;          ///< searches caused by a failed warm-started Newton
   long long approximations = 0;     ///< results returned as kApproximate
+  /// Rigid rail only, set by the caller: a surface far from its rail skips the search (a flange off the
+  /// rail searched ~130 profile samples at every evaluation, a quarter of the vehicle's time on a straight).
+  /// Its out-of-contact result then carries a lower bound of the gap, not the gap: callers that publish the
+  /// gap turn this off for those evaluations. The force is the same, zero, either way.
+  bool skip_far_searches = false;
+  bool has_search_reference = false;                           ///< the last search failed and left the reference below
+  double reference_distance = 0.0;                             ///< its smallest sample distance to the rail, m
+  Eigen::Vector2d reference_centre = Eigen::Vector2d::Zero();  ///< wheel centre in the rail section (lateral, up), m
+  Eigen::Vector3d reference_axle = Eigen::Vector3d::Zero();    ///< axle direction in the rail section frame
+  long long skipped = 0;                                       ///< searches skipped
   void reset() { *this = DetectionWork(); }
 };
 
@@ -176,9 +190,24 @@ class ContactDetector {
   int grid_ny_ = 0, grid_nz_ = 0;
   std::vector<float> grid_dist_, grid_u_;
 
+  double search_lever_[2] = {0.0, 0.0};  // max over a surface's samples of |y| + 2.2 |r0 - z|, m
+
+  // The rail section nearest to the wheel centre, as the search uses it, and the wheel's pose in it.
+  struct SectionPose {
+    double s = 0.0;
+    Eigen::Vector3d o, T, Ny, B;  // section origin and axes (deformed with the rail if not rigid)
+    Eigen::Vector2d centre;       // wheel centre: (Ny, B) components of c - o
+    Eigen::Vector3d axle;         // axle direction: (T, Ny, B) components
+  };
+  template <class Deformation>
+  void sectionPose(const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
+                   const Eigen::Vector3d& c, const Eigen::Vector3d& a, SectionPose& out) const noexcept;
+
+  // min_distance: the smallest sample distance (whether or not a seed was found).
   template <class Deformation>
   bool search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
-              Eigen::Vector4d& x_seed, double& distance, Eigen::Vector3d& p_wheel_seed) const noexcept;
+              Eigen::Vector4d& x_seed, double& distance, Eigen::Vector3d& p_wheel_seed, double& min_distance,
+              SectionPose& section) const noexcept;
 };
 
 }  // namespace contact

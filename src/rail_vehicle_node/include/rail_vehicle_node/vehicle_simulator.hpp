@@ -72,6 +72,10 @@ struct SimulatorSettings {
   // Carry BDF's Jacobian along with the wheelsets' spin between evaluations (IntegratorSettings::spin_bodies),
   // for every wheelset whose inertia is symmetric about its axle; false: CVODE's own Jacobian policy.
   bool carry_jacobian_with_spin = true;
+  // A wheel surface far from its rail skips its search inside the integration (rail_contact
+  // DetectionWork::skip_far_searches; its force is zero either way); the output evaluations always search,
+  // so the published gaps are exact. false: every evaluation searches.
+  bool skip_far_searches = true;
   // Optional cost clock (must outlive the simulator): from the end of the build on, right-hand sides
   // (vehicle_rhs / vehicle_jacobian, including the one of each UpdateOutputs), the contact evaluations in
   // them (contact_detection / contact_forces, flange searches, spin evaluations) and floor accelerations.
@@ -223,6 +227,7 @@ class VehicleSimulator {
   std::unique_ptr<VehicleIntegrator> integrator_;
   IntegrationMethod method_ = IntegrationMethod::kBdf;
   double max_step_ = 0.0;
+  bool skip_far_searches_ = true;
   std::vector<int> wheelset_bodies_;    // body index per wheelset, leading first
   std::vector<double> rolling_radius_;  // per wheelset, at the settled centred position [m]
   std::vector<double> wheelset_s_;      // arc length per wheelset (projection warm start) [m]

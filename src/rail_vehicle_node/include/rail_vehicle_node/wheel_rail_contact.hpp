@@ -75,6 +75,10 @@ struct WheelRailContactData {
     f(force_in_world, saved_force_in_world);
     f(moment_in_world, saved_moment_in_world);
   }
+  // Inside the integration a surface far from its rail skips its search (rail_contact DetectionWork::
+  // skip_far_searches; the force is zero either way); true makes every surface search, so that the
+  // out-of-contact gaps are exact (the output evaluations). True (every surface searches) after construction.
+  void setExactGaps(bool exact);
   bool enabled = true;                   // false: no contact forces (set-up only)
   long long evaluations = 0;             // wheel evaluations since construction
   contact::ContactCost* cost = nullptr;  // optional timing of the evaluations (not owned)

@@ -310,6 +310,8 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
       std::make_unique<WheelRailContactModel>(*track_, wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
                                               rc::railSectionCentre(rail_profile_), options, std::move(wheels));
   contact_data_ = std::make_unique<WheelRailContactData>(*contact_model_);
+  skip_far_searches_ = settings.skip_far_searches;
+  contact_data_->setExactGaps(!skip_far_searches_);
   model_.addForceElement(std::make_unique<WheelRailContactElement>(contact_model_.get(), contact_data_.get()));
   if (settings.wheel_wrench_source != nullptr) {
     model_.addForceElement(std::make_unique<ExternalWheelWrenchElement>(
@@ -504,7 +506,9 @@ void VehicleSimulator::updateOutputs() {
   // Kinematics and contact (through the force element) at the current state.
   {
     core::CostClock::Scope timing(cost_, core::CostClock::kVehicleRhs);
+    contact_data_->setExactGaps(true);  // the published gaps are the searched ones
     computeDerivatives(model_, integrator_->time(), y_scratch_, ydot_scratch_, *data_);
+    contact_data_->setExactGaps(!skip_far_searches_);
   }
   rc::TrackPoint tp;
   for (std::size_t w = 0; w < wheelset_out_.size(); ++w) {

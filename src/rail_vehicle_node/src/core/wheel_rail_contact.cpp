@@ -28,6 +28,12 @@ WheelRailContactData::WheelRailContactData(const WheelRailContactModel& model) {
   forEachSaved([](auto& live, auto& saved) { saved = live; });  // sizes the copies once
 }
 
+void WheelRailContactData::setExactGaps(bool exact) {
+  for (auto& w : work) {
+    for (auto& d : w.detection) d.skip_far_searches = !exact;
+  }
+}
+
 void evaluateWheel(const WheelRailContactModel& model, const VehicleData& data, int k,
                    WheelRailContactData& cd) noexcept {
   const auto i = static_cast<std::size_t>(k);
