@@ -145,6 +145,49 @@ TEST(VehicleJacobian, MatchesTheDenseQuotientAtStandstill) {
   expectMatches(compare(sim));
 }
 
+TEST(VehicleJacobian, VelocityColumnsWithTheKeptClusterFactorsAreTheFreshlyFactoredOnes) {
+  // The velocity columns keep the range-space solve's cluster factors of the unperturbed evaluation
+  // (VehicleData::reuse_cluster_factors): Phi_v depends on the positions only, so each such column must be
+  // the very same numbers as when the factors are formed anew. Compared bit for bit, in the paper curve.
+  VehicleSimulator sim(timedScene("paper_demo.yaml", 300.0, 30.5556, 0.1));
+  ASSERT_EQ(sim.advanceTo(0.1), RunStatus::kFinished) << sim.message();
+  const VehicleModel& model = sim.model();
+  VehicleData& data = sim.data();
+  const int n = model.stateSize();
+  const Eigen::VectorXd y = sim.state();
+  const double t = sim.time();
+  JacobianPattern pattern(model);
+  JacobianWork work(model, pattern);
+  evaluateJacobian(model, pattern, t, y, Eigen::VectorXd::Ones(n), kMinIncrement, data, work);
+  EXPECT_FALSE(data.reuse_cluster_factors);
+  const auto& elements = model.forceElements();
+  for (const auto& e : elements) e->saveWorkState();
+  Eigen::VectorXd y_perturbed = y, f(n);
+  int compared = 0, differing = 0;
+  for (int c = 0; c < pattern.nBodyColours(); ++c) {
+    for (int l = 7; l < 13; ++l) {
+      for (int b : pattern.colourBodies(c)) {
+        const int j = pattern.column(model, b, l);
+        y_perturbed[j] = y[j] + work.increment[j];
+      }
+      computeDerivativesPartial(model, t, y_perturbed, f, data, pattern.liveElements(c), work.element_g);
+      for (const auto& e : elements) e->restoreWorkState();
+      for (int b : pattern.colourBodies(c)) {
+        const int j = pattern.column(model, b, l);
+        for (int k = pattern.colStart()[static_cast<std::size_t>(j)];
+             k < pattern.colStart()[static_cast<std::size_t>(j + 1)]; ++k) {
+          const int i = pattern.rowIndex()[static_cast<std::size_t>(k)];
+          ++compared;
+          if ((f[i] - work.f0[i]) * (1.0 / work.increment[j]) != work.values[static_cast<std::size_t>(k)]) ++differing;
+        }
+        y_perturbed[j] = y[j];
+      }
+    }
+  }
+  EXPECT_GT(compared, 1000);
+  EXPECT_EQ(differing, 0) << "of " << compared;
+}
+
 // The Jacobian carried along with the wheelsets' spin (SpinTransport) against the one evaluated where the
 // wheelsets have turned: each wheelset of the coach in the paper curve turned by 0.35 rad about its axle
 // (five 1 ms steps at 110 km/h), everything else the same.

@@ -76,6 +76,9 @@ class VehicleData {
   // Range-space solve, one constraint cluster at a time.
   Eigen::VectorXd mass_times_x;       // M x = top - Phi_v^T mu of the solve (6n)
   std::vector<ClusterWork> clusters;  // per constraint cluster
+  // The range-space solve keeps the clusters' factors of its last call instead of forming them from
+  // phi_v (the Jacobian's velocity columns: the positions, hence Phi_v, are those of the last call).
+  bool reuse_cluster_factors = false;
 
   // Scratch for the projection.
   Eigen::VectorXd dx;      // (6n)

@@ -128,16 +128,19 @@ void solveAugmented(const VehicleModel& model, VehicleData& data, const Eigen::R
     for (std::size_t k = 0; k < cluster.bodies.size(); ++k) {
       const int b = cluster.bodies[k];
       const int col = 6 * static_cast<int>(k);
+      cw.top.segment<6>(col) = top.segment<6>(6 * b);
+      if (data.reuse_cluster_factors) continue;
       for (int i = 0; i < n_rows; ++i) {
         cw.phi_v.block<1, 6>(i, col) = data.phi_v.block<1, 6>(cluster.rows[static_cast<std::size_t>(i)], 6 * b);
       }
       cw.phi_v_m_inv.middleCols<3>(col) = cw.phi_v.middleCols<3>(col) / bodies[static_cast<std::size_t>(b)].mass;
       cw.phi_v_m_inv.middleCols<3>(col + 3).noalias() = cw.phi_v.middleCols<3>(col + 3) * model.inverseInertia(b);
-      cw.top.segment<6>(col) = top.segment<6>(6 * b);
     }
     // Blocks of ~10 x 18: coefficient-wise (lazy) products, not the general matrix-product kernel.
-    cw.schur.noalias() = cw.phi_v_m_inv.lazyProduct(cw.phi_v.transpose());
-    cw.ldlt.compute(cw.schur);
+    if (!data.reuse_cluster_factors) {
+      cw.schur.noalias() = cw.phi_v_m_inv.lazyProduct(cw.phi_v.transpose());
+      cw.ldlt.compute(cw.schur);
+    }
     cw.rhs.noalias() = cw.phi_v_m_inv.lazyProduct(cw.top);
     for (int i = 0; i < n_rows; ++i) cw.rhs[i] -= bottom[cluster.rows[static_cast<std::size_t>(i)]];
     cw.mu = cw.ldlt.solve(cw.rhs);

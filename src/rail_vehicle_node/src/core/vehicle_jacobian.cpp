@@ -136,30 +136,40 @@ int evaluateJacobian(const VehicleModel& model, const JacobianPattern& pattern, 
   yp = y;
   const auto& col_start = pattern.colStart();
   const auto& row_index = pattern.rowIndex();
-  for (int c = 0; c < pattern.nBodyColours(); ++c) {
-    const std::vector<int>& bodies = pattern.colourBodies(c);
-    const std::vector<char>& live = pattern.liveElements(c);
-    for (int l = 0; l < 13; ++l) {
-      for (int b : bodies) {
-        const int j = pattern.column(model, b, l);
-        yp[j] = y[j] + work.increment[j];
-      }
-      {
-        core::CostClock::Scope timing(cost, core::CostClock::kVehicleJacobian);
-        computeDerivativesPartial(model, t, yp, work.f, data, live, work.element_g);
-        ++evaluations;
-      }
-      for (std::size_t e = 0; e < elements.size(); ++e) {
-        if (live[e] != 0) elements[e]->restoreWorkState();
-      }
-      for (int b : bodies) {
-        const int j = pattern.column(model, b, l);
-        const double inverse = 1.0 / work.increment[j];
-        for (int k = col_start[static_cast<std::size_t>(j)]; k < col_start[static_cast<std::size_t>(j + 1)]; ++k) {
-          const int i = row_index[static_cast<std::size_t>(k)];
-          work.values[static_cast<std::size_t>(k)] = (work.f[i] - work.f0[i]) * inverse;
+  // The velocity columns (l = 7..12) of every colour first: their positions are y's, so the range-space
+  // solve keeps the cluster factors f0's evaluation formed (each evaluation is independent of the order).
+  struct ReuseReset {  // no stale factors for the next caller, however this returns
+    VehicleData& data;
+    ~ReuseReset() { data.reuse_cluster_factors = false; }
+  } reuse_reset{data};
+  for (int pass = 0; pass < 2; ++pass) {
+    const bool velocities = pass == 0;
+    data.reuse_cluster_factors = velocities;
+    for (int c = 0; c < pattern.nBodyColours(); ++c) {
+      const std::vector<int>& bodies = pattern.colourBodies(c);
+      const std::vector<char>& live = pattern.liveElements(c);
+      for (int l = velocities ? 7 : 0; l < (velocities ? 13 : 7); ++l) {
+        for (int b : bodies) {
+          const int j = pattern.column(model, b, l);
+          yp[j] = y[j] + work.increment[j];
         }
-        yp[j] = y[j];
+        {
+          core::CostClock::Scope timing(cost, core::CostClock::kVehicleJacobian);
+          computeDerivativesPartial(model, t, yp, work.f, data, live, work.element_g);
+          ++evaluations;
+        }
+        for (std::size_t e = 0; e < elements.size(); ++e) {
+          if (live[e] != 0) elements[e]->restoreWorkState();
+        }
+        for (int b : bodies) {
+          const int j = pattern.column(model, b, l);
+          const double inverse = 1.0 / work.increment[j];
+          for (int k = col_start[static_cast<std::size_t>(j)]; k < col_start[static_cast<std::size_t>(j + 1)]; ++k) {
+            const int i = row_index[static_cast<std::size_t>(k)];
+            work.values[static_cast<std::size_t>(k)] = (work.f[i] - work.f0[i]) * inverse;
+          }
+          yp[j] = y[j];
+        }
       }
     }
   }
