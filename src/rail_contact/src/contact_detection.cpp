@@ -32,7 +32,8 @@ std::string describe(const DetectionCounts& c) {
   m.precision(2);
   m << c.calls << " contact detections, " << (c.calls > 0 ? static_cast<double>(c.newton_iterations) / c.calls : 0.0)
     << " Newton iterations each, " << c.searches << " robust searches (" << c.fallbacks
-    << " after a failed warm start), " << c.approximations << " approximate";
+    << " after a failed warm start), " << c.skipped << " skipped far from the rail, " << c.approximations
+    << " approximate";
   if (c.approximations > 0)
     m << " (Newton did not converge after the search: the search grid's point pair, within half a grid cell "
          "of the contact, was used)";

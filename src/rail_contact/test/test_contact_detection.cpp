@@ -570,6 +570,7 @@ TEST(DetectionCounts, SumAndDescribeSayWhatApproximateMeans) {
   b.calls = 10;
   b.newton_iterations = 10;
   b.approximations = 1;
+  b.skipped = 3;
   rc::DetectionCounts c;
   c.add(a);
   c.add(b);
@@ -578,7 +579,7 @@ TEST(DetectionCounts, SumAndDescribeSayWhatApproximateMeans) {
   const std::string s = rc::describe(c);
   EXPECT_NE(
       s.find("20 contact detections, 2.00 Newton iterations each, 2 robust searches (1 after a failed warm start), "
-             "1 approximate (Newton did not converge"),
+             "3 skipped far from the rail, 1 approximate (Newton did not converge"),
       std::string::npos)
       << s;
   EXPECT_EQ(rc::describe(rc::DetectionCounts()).find("(Newton"), std::string::npos);

@@ -96,17 +96,20 @@ struct DetectionWork {
 
 /// Counters of several DetectionWork summed (every wheel, both surfaces) for a run's closing summary.
 struct DetectionCounts {
-  long long calls = 0, newton_iterations = 0, searches = 0, fallbacks = 0, approximations = 0;
+  long long calls = 0, newton_iterations = 0, searches = 0, fallbacks = 0, approximations = 0, skipped = 0;
   void add(const DetectionWork& w) {
     calls += w.calls;
     newton_iterations += w.newton_iterations;
     searches += w.searches;
     fallbacks += w.fallbacks;
     approximations += w.approximations;
+    skipped += w.skipped;
   }
 };
+
 /// One line for a run's log: "N detections, I Newton iterations each, S searches (F after a failed warm
-/// start), A approximate"; with A > 0 what approximate means. Not for a time step.
+/// start), K skipped far from the rail, A approximate"; with A > 0 what approximate means. Not for a time
+/// step.
 std::string describe(const DetectionCounts& counts);
 
 /// Wheel pose for the detection (world frame).

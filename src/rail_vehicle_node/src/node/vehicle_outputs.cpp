@@ -314,16 +314,18 @@ void VehicleOutputs::close(const std::string& node, const CosimVehicle* cosim, d
   cost_.setCount("rhs_evaluations", static_cast<double>(c.rhs_evals));
   cost_.setCount("rhs_for_jacobians", static_cast<double>(c.rhs_evals_jacobian));
   cost_.setCount("jacobians", static_cast<double>(c.jacobian_evals));
+  cost_.setCount("jacobians_carried", static_cast<double>(c.jacobian_carries));
   cost_.setCount("projections", static_cast<double>(c.projections));
   if (cosim != nullptr) cost_.setCount("exchanges", static_cast<double>(cosim->stepsExchanged()));
   ROS_INFO_STREAM(cost_.toText(node, wall, sim_.time(), &clock_));
   bag_.writeBeside(node, ".cost.yaml", cost_.toYaml(node, scene_, wall, sim_.time(), &clock_));
   ROS_INFO(
       "%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
-      "%ld steps, %ld RHS + %ld for %ld Jacobians, %ld projections, %ld Adams fallbacks",
+      "%ld steps, %ld RHS + %ld for %ld Jacobians (%ld carried with the wheelsets' spin), %ld projections, %ld "
+      "Adams fallbacks",
       node.c_str(), exit_code == core::kExitOk ? "finished" : "stopped", sim_.time(), sim_.leadingArcLength(), wall,
-      wall / std::max(sim_.time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals, c.projections,
-      c.adams_fallbacks);
+      wall / std::max(sim_.time(), 1e-9), c.steps, c.rhs_evals, c.rhs_evals_jacobian, c.jacobian_evals,
+      c.jacobian_carries, c.projections, c.adams_fallbacks);
   // How the contact was found (the vehicle's own contact on the rigid track), never hiding approximations.
   if (cosim == nullptr) {
     contact::DetectionCounts detection;
