@@ -42,8 +42,10 @@ class VehicleStandalone(unittest.TestCase):
                 rospy.Subscriber("/contact_points", ContactPoints, keep("contact_points")),
                 rospy.Subscriber("/wheelset_kinematics", WheelsetKinematics, keep("kinematics"))]
         out_dir = tempfile.mkdtemp(prefix="railsim_vehicle_")
+        live = "[wheel_states, contact_wrenches, contact_points, wheelset_kinematics]"
         proc = subprocess.Popen(["rosrun", "rail_vehicle_node", "vehicle_node", "__name:=rail_vehicle",
-                                 "_scene_ns:=/vr", "_output_dir:=" + out_dir],
+                                 "_scene_ns:=/vr", "_output_dir:=" + out_dir, "_wait_for_subscribers:=" + live,
+                                 "_subscriber_timeout:=60"],
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         out, _ = proc.communicate(timeout=240)
         rospy.sleep(0.5)
@@ -55,10 +57,13 @@ class VehicleStandalone(unittest.TestCase):
         with lock:
             states, wrenches = received["wheel_states"], received["contact_wrenches"]
             points, kin = received["contact_points"], received["kinematics"]
-        # Late subscribers may miss the first messages; the run publishes 51 of each (100 Hz over 0.5 s).
+        self.assertNotIn("no subscriber on", out)
+        # The run publishes 51 of each (100 Hz over 0.5 s) and waited for these subscribers: each saw the
+        # first output (t = 0) and most of the rest (the last few may still be in flight when the node exits).
         for name, msgs in (("wheel_states", states), ("contact_wrenches", wrenches),
                            ("contact_points", points), ("wheelset_kinematics", kin)):
-            self.assertGreater(len(msgs), 10, name + ": " + out)
+            self.assertGreater(len(msgs), 40, name + ": " + out)
+            self.assertLess(msgs[0].header.stamp.to_sec(), 1e-6, name + ": " + out)  # t = 0 (stamped 1 ns)
         for m in states:
             self.assertEqual(len(m.wheels), 8)
             for w in m.wheels:
@@ -98,6 +103,21 @@ class VehicleStandalone(unittest.TestCase):
                 last = (msg, t)
             self.assertAlmostEqual(last[1].to_sec(), 0.5, places=6)
             self.assertAlmostEqual(last[0].wheels[0].arc_length, 25.0 + 0.5 * 30.5556, delta=0.05)
+
+    def test_waiting_for_a_topic_it_does_not_publish_is_refused(self):
+        with open(SCENE) as f:
+            rospy.set_param("/vw/scene_yaml", f.read())
+        rospy.set_param("/vw/scene_file", SCENE)
+        out_dir = tempfile.mkdtemp(prefix="railsim_vehicle_")
+        proc = subprocess.Popen(["rosrun", "rail_vehicle_node", "vehicle_node", "__name:=rail_vehicle_w",
+                                 "_scene_ns:=/vw", "_output_dir:=" + out_dir,
+                                 "_wait_for_subscribers:=[wheel_states, rail_deflections]"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        out, _ = proc.communicate(timeout=240)
+        self.assertEqual(proc.returncode, 2, out)  # bad input
+        self.assertIn("~wait_for_subscribers names /rail_deflections, which this node does not publish", out)
+        self.assertIn("/wheel_states", out)  # what it does publish
+        self.assertEqual(os.listdir(out_dir), [], out)  # refused before its bag was opened
 
 
 if __name__ == "__main__":

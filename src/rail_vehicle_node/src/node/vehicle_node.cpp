@@ -86,12 +86,15 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
                   .c_str()
             : "");
   rv::VehicleOutputs outputs(nh, pnh, scene, sim, cosim, cost, clock);
+  const auto viewer0 = std::chrono::steady_clock::now();  // a wait for viewers is not the vehicle's set-up
+  if (!outputs.waitForSubscribers(node, nh, pnh, stop.requested)) return kExitBadInput;
+  const double viewer_wait = std::chrono::duration<double>(std::chrono::steady_clock::now() - viewer0).count();
   if (!outputs.openBag(node, pnh)) return kExitBadInput;
 
   const rv::VehicleRunOptions options{&stop.requested, &cost};
   rv::VehicleRun run = cosim ? rv::VehicleRun(scene, *cosim_vehicle, options) : rv::VehicleRun(scene, sim, options);
   const auto wall0 = std::chrono::steady_clock::now();
-  cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count() - peer_wait);
+  cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count() - peer_wait - viewer_wait);
   const long long irregularity_stations0 = rail::contact::Irregularities::stationsEvaluated();
   ros_glue::ProgressLine progress(node, sim.endTimeEstimate());
   char where[64];

@@ -3,9 +3,15 @@
 #include <rosgraph_msgs/Clock.h>
 #include <tf2_msgs/TFMessage.h>
 #include <visualization_msgs/MarkerArray.h>
+#include <xmlrpcpp/XmlRpcValue.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <iterator>
+#include <sstream>
+#include <thread>
+#include <vector>
 
 #include <rail_msgs/ContactPoints.h>
 #include <rail_msgs/ContactWrenches.h>
@@ -254,6 +260,78 @@ VehicleOutputs::VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const 
 }
 
 VehicleOutputs::~VehicleOutputs() = default;
+
+bool VehicleOutputs::waitForSubscribers(const std::string& node, ros::NodeHandle& nh, ros::NodeHandle& pnh,
+                                        const std::atomic<bool>& stop) {
+  XmlRpc::XmlRpcValue value;
+  if (!pnh.getParam("wait_for_subscribers", value)) return true;
+  std::vector<std::string> names;
+  if (value.getType() == XmlRpc::XmlRpcValue::TypeString) {
+    // roscpp passes `_wait_for_subscribers:=[a, b]` from its command line as a string: split it.
+    std::string text = static_cast<std::string>(value);
+    std::replace_if(
+        text.begin(), text.end(), [](char c) { return c == '[' || c == ']' || c == ','; }, ' ');
+    std::istringstream words(text);
+    for (std::string word; words >> word;) names.push_back(word);
+  } else if (value.getType() == XmlRpc::XmlRpcValue::TypeArray) {
+    for (int i = 0; i < value.size(); ++i) {
+      if (value[i].getType() != XmlRpc::XmlRpcValue::TypeString) {
+        ROS_FATAL("%s: ~wait_for_subscribers: entry %d is not a topic name", node.c_str(), i);
+        return false;
+      }
+      names.push_back(static_cast<std::string>(value[i]));
+    }
+  } else {
+    ROS_FATAL("%s: ~wait_for_subscribers must be a topic name or a list of them", node.c_str());
+    return false;
+  }
+  const ros::Publisher* published[] = {&pub_clock_,      &pub_states_, &pub_points_, &pub_wrenches_,
+                                       &pub_kinematics_, &pub_floor_,  &pub_energy_, &pub_markers_};
+  std::vector<const ros::Publisher*> waited;
+  std::string offered;
+  for (const ros::Publisher* pub : published) {
+    if (*pub) offered += (offered.empty() ? "" : ", ") + pub->getTopic();
+  }
+  for (const std::string& name : names) {
+    std::string topic;
+    try {
+      topic = nh.resolveName(name);
+    } catch (const ros::InvalidNameException& e) {
+      ROS_FATAL("%s: ~wait_for_subscribers: %s", node.c_str(), e.what());
+      return false;
+    }
+    const auto it = std::find_if(std::begin(published), std::end(published),
+                                 [&](const ros::Publisher* pub) { return *pub && pub->getTopic() == topic; });
+    if (it == std::end(published)) {
+      ROS_FATAL(
+          "%s: ~wait_for_subscribers names %s, which this node does not publish with this scene (it "
+          "publishes %s)",
+          node.c_str(), topic.c_str(), offered.c_str());
+      return false;
+    }
+    waited.push_back(*it);
+  }
+  const double timeout = pnh.param("subscriber_timeout", 30.0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(std::max(timeout, 0.0));
+  const auto missing = [&] {
+    std::string list;
+    for (const ros::Publisher* pub : waited) {
+      if (pub->getNumSubscribers() == 0) list += (list.empty() ? "" : ", ") + pub->getTopic();
+    }
+    return list;
+  };
+  std::string still = missing();
+  if (!still.empty()) ROS_INFO("%s: waiting for a subscriber on %s", node.c_str(), still.c_str());
+  while (!still.empty() && !stop && ros::ok() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    still = missing();
+  }
+  if (!still.empty() && !stop && ros::ok()) {
+    ROS_WARN("%s: no subscriber on %s after %g s (~subscriber_timeout); running without", node.c_str(), still.c_str(),
+             timeout);
+  }
+  return true;
+}
 
 bool VehicleOutputs::openBag(const std::string& node, ros::NodeHandle& pnh) {
   if (scene_.output.bag.empty()) return true;

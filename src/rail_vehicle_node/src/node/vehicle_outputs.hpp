@@ -7,6 +7,7 @@
 #include <ros/ros.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -34,6 +35,13 @@ class VehicleOutputs {
 
   // Opens output.bag when the scene names one. False after a FATAL line naming the scene's output.bag.
   bool openBag(const std::string& node, ros::NodeHandle& pnh);
+
+  // ~wait_for_subscribers (a topic or a list of them, default none): before the first step, waits until each
+  // named topic has a subscriber, at most ~subscriber_timeout s (default 30), so a viewer started beside
+  // the node sees the run from its start. A timeout warns, naming the topics, and the run goes on. False
+  // after a FATAL line when a name is not a topic this node publishes.
+  bool waitForSubscribers(const std::string& node, ros::NodeHandle& nh, ros::NodeHandle& pnh,
+                          const std::atomic<bool>& stop);
 
   // Publishes (and records) the state of the simulator now, as output `index`.
   void publish(std::uint64_t index);
