@@ -68,10 +68,11 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     if (k == kFlange && !options_.flange_contact) {
       c.searched = false;
       c.status = DetectionStatus::kOutOfBounds;
-      work.impact[k] = ImpactMemory();
+      work.impact[k] = work.impact_next[k] = ImpactMemory();
       continue;
     }
     c.searched = true;
+    ImpactMemory& memory = work.hold_impact_memory ? (work.impact_next[k] = work.impact[k]) : work.impact[k];
     ContactGeometry g;
     if (cost != nullptr) {
       const Clock::time_point t0 = Clock::now();
@@ -88,7 +89,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     c.status = input_ok ? g.status : DetectionStatus::kInvalidInput;
     c.penetration = std::isfinite(g.penetration) ? g.penetration : -1.0;
     if (!g.valid || !input_ok) {
-      updateImpactMemory(work.impact[k], -1.0, 0.0);
+      updateImpactMemory(memory, -1.0, 0.0);
       continue;
     }
     if (k == kTread) tread_on_own_surface = g.on_own_surface;
@@ -121,7 +122,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     const Eigen::Vector3d v_wheel_shape =
         ws.v_wheel_in_world + omega_without_spin.cross(g.p_wheel_in_world - ws.p_wheel_in_world);
     c.penetration_rate = -(v_wheel_shape - v_rail).dot(n);
-    updateImpactMemory(work.impact[k], c.penetration, c.penetration_rate);
+    updateImpactMemory(memory, c.penetration, c.penetration_rate);
     if (!g.in_contact) continue;
 
     // Hertz (eq. 9): principal curvatures, rail longitudinal curvature ~ 0.
@@ -152,7 +153,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
         continue;
       }
     }
-    c.N = dampedNormalForce(hz.K, c.penetration, c.penetration_rate, work.impact[k].impact_velocity, options_.damping);
+    c.N = dampedNormalForce(hz.K, c.penetration, c.penetration_rate, memory.impact_velocity, options_.damping);
     c.active = true;
     c.a = hz.a(c.N);
     c.b = hz.b(c.N);

@@ -116,6 +116,54 @@ TEST(WheelContact, HysteresisDampingFollowsEquation9) {
   EXPECT_NEAR(out.contact[rc::kTread].N, elastic.contact[rc::kTread].N * factor, 1e-6 * elastic.contact[rc::kTread].N);
 }
 
+TEST(WheelContact, AHeldImpactMemoryTakesOnlyTheCommittedEvaluations) {
+  // An implicit integrator evaluates trial states (Newton iterates, rejected steps) before it accepts one.
+  // With hold_impact_memory, a trial that pushes the wheel in fast must not change the force at another
+  // state until it is committed; without it, it does (the memory keeps the largest approach rate).
+  const rc::WheelContactModel m = makeModel(true, true);
+  const auto& track = setup().table.track();
+  rc::WheelState accepted = leftWheel(0.0, -20e-6, 0.0, 0.0);
+  accepted.v_wheel_in_world.z() = -0.01;  // onset at 0.01 m/s
+  rc::WheelState trial = leftWheel(0.0, -60e-6, 0.0, 0.0);
+  trial.v_wheel_in_world.z() = -0.5;  // a trial state far deeper and fifty times faster
+  rc::WheelState later = leftWheel(0.0, -30e-6, 0.0, 0.0);
+  later.v_wheel_in_world.z() = 0.005;  // separating: eq. 9's damping divides by the remembered rate
+  rc::WheelContactResult out;
+
+  rc::WheelContactWork held;
+  held.hold_impact_memory = true;
+  m.evaluate(accepted, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), held, out);
+  EXPECT_FALSE(held.impact[rc::kTread].in_contact);  // not committed yet
+  held.commitImpactMemory();
+  ASSERT_TRUE(held.impact[rc::kTread].in_contact);
+  const double onset = held.impact[rc::kTread].impact_velocity;
+  EXPECT_GT(onset, 0.009);
+  m.evaluate(later, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), held, out);
+  const double n_before_trial = out.contact[rc::kTread].N;
+  m.evaluate(trial, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), held, out);
+  EXPECT_GT(held.impact_next[rc::kTread].impact_velocity, 0.4);  // the trial's own force used its rate
+  m.evaluate(later, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), held, out);
+  // The trial left no trace in the memory; the detection's warm start (another start point) moves the
+  // converged point within its tolerance only (1e-8 relative in N seen), hence 1e-7 relative: the trial
+  // would move it by 38 %.
+  EXPECT_NEAR(out.contact[rc::kTread].N, n_before_trial, 1e-7 * n_before_trial);
+  EXPECT_EQ(held.impact[rc::kTread].impact_velocity, onset);
+
+  // Without holding, the same sequence remembers the trial: the damping at `later` shrinks by ~50 times.
+  rc::WheelContactWork every;
+  m.evaluate(accepted, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), every, out);
+  m.evaluate(later, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), every, out);
+  EXPECT_NEAR(out.contact[rc::kTread].N, n_before_trial, 1e-7 * n_before_trial);  // as held, committed at `accepted`
+  m.evaluate(trial, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), every, out);
+  m.evaluate(later, rc::RailSide::kLeft, track, rc::RigidRailDeformation(), every, out);
+  EXPECT_GT(out.contact[rc::kTread].N, n_before_trial * 1.1);
+
+  // reset() keeps the caller's choice.
+  held.reset();
+  EXPECT_TRUE(held.hold_impact_memory);
+  EXPECT_FALSE(held.impact[rc::kTread].in_contact);
+}
+
 TEST(WheelContact, PenetrationRateIgnoresTheSpinAboutTheAxle) {
   // A surface of revolution spinning about its axis keeps its shape: the penetration rate (and with it eq. 9's
   // damping) must be the same with and without the wheel's spin, also for an approximate point pair whose

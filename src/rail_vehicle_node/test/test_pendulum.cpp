@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 #include "rail_vehicle_node/vehicle_integrator.hpp"
 
@@ -95,6 +96,57 @@ TEST_P(Pendulum, ConservesEnergyKeepsConstraintAndMatchesScalarSolution) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Solvers, Pendulum, ::testing::Values(KktSolver::kRangeSpace, KktSolver::kAugmentedLu));
+
+// A force element that applies nothing and counts the steps it is told were accepted.
+class StepCounter : public ForceElement {
+ public:
+  explicit StepCounter(long* accepted) : ForceElement("step_counter", 0, kGround), accepted_(accepted) {}
+  void addForces(const VehicleData&, Eigen::Ref<Eigen::VectorXd>) const override {}
+  double potentialEnergy(const VehicleData&) const override { return 0.0; }
+  void acceptStep() const override { ++*accepted_; }
+
+ private:
+  long* accepted_;
+};
+
+// Taking CVODE's steps one at a time (IntegratorSettings::accept_steps) tells the force elements of every
+// accepted step, once, and changes nothing else: the same steps, the same interpolated outputs.
+TEST(Pendulum, AcceptingStepsOneAtATimeTellsTheElementsAndChangesNoResult) {
+  long accepted[2] = {0, 0};
+  Eigen::VectorXd end_state[2];
+  long steps[2] = {0, 0};
+  for (int one_at_a_time = 0; one_at_a_time < 2; ++one_at_a_time) {
+    VehicleModel model;
+    RigidBody body;
+    body.name = "bob";
+    body.mass = kMass;
+    body.inertia_in_body = Vector3(0.15, kJyy, 0.1).asDiagonal();
+    body.r_reference = Vector3(0.0, 0.0, -kLength);
+    const int b = model.addBody(body);
+    model.addRevoluteJointAt("hinge", b, kGround, Vector3::Zero(), Vector3::UnitY());
+    model.addForceElement(std::make_unique<StepCounter>(&accepted[one_at_a_time]));
+    model.setGravity(Vector3(0.0, 0.0, -kGravity));
+    model.finalize();
+    VehicleData data(model);
+    Eigen::VectorXd y0 = model.referenceState();
+    const Matrix3 R = Eigen::AngleAxisd(kTheta0, Vector3::UnitY()).toRotationMatrix();
+    y0.segment<3>(0) = R * Vector3(0.0, 0.0, -kLength);
+    y0.segment<4>(3) = eulerParametersFromRotation(R);
+    IntegratorSettings settings;
+    settings.accept_steps = one_at_a_time == 1;
+    VehicleIntegrator integrator(model, data, y0, 0.0, settings);
+    // Output instants both finer (several per step) and coarser than the steps.
+    for (int k = 1; k <= 400; ++k) integrator.advanceTo(k < 200 ? 1e-4 * k : 0.02 + 0.01 * (k - 200));
+    end_state[one_at_a_time] = integrator.state();
+    steps[one_at_a_time] = integrator.counters().steps;
+  }
+  EXPECT_EQ(accepted[0], 0);
+  EXPECT_GT(steps[1], 100);
+  EXPECT_EQ(accepted[1], steps[1]);
+  EXPECT_EQ(steps[0], steps[1]);
+  // Bit for bit: the same CVODE steps, interpolated at the same instants.
+  EXPECT_EQ(end_state[0], end_state[1]);
+}
 
 // The reaction at the hinge at rest hanging straight down is the weight: lambda carries it.
 TEST(Pendulum, HangingAtRestHasZeroAccelerationAndCarriesTheWeight) {

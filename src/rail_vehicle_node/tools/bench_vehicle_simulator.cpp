@@ -1,6 +1,7 @@
 // Benchmark of the vehicle on the rigid track (prints its figures; not a test):
 //   bench_vehicle_simulator <scene.yaml> <simulated seconds> [bdf|adams|auto] [max_step] [flange 0|1] [spin 0|1]
-//                           [start_arc_length] [cost 0|1] [coloured|dq] [klu|dense] [runs]
+//                           [start_arc_length] [cost 0|1] [coloured|dq] [klu|dense] [runs] [carry 0|1]
+//                           [accepted|every]
 // Prints, per run, wall time per simulated second, CVODE steps, RHS and Jacobian evaluations, then the
 // median wall time of the runs. max_step is the vehicle-alone cap (SimulatorSettings::standalone_max_step,
 // 0 = none); a negative start_arc_length keeps the scene's. cost 1 passes a cost clock (as the node does)
@@ -23,11 +24,13 @@ namespace {
 const char* const kUsage =
     "usage: bench_vehicle_simulator scene.yaml seconds [bdf|adams|auto] [max_step] [flange 0|1] [spin 0|1]\n"
     "                               [start_s] [cost 0|1] [coloured|dq] [klu|dense] [runs] [carry 0|1]\n"
+    "                               [accepted|every]\n"
     "The vehicle alone on the rigid track: per run the wall time per simulated second, CVODE steps, RHS and\n"
     "Jacobian evaluations, then the median of the runs. max_step: the vehicle-alone cap (0 = none);\n"
     "start_s < 0 keeps the scene's; cost 1 passes a cost clock; coloured|dq: BDF's Jacobian; klu|dense: the\n"
     "linear solver with the coloured Jacobian; carry 0: no Jacobian carried with the wheelsets' spin (CVODE's\n"
-    "own reuse policy).\n";
+    "own reuse policy); every: the contacts' impact memories take every evaluation, trial states included,\n"
+    "instead of the accepted steps only.\n";
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -56,6 +59,7 @@ int main(int argc, char** argv) {
   if (argc > 10 && std::string(argv[10]) == "dense") settings.linear_solver = vehicle::LinearSolverKind::kDense;
   const int runs = argc > 11 ? std::max(1, std::atoi(argv[11])) : 1;
   if (argc > 12) settings.carry_jacobian_with_spin = std::atoi(argv[12]) != 0;
+  if (argc > 13) settings.impact_memory_at_accepted_steps = std::string(argv[13]) != "every";
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = duration;
   std::vector<double> walls;

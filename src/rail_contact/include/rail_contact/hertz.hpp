@@ -136,7 +136,8 @@ double dampedNormalForce(double K, double delta, double delta_dot, double delta_
 /// case's variants (N ~ 1.8 MN where K delta^1.5 is ~90 kN), and at the other end turned negative (N
 /// clamped to 0) whenever a contact separated faster than 0.018 m/s. So the memory keeps the largest
 /// approach rate since onset: identical to eq. 9 for an impact, bounded for a contact that is pushed in
-/// after a soft start.
+/// after a soft start. An implicit integrator's caller holds it to accepted steps (WheelContactWork::
+/// hold_impact_memory), so that its Newton iterates and rejected steps do not enter it.
 struct ImpactMemory {
   bool in_contact = false;
   double impact_velocity = 0.0;  ///< largest delta_dot since contact onset [m/s], >= 0

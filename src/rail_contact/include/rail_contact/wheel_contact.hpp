@@ -99,7 +99,21 @@ struct WheelContactResult {
 struct WheelContactWork {
   DetectionWork detection[2];
   ImpactMemory impact[2];
-  void reset() { *this = WheelContactWork(); }
+  /// false: each evaluation updates impact[]. true: an evaluation reads impact[] and writes the updated
+  /// memory to impact_next[], which the caller commits (commitImpactMemory) once the state it evaluated is
+  /// accepted, so that the trial states of an implicit integrator (Newton iterates, rejected steps) do not
+  /// enter the memory and the force is a function of the state and the accepted history.
+  bool hold_impact_memory = false;
+  ImpactMemory impact_next[2];
+  void commitImpactMemory() {
+    impact[0] = impact_next[0];
+    impact[1] = impact_next[1];
+  }
+  void reset() {
+    const bool hold = hold_impact_memory;
+    *this = WheelContactWork();
+    hold_impact_memory = hold;
+  }
 };
 
 /// Contact model for one wheel profile on one rail profile. Constant after building.

@@ -40,6 +40,9 @@ class ForceElement {
   // allocation. Default: none.
   virtual void saveWorkState() const {}
   virtual void restoreWorkState() const {}
+  // The integrator accepted a step at the state of the latest evaluation: work state that must only hold
+  // accepted history (the contacts' impact memories) takes it now. No allocation. Default: nothing.
+  virtual void acceptStep() const {}
 
   // Adds force f (world) acting at the world point p to body b (nothing for the ground).
   static void applyForceAt(const VehicleData& data, int body, const Vector3& f_in_world, const Vector3& p_in_world,

@@ -52,9 +52,13 @@ struct IntegratorSettings {
   // some flange onsets with tolerances below 1e-6), Adams integrates the rest of that interval from the
   // last successful step and BDF restarts after it (counted in IntegratorCounters::adams_fallbacks).
   bool adams_fallback = true;
-  double fallback_max_step = 0.0;               // the fallback's step cap [s]; 0 = max_step
-  int max_order = 5;                            // BDF <= 5, Adams <= 12
-  long max_steps_per_call = 100000;             // internal steps allowed within one AdvanceTo
+  double fallback_max_step = 0.0;    // the fallback's step cap [s]; 0 = max_step
+  int max_order = 5;                 // BDF <= 5, Adams <= 12
+  long max_steps_per_call = 100000;  // internal steps allowed within one AdvanceTo
+  // Take CVODE's steps one at a time (CV_ONE_STEP) and tell the force elements after each accepted one
+  // (ForceElement::acceptStep), so that memories of the contacts hold accepted states only; false: CV_NORMAL,
+  // and no element hears of the steps.
+  bool accept_steps = false;
   double projection_position_threshold = 1e-6;  // max |Phi| that triggers a projection [m]
   double projection_velocity_threshold = 1e-5;  // max |Phi_v v| that triggers a projection [m/s]
   double projection_euler_threshold = 1e-6;  // max |‖p‖ - 1| that triggers a projection (rotations use p/‖p‖)

@@ -76,6 +76,11 @@ struct SimulatorSettings {
   // DetectionWork::skip_far_searches; its force is zero either way); the output evaluations always search,
   // so the published gaps are exact. false: every evaluation searches.
   bool skip_far_searches = true;
+  // The contacts' impact memories (eq. 9's impact velocity, rail_contact ImpactMemory) take accepted steps
+  // only (WheelContactWork::hold_impact_memory, IntegratorSettings::accept_steps), not every trial state of
+  // BDF's Newton or of a rejected step; false: every evaluation updates them (the co-simulation's vehicle
+  // has no contact of its own and ignores this).
+  bool impact_memory_at_accepted_steps = true;
   // Optional cost clock (must outlive the simulator): from the end of the build on, right-hand sides
   // (vehicle_rhs / vehicle_jacobian, including the one of each UpdateOutputs), the contact evaluations in
   // them (contact_detection / contact_forces, flange searches, spin evaluations) and floor accelerations.

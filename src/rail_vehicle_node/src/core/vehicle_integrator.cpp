@@ -87,6 +87,33 @@ struct VehicleIntegrator::Impl {
     if (flag < 0) fail(call, flag);
   }
 
+  // CVode to t_out as CV_NORMAL does (the state at t_out interpolated in the last step), but with
+  // IntegratorSettings::accept_steps one step at a time, each accepted one followed by the force elements'
+  // acceptStep. On failure y and t_reached hold the last accepted step. Returns CVode's flag.
+  int stepTo(void* mem, realtype t_out, N_Vector y_out, realtype* t_reached) {
+    if (!settings.accept_steps) return CVode(mem, t_out, y_out, t_reached, CV_NORMAL);
+    realtype t_now = 0.0;
+    CVodeGetCurrentTime(mem, &t_now);
+    for (long taken = 0; t_now < t_out; ++taken) {
+      if (taken == settings.max_steps_per_call) {
+        CVodeGetDky(mem, t_now, 0, y_out);
+        *t_reached = t_now;
+        std::snprintf(last_error.data(), last_error.size(), "%ld steps taken before reaching t = %.9g s", taken,
+                      static_cast<double>(t_out));
+        return CV_TOO_MUCH_WORK;
+      }
+      const int flag = CVode(mem, t_out, y_out, &t_now, CV_ONE_STEP);
+      if (flag < 0) {
+        *t_reached = t_now;
+        return flag;
+      }
+      for (const auto& element : model.forceElements()) element->acceptStep();
+    }
+    const int flag = CVodeGetDky(mem, t_out, 0, y_out);
+    *t_reached = t_out;
+    return flag;
+  }
+
   static int rhs(realtype t, N_Vector y, N_Vector y_dot, void* user_data) {
     auto* self = static_cast<Impl*>(user_data);
     const int n = self->model.stateSize();
@@ -251,7 +278,7 @@ struct VehicleIntegrator::Impl {
     }
     last_error[0] = '\0';
     realtype t_reached = t;
-    const int flag = CVode(adams, t_out, y, &t_reached, CV_NORMAL);
+    const int flag = stepTo(adams, t_out, y, &t_reached);
     long v = 0;
     if (CVodeGetNumSteps(adams, &v) == CV_SUCCESS) base.steps += v;
     if (CVodeGetNumRhsEvals(adams, &v) == CV_SUCCESS) base.rhs_evals += v;
@@ -373,7 +400,7 @@ void VehicleIntegrator::advanceTo(double t) {
   }
   s.last_error[0] = '\0';
   realtype t_reached = s.t;
-  const int flag = CVode(s.cvode, t, s.y, &t_reached, CV_NORMAL);
+  const int flag = s.stepTo(s.cvode, t, s.y, &t_reached);
   const bool bdf_failed = flag == CV_ERR_FAILURE || flag == CV_CONV_FAILURE;
   if (bdf_failed && s.settings.method == IntegrationMethod::kBdf && s.settings.adams_fallback) {
     // y holds the last successful step at t_reached: Adams takes the rest of the interval, BDF restarts at t.

@@ -95,4 +95,10 @@ void WheelRailContactElement::restoreWorkState() const {
   contact_data_->forEachSaved([](auto& live, auto& saved) { live = saved; });
 }
 
+void WheelRailContactElement::acceptStep() const {
+  for (contact::WheelContactWork& w : contact_data_->work) {
+    if (w.hold_impact_memory) w.commitImpactMemory();
+  }
+}
+
 }  // namespace rail::vehicle
