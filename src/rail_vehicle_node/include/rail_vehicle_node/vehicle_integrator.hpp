@@ -40,6 +40,9 @@ struct IntegratorSettings {
   IntegrationMethod method = IntegrationMethod::kBdf;
   JacobianKind jacobian = JacobianKind::kColoured;                // BDF only
   LinearSolverKind linear_solver = LinearSolverKind::kSparseKlu;  // BDF with kColoured only
+  // With kSparseKlu: I - gamma J written straight into KLU's matrix by a linear-system function; false: a
+  // Jacobian function, and CVODE zeroes, copies and scale-adds the matrix at every set-up (the same numbers).
+  bool direct_linear_system = true;
   // BDF with kColoured only: bodies that turn fast about their own y axis and whose dynamics do not change
   // with that turn (the wheelsets). Between evaluations the Jacobian is carried along with their turn
   // (SpinTransport) at every linear-solver set-up, one every linear_setup_interval steps; a new one is

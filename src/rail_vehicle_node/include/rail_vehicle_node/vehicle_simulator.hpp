@@ -69,6 +69,7 @@ struct SimulatorSettings {
   // BDF's Jacobian and linear solver (vehicle_integrator.hpp).
   JacobianKind jacobian = JacobianKind::kColoured;
   LinearSolverKind linear_solver = LinearSolverKind::kSparseKlu;
+  bool direct_linear_system = true;  // IntegratorSettings::direct_linear_system
   // Carry BDF's Jacobian along with the wheelsets' spin between evaluations (IntegratorSettings::spin_bodies),
   // for every wheelset whose inertia is symmetric about its axle; false: CVODE's own Jacobian policy.
   bool carry_jacobian_with_spin = true;

@@ -413,6 +413,7 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   // 1e-6 threshold re-initialised CVODE (a new Jacobian, order 1) every output interval.
   is.projection_euler_threshold = 1e-3;
   is.linear_solver = settings.linear_solver;
+  is.direct_linear_system = settings.direct_linear_system;
   if (settings.carry_jacobian_with_spin) {
     // Only a wheelset whose inertia is symmetric about its axle (body y) keeps its dynamics when it turns.
     for (int body : wheelset_bodies_) {
