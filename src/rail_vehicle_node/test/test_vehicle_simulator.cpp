@@ -349,35 +349,40 @@ Vector3 pointVelocity(const VehicleModel& model, const Eigen::Ref<const Eigen::V
          A * y.segment<3>(model.angularVelocityOffset(body)).cross(s_in_body);
 }
 
+// The paper scene's first 4 s on the rigid track (straight, then the entry transition with the leading
+// wheelset's flange bursts from 2.8 s), sampled every millisecond, for runs that must be the same to the bit.
+struct FirstFourSeconds {
+  std::vector<double> lateral, flange_force, flange_gap;
+  IntegratorCounters counters;
+};
+
+FirstFourSeconds runFirstFourSeconds(const SimulatorSettings& settings) {
+  core::Scene scene = core::fixtures::loadConfigScene("paper_demo.yaml");
+  scene.effects.track_model = core::TrackModel::kRigid;
+  VehicleSimulator sim(scene, settings);
+  FirstFourSeconds out;
+  for (int i = 1; i <= 4000; ++i) {
+    EXPECT_EQ(sim.advanceTo(1e-3 * i), RunStatus::kRunning) << sim.message();
+    out.lateral.push_back(sim.wheelsets().front().lateral);
+    out.flange_force.push_back(sim.contacts()[1].contact[rc::kFlange].N);
+    out.flange_gap.push_back(sim.contacts()[0].contact[rc::kFlange].penetration);
+  }
+  out.counters = sim.counters();
+  return out;
+}
+
 TEST(VehicleSimulator, SkippingFarFlangeSearchesChangesNothing) {
   // A surface far from its rail skips its search (SimulatorSettings::skip_far_searches): it changes no force,
   // and a skipped search is one that would have found no point pair near enough to seed Newton, so no
-  // warm start differs either. The paper scene's first 4 s (straight, then the entry transition with the
-  // leading wheelset's flange bursts from 2.8 s) with and without it must be the same run to the bit:
-  // the leading wheelset's lateral position, its flange force, and the published flange gap (output
+  // warm start differs either. The paper scene's first 4 s with and without it must be the same run to the
+  // bit: the leading wheelset's lateral position, its flange force, and the published flange gap (output
   // evaluations always search), every millisecond.
-  core::Scene scene = core::fixtures::loadConfigScene("paper_demo.yaml");
-  scene.effects.track_model = core::TrackModel::kRigid;
-  struct Sampled {
-    std::vector<double> lateral, flange_force, flange_gap;
-    long steps = 0;
-  };
-  auto run = [&scene](bool skip) {
-    SimulatorSettings settings;
-    settings.skip_far_searches = skip;
-    VehicleSimulator sim(scene, settings);
-    Sampled out;
-    for (int i = 1; i <= 4000; ++i) {
-      EXPECT_EQ(sim.advanceTo(1e-3 * i), RunStatus::kRunning) << sim.message();
-      out.lateral.push_back(sim.wheelsets().front().lateral);
-      out.flange_force.push_back(sim.contacts()[1].contact[rc::kFlange].N);
-      out.flange_gap.push_back(sim.contacts()[0].contact[rc::kFlange].penetration);
-    }
-    out.steps = sim.counters().steps;
-    return out;
-  };
-  const Sampled skipping = run(true), searching = run(false);
-  EXPECT_EQ(skipping.steps, searching.steps);
+  SimulatorSettings settings;
+  settings.skip_far_searches = true;
+  const FirstFourSeconds skipping = runFirstFourSeconds(settings);
+  settings.skip_far_searches = false;
+  const FirstFourSeconds searching = runFirstFourSeconds(settings);
+  EXPECT_EQ(skipping.counters.steps, searching.counters.steps);
   EXPECT_TRUE(skipping.lateral == searching.lateral);
   EXPECT_TRUE(skipping.flange_force == searching.flange_force);
   EXPECT_TRUE(skipping.flange_gap == searching.flange_gap);
@@ -389,26 +394,11 @@ TEST(VehicleSimulator, WritingTheLinearSystemDirectlyIsTheSameRunAsCvodesOwnPass
   // holds the numbers CVODE's own zero, copy and scale-add passes give from the Jacobian function, and the
   // same Jacobian is reused when CVODE deems it current: the paper scene's first 4 s (the entry transition's
   // flange bursts included) must be the same run to the bit, with the same steps and Jacobians.
-  core::Scene scene = core::fixtures::loadConfigScene("paper_demo.yaml");
-  scene.effects.track_model = core::TrackModel::kRigid;
-  struct Sampled {
-    std::vector<double> lateral, flange_force;
-    IntegratorCounters counters;
-  };
-  auto run = [&scene](bool direct) {
-    SimulatorSettings settings;
-    settings.direct_linear_system = direct;
-    VehicleSimulator sim(scene, settings);
-    Sampled out;
-    for (int i = 1; i <= 4000; ++i) {
-      EXPECT_EQ(sim.advanceTo(1e-3 * i), RunStatus::kRunning) << sim.message();
-      out.lateral.push_back(sim.wheelsets().front().lateral);
-      out.flange_force.push_back(sim.contacts()[1].contact[rc::kFlange].N);
-    }
-    out.counters = sim.counters();
-    return out;
-  };
-  const Sampled direct = run(true), passes = run(false);
+  SimulatorSettings settings;
+  settings.direct_linear_system = true;
+  const FirstFourSeconds direct = runFirstFourSeconds(settings);
+  settings.direct_linear_system = false;
+  const FirstFourSeconds passes = runFirstFourSeconds(settings);
   EXPECT_EQ(direct.counters.steps, passes.counters.steps);
   EXPECT_EQ(direct.counters.rhs_evals, passes.counters.rhs_evals);
   EXPECT_EQ(direct.counters.jacobian_evals, passes.counters.jacobian_evals);

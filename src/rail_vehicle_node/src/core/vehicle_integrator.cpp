@@ -183,6 +183,16 @@ struct VehicleIntegrator::Impl {
     return 0;
   }
 
+  // The pattern's column pointers and row indices into the sparse matrix M.
+  void writePattern(SUNMatrix M) const {
+    const auto& col_start = pattern->colStart();
+    const auto& row_index = pattern->rowIndex();
+    sunindextype* pointers = SUNSparseMatrix_IndexPointers(M);
+    sunindextype* indices = SUNSparseMatrix_IndexValues(M);
+    for (std::size_t j = 0; j < col_start.size(); ++j) pointers[j] = col_start[j];
+    for (std::size_t k = 0; k < row_index.size(); ++k) indices[k] = row_index[k];
+  }
+
   // CVODE's Jacobian function: the coloured Jacobian into the dense or sparse matrix J.
   static int colouredJacobian(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* user_data, N_Vector /*tmp1*/,
                               N_Vector /*tmp2*/, N_Vector /*tmp3*/) {
@@ -195,12 +205,9 @@ struct VehicleIntegrator::Impl {
     const int n = self->model.stateSize();
     bool finite = true;
     if (SUNMatGetID(J) == SUNMATRIX_SPARSE) {
-      sunindextype* pointers = SUNSparseMatrix_IndexPointers(J);
-      sunindextype* indices = SUNSparseMatrix_IndexValues(J);
+      self->writePattern(J);  // CVODE zeroed the whole matrix before this call
       realtype* values_out = SUNSparseMatrix_Data(J);
-      for (int j = 0; j <= n; ++j) pointers[j] = col_start[static_cast<std::size_t>(j)];
       for (std::size_t k = 0; k < row_index.size(); ++k) {
-        indices[k] = row_index[k];
         values_out[k] = values[k];
         finite = finite && std::isfinite(values[k]);
       }
@@ -219,6 +226,7 @@ struct VehicleIntegrator::Impl {
 
   // CVODE's linear-system function for KLU: A = I - gamma J written straight into the sparse matrix, with
   // the last Jacobian when CVODE deems it current (jok), instead of CVODE's zero, copy and scale-add passes.
+  // The matrix's structure is the pattern's, written once at construction; only its values change here.
   static int colouredLinearSystem(realtype t, N_Vector y, N_Vector fy, SUNMatrix A, booleantype jok, booleantype* jcur,
                                   realtype gamma, void* user_data, N_Vector /*tmp1*/, N_Vector /*tmp2*/,
                                   N_Vector /*tmp3*/) {
@@ -232,20 +240,15 @@ struct VehicleIntegrator::Impl {
     const auto& col_start = self->pattern->colStart();
     const auto& row_index = self->pattern->rowIndex();
     const std::vector<double>& values = *self->jacobian_values;
-    sunindextype* pointers = SUNSparseMatrix_IndexPointers(A);
-    sunindextype* indices = SUNSparseMatrix_IndexValues(A);
     realtype* values_out = SUNSparseMatrix_Data(A);
     const int n = self->model.stateSize();
     bool finite = true;
-    for (int j = 0; j <= n; ++j) pointers[j] = col_start[static_cast<std::size_t>(j)];
     for (int j = 0; j < n; ++j) {
       for (int k = col_start[static_cast<std::size_t>(j)]; k < col_start[static_cast<std::size_t>(j + 1)]; ++k) {
-        const int i = row_index[static_cast<std::size_t>(k)];
         const double v = values[static_cast<std::size_t>(k)];
         finite = finite && std::isfinite(v);
-        indices[k] = i;
         values_out[k] = -gamma * v;  // as SUNMatScaleAddI: (-gamma) J, then + 1 on the diagonal
-        if (i == j) values_out[k] += 1.0;
+        if (row_index[static_cast<std::size_t>(k)] == j) values_out[k] += 1.0;
       }
     }
     return finite ? 0 : 1;  // non-finite: recoverable
@@ -410,6 +413,7 @@ VehicleIntegrator::VehicleIntegrator(const VehicleModel& model, VehicleData& dat
     }
     s.check(CVodeSetLinearSolver(s.cvode, s.linear_solver, s.jacobian), "CVodeSetLinearSolver");
     if (settings.linear_solver == LinearSolverKind::kSparseKlu && settings.direct_linear_system) {
+      s.writePattern(s.jacobian);
       s.check(CVodeSetLinSysFn(s.cvode, &Impl::colouredLinearSystem), "CVodeSetLinSysFn");
     } else {
       s.check(CVodeSetJacFn(s.cvode, &Impl::colouredJacobian), "CVodeSetJacFn");
