@@ -138,6 +138,26 @@ class ScriptsOnBadInput(unittest.TestCase):
         self.assertNotIn("Traceback", p.stderr)
         self.assertFalse(os.path.exists(ws))
 
+    def test_vehicle_benchmark_refuses_a_value_it_would_ignore(self):
+        # Each word-valued argument is one of its choices; another word must not fall back to a default.
+        bench = os.path.join(LIB, "rail_vehicle_node", "bench_vehicle_simulator")
+        scene = os.path.join(REPO, "config", "scenes", "paper_demo.yaml")
+        base = [bench, scene, "0.01", "auto", "0", "1", "1", "-1", "0", "coloured", "klu", "1", "1"]
+        for i, bad in ((3, "bfd"), (5, "2"), (10, "kl"), (12, "yes"), (13, "bogus")):
+            with self.subTest(argument=i, value=bad):
+                cmd = (base + ["accepted"])[:]
+                cmd[i] = bad
+                p = run(cmd)
+                self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+                self.assertIn("argument %d: '%s' is not one of" % (i, bad), p.stderr)
+                self.assertEqual(p.stdout, "")
+        p = run(base + ["accepted", "extra"])
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertIn("unexpected argument 'extra'", p.stderr)
+        p = run(base + ["every"])
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertIn("median of 1 runs", p.stdout)
+
     def test_worn_profile_maker_names_the_missing_standard_shape(self):
         d = os.path.join(tempfile.mkdtemp(prefix="tools_cli_prof_"), "none")
         p = run([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "make_worn_profiles.py"), "--profiles", d])

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -35,31 +36,45 @@ const char* const kUsage =
 
 int main(int argc, char** argv) {
   using namespace rail;
-  if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kAnyCount)) return 0;
+  if (rail::tools::startTool(argc, argv, kUsage, 13)) return 0;
   if (argc < 3) {
     std::fputs(kUsage, stderr);
     return 2;
   }
+  using tools::positionalChoice;
+  using tools::positionalNumber;
+  static const char* const kMethods[] = {"bdf", "adams", "auto", nullptr};
+  static const char* const kOffOn[] = {"0", "1", nullptr};
+  static const char* const kJacobians[] = {"coloured", "dq", nullptr};
+  static const char* const kSolvers[] = {"klu", "dense", nullptr};
+  static const char* const kMemories[] = {"accepted", "every", nullptr};
+  const double duration = positionalNumber(argc, argv, 2, 0.0, 1e-6, kUsage);
+  const int method = positionalChoice(argc, argv, 3, kMethods, 2, kUsage);
+  vehicle::SimulatorSettings settings;
+  settings.standalone_max_step = positionalNumber(argc, argv, 4, 0.0, 0.0, kUsage);
+  const bool flange = positionalChoice(argc, argv, 5, kOffOn, 1, kUsage) == 1;
+  const bool spin = positionalChoice(argc, argv, 6, kOffOn, 1, kUsage) == 1;
+  const double start_s = positionalNumber(argc, argv, 7, -1.0, -HUGE_VAL, kUsage);
+  const bool with_cost = positionalChoice(argc, argv, 8, kOffOn, 0, kUsage) == 1;
+  if (positionalChoice(argc, argv, 9, kJacobians, 0, kUsage) == 1) {
+    settings.jacobian = vehicle::JacobianKind::kDenseDifferenceQuotient;
+  }
+  if (positionalChoice(argc, argv, 10, kSolvers, 0, kUsage) == 1) {
+    settings.linear_solver = vehicle::LinearSolverKind::kDense;
+  }
+  const int runs = static_cast<int>(positionalNumber(argc, argv, 11, 1.0, 1.0, kUsage));
+  settings.carry_jacobian_with_spin = positionalChoice(argc, argv, 12, kOffOn, 1, kUsage) == 1;
+  settings.impact_memory_at_accepted_steps = positionalChoice(argc, argv, 13, kMemories, 0, kUsage) == 0;
   core::Scene scene = core::loadSceneFile(argv[1]);
   scene.effects.track_model = core::TrackModel::kRigid;
-  const double duration = std::atof(argv[2]);
   if (argc > 3) {
-    const std::string m = argv[3];
-    scene.solver.vehicle_method = m == "bdf"     ? core::VehicleMethod::kBdf
-                                  : m == "adams" ? core::VehicleMethod::kAdams
-                                                 : core::VehicleMethod::kAuto;
+    scene.solver.vehicle_method = method == 0   ? core::VehicleMethod::kBdf
+                                  : method == 1 ? core::VehicleMethod::kAdams
+                                                : core::VehicleMethod::kAuto;
   }
-  vehicle::SimulatorSettings settings;
-  if (argc > 4) settings.standalone_max_step = std::atof(argv[4]);
-  if (argc > 5) scene.effects.flange_contact = std::atoi(argv[5]) != 0;
-  if (argc > 6) scene.effects.spin_creepage = std::atoi(argv[6]) != 0;
-  if (argc > 7 && std::atof(argv[7]) >= 0.0) scene.vehicle.start_arc_length = std::atof(argv[7]);
-  const bool with_cost = argc > 8 && std::atoi(argv[8]) != 0;
-  if (argc > 9 && std::string(argv[9]) == "dq") settings.jacobian = vehicle::JacobianKind::kDenseDifferenceQuotient;
-  if (argc > 10 && std::string(argv[10]) == "dense") settings.linear_solver = vehicle::LinearSolverKind::kDense;
-  const int runs = argc > 11 ? std::max(1, std::atoi(argv[11])) : 1;
-  if (argc > 12) settings.carry_jacobian_with_spin = std::atoi(argv[12]) != 0;
-  if (argc > 13) settings.impact_memory_at_accepted_steps = std::string(argv[13]) != "every";
+  if (argc > 5) scene.effects.flange_contact = flange;
+  if (argc > 6) scene.effects.spin_creepage = spin;
+  if (start_s >= 0.0) scene.vehicle.start_arc_length = start_s;
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = duration;
   std::vector<double> walls;

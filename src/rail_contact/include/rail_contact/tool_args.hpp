@@ -53,6 +53,19 @@ inline double positionalNumber(int argc, char** argv, int i, double fallback, do
   return v;
 }
 
+/// Positional argument i (1-based) as the index of its value in choices (nullptr-terminated), fallback when
+/// absent; any other value exits 2 with the program's name, the argument, the choices and the usage.
+inline int positionalChoice(int argc, char** argv, int i, const char* const* choices, int fallback, const char* usage) {
+  if (i >= argc) return fallback;
+  std::string allowed;
+  for (int k = 0; choices[k] != nullptr; ++k) {
+    if (argv[i] == std::string(choices[k])) return k;
+    allowed += (k == 0 ? "" : "|") + std::string(choices[k]);
+  }
+  std::fprintf(stderr, "%s: argument %d: '%s' is not one of %s\n%s", argv[0], i, argv[i], allowed.c_str(), usage);
+  std::exit(2);
+}
+
 /// Refuses more than max_positional arguments (exit 2).
 inline void atMostArguments(int argc, char** argv, int max_positional, const char* usage) {
   if (argc - 1 > max_positional) {
