@@ -89,7 +89,7 @@ def main(argv=None):
         print("\n5 km against 500 m (flexible, 2e-5 s): loop %+.1f %%, launch to exit %+.1f %%" % (
             100 * (five[0][1] / flex[0][1] - 1), 100 * (five[0][2] / flex[0][2] - 1)))
     if not a.no_accuracy:
-        accuracy(a)
+        return accuracy(a)
     return 0
 
 
@@ -101,8 +101,12 @@ def accuracy(a):
     reference = os.path.join(a.out, "accuracy_reference_0.1ms.csv")
     print("\nAccuracy of the vehicle alone, whole scene, against Adams capped at 5e-6 s, 0.1 ms samples (%s):"
           % reference, flush=True)
-    subprocess.run([exe, "--sample", "1e-4", PAPER, reference, "auto", "0", "0", "0", "adams", "2e-5", "0", "0"],
-                   check=False)
+    p = subprocess.run([exe, "--sample", "1e-4", PAPER, reference, "auto", "0", "0", "0", "adams", "2e-5", "0", "0"],
+                       check=False)
+    if p.returncode != 0:
+        print("bench_targets: bench_vehicle_accuracy exited %d (a run stopped early or bad input)" % p.returncode,
+              file=sys.stderr)
+    return p.returncode
 
 
 if __name__ == "__main__":

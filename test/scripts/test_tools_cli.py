@@ -158,6 +158,37 @@ class ScriptsOnBadInput(unittest.TestCase):
         self.assertEqual(p.returncode, 0, p.stderr)
         self.assertIn("median of 1 runs", p.stdout)
 
+    def test_vehicle_accuracy_benchmark_refuses_bad_candidates_before_any_run(self):
+        # A candidate is method max_step rtol atol; a bad word, a negative number or an incomplete group
+        # exits 2 naming the argument, before the reference run (minutes) starts and without writing it.
+        bench = os.path.join(LIB, "rail_vehicle_node", "bench_vehicle_accuracy")
+        scene = os.path.join(REPO, "config", "scenes", "paper_demo.yaml")
+        with tempfile.TemporaryDirectory() as d:
+            ref = os.path.join(d, "reference.csv")
+            cases = (
+                ([scene, ref, "bfd", "0", "0", "0"], "argument 3: 'bfd' is not one of bdf|adams|auto"),
+                (["--sample", "1e-4", scene, ref, "auto", "0", "-1", "0"], "argument 7: '-1' is not a number >= 0"),
+                ([scene, ref, "bdf", "1e-4", "0"], "3 candidate arguments, expected groups of four"),
+            )
+            for args, message in cases:
+                with self.subTest(args=args):
+                    p = run([bench] + args)
+                    self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+                    self.assertIn(message, p.stderr)
+                    self.assertEqual(p.stdout, "")
+            p = run([bench, scene, os.path.join(d, "no", "such", "dir", "reference.csv")])
+            self.assertEqual(p.returncode, 1, p.stdout + p.stderr)
+            self.assertIn("reference.csv: cannot write the reference there", p.stderr)
+            self.assertEqual(os.listdir(d), [])
+
+    def test_vehicle_benchmarks_name_a_missing_scene_and_exit_1(self):
+        for tool in ("bench_vehicle_accuracy", "bench_vehicle_simulator"):
+            with self.subTest(tool=tool):
+                p = run([os.path.join(LIB, "rail_vehicle_node", tool), "/nonexistent/scene.yaml", "1"])
+                self.assertEqual(p.returncode, 1, p.stdout + p.stderr)
+                self.assertIn("%s: /nonexistent/scene.yaml: cannot read the scene file" % tool, p.stderr)
+                self.assertNotIn("terminate called", p.stderr)
+
     def test_worn_profile_maker_names_the_missing_standard_shape(self):
         d = os.path.join(tempfile.mkdtemp(prefix="tools_cli_prof_"), "none")
         p = run([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "make_worn_profiles.py"), "--profiles", d])

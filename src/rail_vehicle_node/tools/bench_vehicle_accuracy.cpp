@@ -7,14 +7,20 @@
 // per simulated second, and against the reference the largest difference of the leading wheelset's
 // lateral and vertical displacement and attack angle on the straights and in the steady curve, and the
 // count, peak and mean of its flange-force bursts (runs of samples with flange contact) in the transitions.
-// method: bdf | adams | auto; max_step 0 = none; rtol/atol 0 = the scene's.
+// method: bdf | adams | auto; max_step 0 = none; rtol/atol 0 = the scene's. Exit 1 when a run stops early.
 #include <rail_core/scene_loader.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -37,7 +43,8 @@ struct Candidate {
   double max_step = 0.0, rtol = 0.0, atol = 0.0;
 };
 
-std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double sample, double& wall_per_s) {
+std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double sample, double& wall_per_s,
+                             bool& finished) {
   core::Scene scene = base;
   scene.effects.track_model = core::TrackModel::kRigid;
   scene.solver.vehicle_method = c.method == "bdf"     ? core::VehicleMethod::kBdf
@@ -75,17 +82,21 @@ std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double
       k.rhs_evals, k.rhs_evals_jacobian, k.jacobian_evals,
       status == vehicle::RunStatus::kFinished ? "finished" : "stopped:", sim.message().c_str());
   std::fflush(stdout);
+  finished = status == vehicle::RunStatus::kFinished;
   return out;
 }
 
-void write(const std::string& path, const std::vector<Sample>& v) {
+bool write(const std::string& path, const std::vector<Sample>& v) {
   std::ofstream f(path);
+  if (!f) return false;
   f.precision(17);
   f << "t,s,lateral,vertical,attack,flange_left,flange_right\n";
   for (const Sample& x : v) {
     f << x.t << ',' << x.s << ',' << x.lateral << ',' << x.vertical << ',' << x.attack << ',' << x.flange_left << ','
       << x.flange_right << '\n';
   }
+  f.close();
+  return static_cast<bool>(f);
 }
 
 bool read(const std::string& path, std::vector<Sample>& v) {
@@ -150,10 +161,12 @@ const char* const kUsage =
     "on the first call): per candidate the wall time per simulated second and the largest differences of the\n"
     "leading wheelset on the straights and the steady curve, and its flange-force bursts in the transitions.\n"
     "method: bdf | adams | auto; max_step 0 = none; rtol/atol 0 = the scene's. --sample: the sampling\n"
-    "interval of both runs in s (default 1e-3; a reference.csv is reused only with the same interval).\n";
+    "interval of both runs in s (default 1e-3; a reference.csv is reused only with the same interval).\n"
+    "Exit 1 when a run stops before the scene's end (a stopped reference is not written), 2 on bad arguments.\n";
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+int runBenchmark(int argc, char** argv) {
   if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;
   double sample = 1e-3;
   int first = 1;
@@ -173,21 +186,51 @@ int main(int argc, char** argv) {
     std::fputs(kUsage, stderr);
     return 2;
   }
+  // Candidates in groups of four, each word one of its choices and each number >= 0.
+  if ((argc - first - 2) % 4 != 0) {
+    std::fprintf(
+        stderr,
+        "bench_vehicle_accuracy: %d candidate arguments, expected groups of four (method max_step rtol atol)\n%s",
+        argc - first - 2, kUsage);
+    return 2;
+  }
+  static const char* const kMethods[] = {"bdf", "adams", "auto", nullptr};
+  std::vector<Candidate> candidates;
+  for (int i = first + 2; i + 3 < argc; i += 4) {
+    Candidate c;
+    c.method = kMethods[tools::positionalChoice(argc, argv, i, kMethods, 2, kUsage)];
+    c.max_step = tools::positionalNumber(argc, argv, i + 1, 0.0, 0.0, kUsage);
+    c.rtol = tools::positionalNumber(argc, argv, i + 2, 0.0, 0.0, kUsage);
+    c.atol = tools::positionalNumber(argc, argv, i + 3, 0.0, 0.0, kUsage);
+    candidates.push_back(c);
+  }
   const core::Scene scene = core::loadSceneFile(argv[first]);
   const std::string reference_path = argv[first + 1];
   std::vector<Sample> ref;
-  if (!read(reference_path, ref)) {
+  const bool have_reference = read(reference_path, ref);
+  const std::filesystem::path reference_dir = std::filesystem::path(reference_path).parent_path();
+  if (!have_reference && ::access(reference_dir.empty() ? "." : reference_dir.c_str(), W_OK) != 0) {
+    std::fprintf(stderr, "bench_vehicle_accuracy: %s: cannot write the reference there (%s)\n", reference_path.c_str(),
+                 std::strerror(errno));
+    return 1;
+  }
+  if (!have_reference) {
     double wall = 0.0;
-    ref = simulate(scene, Candidate{"adams", 5e-6, 0.0, 0.0}, sample, wall);
-    write(reference_path, ref);
+    bool finished = false;
+    ref = simulate(scene, Candidate{"adams", 5e-6, 0.0, 0.0}, sample, wall, finished);
+    if (!finished) {
+      std::fprintf(stderr, "bench_vehicle_accuracy: the reference run stopped before the scene's end; %s not written\n",
+                   reference_path.c_str());
+      return 1;
+    }
+    if (!write(reference_path, ref)) {
+      std::fprintf(stderr, "bench_vehicle_accuracy: %s: cannot write the reference\n", reference_path.c_str());
+      return 1;
+    }
   } else if (ref.size() > 1 && std::abs((ref[1].t - ref[0].t) - sample) > 1e-3 * sample) {
     std::fprintf(stderr, "bench_vehicle_accuracy: %s was sampled every %g s, not every %g s (--sample)\n",
                  reference_path.c_str(), ref[1].t - ref[0].t, sample);
     return 2;
-  }
-  std::vector<Candidate> candidates;
-  for (int i = first + 2; i + 3 < argc; i += 4) {
-    candidates.push_back(Candidate{argv[i], std::atof(argv[i + 1]), std::atof(argv[i + 2]), std::atof(argv[i + 3])});
   }
   if (candidates.empty()) candidates.push_back(Candidate{});
   // Windows by the leading wheelset's arc length on the paper scene's layout: straight 0-100 m, transition
@@ -199,9 +242,12 @@ int main(int argc, char** argv) {
   };
   const Window steady[] = {{"straight", 0.0, 100.0}, {"steady curve", 220.0, 380.0}, {"final straight", 485.0, 500.0}};
   const Window transitions[] = {{"entry transition", 100.0, 220.0}, {"exit transition", 380.0, 485.0}};
+  bool all_finished = true;
   for (const Candidate& c : candidates) {
     double wall = 0.0;
-    const std::vector<Sample> run = simulate(scene, c, sample, wall);
+    bool finished = false;
+    const std::vector<Sample> run = simulate(scene, c, sample, wall, finished);
+    all_finished = all_finished && finished;
     const std::size_t n = std::min(run.size(), ref.size());
     std::printf("| window | max |d lateral| [m] | max |d vertical| [m] | max |d attack| [deg] |\n|---|---|---|---|\n");
     for (const Window& w : steady) {
@@ -233,5 +279,16 @@ int main(int argc, char** argv) {
     }
     std::fflush(stdout);
   }
-  return 0;
+  return all_finished ? 0 : 1;
+}
+}  // namespace
+
+// A scene that cannot be read or built: one line naming the file and the field, exit 1.
+int main(int argc, char** argv) {
+  try {
+    return runBenchmark(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_vehicle_accuracy: %s\n", e.what());
+    return 1;
+  }
 }

@@ -1,6 +1,6 @@
 // Benchmark program (not part of the library): median wall time of one right-hand side evaluation of the
 // full vehicle model, for both solvers of the augmented system.
-// Usage: benchmark_rhs [vehicle.yaml] [evaluations]
+// Usage: bench_vehicle_rhs [vehicle.yaml] [evaluations]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
     const double lu = medianRhsMicroseconds(path, rail::vehicle::KktSolver::kAugmentedLu, evaluations);
     std::printf("median RHS evaluation, augmented LU solve: %.2f us over %d evaluations\n", lu, evaluations);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "benchmark_rhs: %s\n", e.what());
+    std::fprintf(stderr, "bench_vehicle_rhs: %s\n", e.what());
     return 1;
   }
   return 0;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,8 @@ const char* const kUsage =
     "instead of the accepted steps only.\n";
 }  // namespace
 
-int main(int argc, char** argv) {
+namespace {
+int runBenchmark(int argc, char** argv) {
   using namespace rail;
   if (rail::tools::startTool(argc, argv, kUsage, 13)) return 0;
   if (argc < 3) {
@@ -117,4 +119,15 @@ int main(int argc, char** argv) {
   std::printf("median of %d runs: %.3f s wall per simulated s (real-time factor %.2f), min %.3f, max %.3f\n", runs,
               median, 1.0 / median, sorted.front(), sorted.back());
   return all_finished ? 0 : 1;
+}
+}  // namespace
+
+// A scene that cannot be read or built: one line naming the file and the field, exit 1.
+int main(int argc, char** argv) {
+  try {
+    return runBenchmark(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_vehicle_simulator: %s\n", e.what());
+    return 1;
+  }
 }
