@@ -382,6 +382,10 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
                              const Deformation& deformation, DetectionWork& work, ContactGeometry& out) const noexcept {
   ++work.calls;
   out.iterations = 0;
+  if (work.hold_warm_start) {
+    work.x = work.x_committed;
+    work.has_warm_start = work.has_committed_warm_start;
+  }
   WheelFrame wf;
   if (!makeWheelFrame(pose, wf)) {
     out.status = DetectionStatus::kInvalidInput;

@@ -264,7 +264,8 @@ struct CurveRun {
 };
 // Both tests below compare two runs of the same step sequence: Adams at the paper's 2e-5 s cap (the vehicle
 // alone is otherwise uncapped and BDF's step choice would differ between the runs by more than the effect).
-CurveRun runTightCurve(double t_end, double split_overlap, double rtol, double atol, double max_step = 2e-5) {
+CurveRun runTightCurve(double t_end, double split_overlap, double rtol, double atol, double max_step = 2e-5,
+                       bool warm_starts_at_accepted_steps = true) {
   core::Scene scene = core::fixtures::loadConfigScene("tight_curve.yaml");
   scene.vehicle.start_arc_length = 145.0;
   scene.solver.end.kind = core::EndKind::kTime;
@@ -274,6 +275,7 @@ CurveRun runTightCurve(double t_end, double split_overlap, double rtol, double a
   SimulatorSettings settings;
   settings.contact.detection.split_overlap = split_overlap;
   settings.standalone_max_step = max_step;
+  settings.warm_starts_at_accepted_steps = warm_starts_at_accepted_steps;
   VehicleSimulator sim(scene, settings);
   RunStatus status = RunStatus::kRunning;
   for (int i = 1; status == RunStatus::kRunning; ++i) status = sim.advanceTo(std::min(t_end, 0.01 * i));
@@ -323,21 +325,30 @@ TEST(VehicleSimulator, TightCurveWithFlangeContactConvergesWithTheTolerance) {
   EXPECT_LT(static_cast<double>(run.counters.rhs_evals), 1.3 * static_cast<double>(run.counters.steps));
 }
 
-TEST(VehicleSimulator, UncappedBdfAtTightTolerancesFinishesTheFlangeOnsetsWithTheAdamsFallback) {
-  // The vehicle alone uncapped (BDF) at rtol 1e-8 / atol 1e-10 in the tight curve: at the flange onsets
-  // (from ~45 ms) CVODE's BDF gives up (error test failing down to h ~ 1e-11 s); Adams at the scene's 2e-5 s
-  // cap finishes those output intervals. The run must end and agree with the Adams run at the cap and the
-  // same tolerances within the 20 um the test above allows between tolerances 100 times apart.
+TEST(VehicleSimulator, UncappedBdfAtTightTolerancesFinishesTheFlangeOnsets) {
+  // The vehicle alone uncapped (BDF) at rtol 1e-8 / atol 1e-10 in the tight curve, through the flange onsets
+  // (from ~45 ms). With the detections warm-started from the accepted steps (the default) BDF gets through
+  // on its own. With the former rule, warm starts from the last trial evaluation, the contact point depends
+  // on where BDF's Newton has been and CVODE gives up at the onsets (error test failing down to h ~ 1e-11 s);
+  // Adams at the scene's 2e-5 s cap then finishes those output intervals (IntegratorSettings::adams_fallback).
+  // Both runs must end and agree with the Adams run at the cap and the same tolerances within the 20 um the
+  // test above allows between tolerances 100 times apart.
   const CurveRun bdf = runTightCurve(0.2, 5e-3, 1e-8, 1e-10, 0.0);
+  const CurveRun former = runTightCurve(0.2, 5e-3, 1e-8, 1e-10, 0.0, false);
   const CurveRun adams = runTightCurve(0.2, 5e-3, 1e-8, 1e-10, 2e-5);
   ASSERT_EQ(bdf.lateral.size(), 4u);
-  std::printf("tight curve 0.2 s, rtol 1e-8: BDF uncapped %ld steps, %ld Adams fallbacks\n", bdf.counters.steps,
-              bdf.counters.adams_fallbacks);
-  EXPECT_GT(bdf.counters.adams_fallbacks, 0);
+  ASSERT_EQ(former.lateral.size(), 4u);
+  std::printf(
+      "tight curve 0.2 s, rtol 1e-8: BDF uncapped %ld steps, %ld Adams fallbacks; warm starts from every "
+      "evaluation %ld steps, %ld fallbacks\n",
+      bdf.counters.steps, bdf.counters.adams_fallbacks, former.counters.steps, former.counters.adams_fallbacks);
+  EXPECT_EQ(bdf.counters.adams_fallbacks, 0);
+  EXPECT_GT(former.counters.adams_fallbacks, 0);
   for (std::size_t w = 0; w < 4; ++w) {
-    std::printf("  wheelset %zu lateral %.4f mm (Adams at the cap %.4f mm)\n", w + 1, bdf.lateral[w] * 1e3,
-                adams.lateral[w] * 1e3);
+    std::printf("  wheelset %zu lateral %.4f mm, former rule %.4f mm (Adams at the cap %.4f mm)\n", w + 1,
+                bdf.lateral[w] * 1e3, former.lateral[w] * 1e3, adams.lateral[w] * 1e3);
     EXPECT_NEAR(bdf.lateral[w], adams.lateral[w], 20e-6) << "wheelset " << w + 1;
+    EXPECT_NEAR(former.lateral[w], adams.lateral[w], 20e-6) << "wheelset " << w + 1 << ", former rule";
   }
 }
 

@@ -31,8 +31,8 @@ const char* const kUsage =
     "Jacobian evaluations, then the median of the runs. max_step: the vehicle-alone cap (0 = none);\n"
     "start_s < 0 keeps the scene's; cost 1 passes a cost clock; coloured|dq: BDF's Jacobian; klu|dense: the\n"
     "linear solver with the coloured Jacobian; carry 0: no Jacobian carried with the wheelsets' spin (CVODE's\n"
-    "own reuse policy); every: the contacts' impact memories take every evaluation, trial states included,\n"
-    "instead of the accepted steps only.\n";
+    "own reuse policy); every: the contacts' impact memories and detection warm starts take every evaluation,\n"
+    "trial states included, instead of the accepted steps only.\n";
 }  // namespace
 
 namespace {
@@ -67,6 +67,7 @@ int runBenchmark(int argc, char** argv) {
   const int runs = static_cast<int>(positionalNumber(argc, argv, 11, 1.0, 1.0, kUsage));
   settings.carry_jacobian_with_spin = positionalChoice(argc, argv, 12, kOffOn, 1, kUsage) == 1;
   settings.impact_memory_at_accepted_steps = positionalChoice(argc, argv, 13, kMemories, 0, kUsage) == 0;
+  settings.warm_starts_at_accepted_steps = settings.impact_memory_at_accepted_steps;
   core::Scene scene = core::loadSceneFile(argv[1]);
   scene.effects.track_model = core::TrackModel::kRigid;
   if (argc > 3) {

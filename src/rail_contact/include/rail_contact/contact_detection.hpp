@@ -91,7 +91,22 @@ struct DetectionWork {
   Eigen::Vector2d reference_centre = Eigen::Vector2d::Zero();  ///< wheel centre in the rail section (lateral, up), m
   Eigen::Vector3d reference_axle = Eigen::Vector3d::Zero();    ///< axle direction in the rail section frame
   long long skipped = 0;                                       ///< searches skipped
-  void reset() { *this = DetectionWork(); }
+  /// false: a detection starts Newton from the previous detection's solution. true: from the solution
+  /// committed by commitWarmStart once the state it was found at is accepted, so that the trial states of an
+  /// implicit integrator (Newton iterates, Jacobian perturbations, rejected steps) do not decide which point
+  /// the next detection converges to, and the contact is a function of the state and the accepted history.
+  bool hold_warm_start = false;
+  Eigen::Vector4d x_committed = Eigen::Vector4d::Zero();
+  bool has_committed_warm_start = false;
+  void commitWarmStart() {
+    x_committed = x;
+    has_committed_warm_start = has_warm_start;
+  }
+  void reset() {
+    const bool hold = hold_warm_start;
+    *this = DetectionWork();
+    hold_warm_start = hold;
+  }
 };
 
 /// Counters of several DetectionWork summed (every wheel, both surfaces) for a run's closing summary.

@@ -109,10 +109,20 @@ struct WheelContactWork {
     impact[0] = impact_next[0];
     impact[1] = impact_next[1];
   }
+  /// What the caller commits at an accepted step: the held impact memories and warm starts.
+  void commitAcceptedStep() {
+    if (hold_impact_memory) commitImpactMemory();
+    for (DetectionWork& d : detection) {
+      if (d.hold_warm_start) d.commitWarmStart();
+    }
+  }
   void reset() {
     const bool hold = hold_impact_memory;
+    const bool hold_warm[2] = {detection[0].hold_warm_start, detection[1].hold_warm_start};
     *this = WheelContactWork();
     hold_impact_memory = hold;
+    detection[0].hold_warm_start = hold_warm[0];
+    detection[1].hold_warm_start = hold_warm[1];
   }
 };
 

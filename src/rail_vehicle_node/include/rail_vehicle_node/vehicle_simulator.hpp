@@ -82,6 +82,10 @@ struct SimulatorSettings {
   // BDF's Newton or of a rejected step; false: every evaluation updates them (the co-simulation's vehicle
   // has no contact of its own and ignores this).
   bool impact_memory_at_accepted_steps = true;
+  // The contact detections start Newton from the contact point of the last accepted step (rail_contact
+  // DetectionWork::hold_warm_start), not from the last trial evaluation's, which made the contact point and
+  // so the run depend on where the integrator had evaluated; false: from the last evaluation (the former rule).
+  bool warm_starts_at_accepted_steps = true;
   // Optional cost clock (must outlive the simulator): from the end of the build on, right-hand sides
   // (vehicle_rhs / vehicle_jacobian, including the one of each UpdateOutputs), the contact evaluations in
   // them (contact_detection / contact_forces, flange searches, spin evaluations) and floor accelerations.

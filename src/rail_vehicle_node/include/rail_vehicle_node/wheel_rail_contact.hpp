@@ -101,7 +101,7 @@ class WheelRailContactElement : public ForceElement {
   // Warm starts, impact memories, hints and the last results.
   void saveWorkState() const override;
   void restoreWorkState() const override;
-  void acceptStep() const override;  // commits the impact memories (WheelContactWork::hold_impact_memory)
+  void acceptStep() const override;  // commits the held impact memories and warm starts (commitAcceptedStep)
 
  private:
   const WheelRailContactModel* model_;

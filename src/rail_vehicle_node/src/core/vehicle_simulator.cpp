@@ -430,10 +430,12 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   method_ = chooseMethod(solver, scene.vehicle.speed, cosimulation);
   is.method = method_;
   is.max_order = method_ == IntegrationMethod::kBdf ? 5 : 12;
-  is.accept_steps = settings.impact_memory_at_accepted_steps && !cosimulation;
+  is.accept_steps =
+      (settings.impact_memory_at_accepted_steps || settings.warm_starts_at_accepted_steps) && !cosimulation;
   for (auto& work : contact_data_->work) {
     for (auto& impact : work.impact) impact = rc::ImpactMemory();
-    work.hold_impact_memory = is.accept_steps;
+    work.hold_impact_memory = settings.impact_memory_at_accepted_steps && is.accept_steps;
+    for (auto& d : work.detection) d.hold_warm_start = settings.warm_starts_at_accepted_steps && is.accept_steps;
   }
   if (settings.wheel_wrench_source != nullptr) {
     // Settled on the rigid contact; from here on the wheel wrenches come from the source.

@@ -97,7 +97,7 @@ void WheelRailContactElement::restoreWorkState() const {
 
 void WheelRailContactElement::acceptStep() const {
   for (contact::WheelContactWork& w : contact_data_->work) {
-    if (w.hold_impact_memory) w.commitImpactMemory();
+    w.commitAcceptedStep();
   }
 }
 
