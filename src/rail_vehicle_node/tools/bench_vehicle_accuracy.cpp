@@ -19,7 +19,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -285,10 +284,5 @@ int runBenchmark(int argc, char** argv) {
 
 // A scene that cannot be read or built: one line naming the file and the field, exit 1.
 int main(int argc, char** argv) {
-  try {
-    return runBenchmark(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_vehicle_accuracy: %s\n", e.what());
-    return 1;
-  }
+  return rail::tools::runReportingErrors("bench_vehicle_accuracy", runBenchmark, argc, argv);
 }

@@ -15,7 +15,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <exception>
 #include <string>
 #include <vector>
 
@@ -125,10 +124,5 @@ int runBenchmark(int argc, char** argv) {
 
 // A scene that cannot be read or built: one line naming the file and the field, exit 1.
 int main(int argc, char** argv) {
-  try {
-    return runBenchmark(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_vehicle_simulator: %s\n", e.what());
-    return 1;
-  }
+  return rail::tools::runReportingErrors("bench_vehicle_simulator", runBenchmark, argc, argv);
 }

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string>
 
 #include "rail_contact/format.hpp"
@@ -88,6 +89,17 @@ inline bool startTool(int argc, char** argv, const char* usage, int max_position
   refuseOptions(argc, argv, usage);
   atMostArguments(argc, argv, max_positional, usage);
   return false;
+}
+
+/// A tool's main in one call, `return runReportingErrors("name", run, argc, argv);`: an exception thrown by
+/// run (a file that cannot be read, a field out of range) is one line "name: what" on stderr and exit 1.
+inline int runReportingErrors(const char* name, int (*run)(int, char**), int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n", name, e.what());
+    return 1;
+  }
 }
 
 }  // namespace tools
