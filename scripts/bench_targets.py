@@ -7,7 +7,7 @@ factor >= 1). Each case runs --repeat times, one at a time (run nothing else mea
 median of the slower node's loop wall time (set-up excluded, from the cost profiles), per simulated second,
 and its ratio to the run alone. Then the vehicle alone's accuracy against a reference run of the whole
 scene (Adams capped at 5e-6 s, 0.1 ms samples, cached in --out as accuracy_reference_0.1ms.csv; its first run
-takes ~2-3 min):
+takes ~10 min; a cached one from another scene or an older build is refused, exit 2: delete it):
 bench_vehicle_accuracy's table for the default run and for Adams at the former 2e-5 s cap.
 
   scripts/bench_targets.py [--repeat 3] [--end 1.5] [--out DIR] [--workspace WS] [--only TEXT ...]
@@ -104,7 +104,8 @@ def accuracy(a):
     p = subprocess.run([exe, "--sample", "1e-4", PAPER, reference, "auto", "0", "0", "0", "adams", "2e-5", "0", "0"],
                        check=False)
     if p.returncode != 0:
-        print("bench_targets: bench_vehicle_accuracy exited %d (a run stopped early or bad input)" % p.returncode,
+        print("bench_targets: bench_vehicle_accuracy exited %d (a run stopped early, or bad input such as a stale %s)"
+              % (p.returncode, reference),
               file=sys.stderr)
     return p.returncode
 

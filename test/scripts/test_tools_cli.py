@@ -181,6 +181,41 @@ class ScriptsOnBadInput(unittest.TestCase):
             self.assertIn("reference.csv: cannot write the reference there", p.stderr)
             self.assertEqual(os.listdir(d), [])
 
+    def test_vehicle_accuracy_benchmark_refuses_a_reference_it_did_not_make(self):
+        # A cached reference is compared against only when its first line names this scene, sampling
+        # interval and results revision; one from an older build or another scene would be a silent wrong
+        # table. Refused with exit 2 before any run, and left as it was.
+        bench = os.path.join(LIB, "rail_vehicle_node", "bench_vehicle_accuracy")
+        scene = os.path.join(REPO, "config", "scenes", "paper_demo.yaml")
+        with tempfile.TemporaryDirectory() as d:
+            ref = os.path.join(d, "reference.csv")
+            old = "t,s,lateral,vertical,attack,flange_left,flange_right\n0,0,0,0,0,0,0\n"
+            with open(ref, "w") as f:
+                f.write(old)
+            p = run([bench, scene, ref])
+            self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+            self.assertIn("reference.csv has no provenance line (made by an older build); delete it", p.stderr)
+            self.assertEqual(p.stdout, "")
+            with open(ref) as f:
+                self.assertEqual(f.read(), old)
+            with open(ref, "w") as f:
+                f.write("# bench_vehicle_accuracy reference: scene_hash 0123456789abcdef, adams max_step 5e-06 s, "
+                        "sample 0.001 s, results_revision 1\n" + old)
+            p = run([bench, "--sample", "1e-4", scene, ref])
+            self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+            self.assertIn("reference.csv was made from another scene, setting or build", p.stderr)
+            needed = re.search(r"needed:  (bench_vehicle_accuracy reference: scene_hash ([0-9a-f]{16}), .*)", p.stderr)
+            self.assertIsNotNone(needed, p.stderr)
+            self.assertNotEqual(needed.group(2), "0123456789abcdef")
+            self.assertIn("sample 0.0001 s, results_revision", needed.group(1))
+            # The line this run needs, over a sample that is not seven numbers: read, then refused at its line.
+            with open(ref, "w") as f:
+                f.write("# " + needed.group(1) + "\n" + old + "0.001,1,2,3,4,5\n")
+            p = run([bench, "--sample", "1e-4", scene, ref])
+            self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+            self.assertIn("reference.csv:4: expected seven numbers", p.stderr)
+            self.assertEqual(p.stdout, "")
+
     def test_vehicle_benchmarks_name_a_missing_scene_and_exit_1(self):
         for tool in ("bench_vehicle_accuracy", "bench_vehicle_simulator"):
             with self.subTest(tool=tool):

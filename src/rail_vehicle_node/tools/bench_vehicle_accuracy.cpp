@@ -1,10 +1,10 @@
 // Accuracy of the vehicle alone against a reference run (prints its figures; not a test):
 //   bench_vehicle_accuracy [--sample DT] <scene.yaml> <reference.csv> [method max_step rtol atol] ...
 // The reference is the scene run with Adams capped at 5e-6 s (written to reference.csv on the first call,
-// read back afterwards); each candidate (default: the scene's own settings, the vehicle alone uncapped) runs
-// the whole scene. Both are sampled every DT (default 1 ms, the node's output rate; a finer DT resolves the
-// flange impacts, which last about a millisecond). Printed per candidate: wall time
-// per simulated second, and against the reference the largest difference of the leading wheelset's
+// read back afterwards if its first line names the same scene, interval and results revision); each candidate (default:
+// the scene's own settings, the vehicle alone uncapped) runs the whole scene. Both are sampled every DT (default 1 ms,
+// the node's output rate; a finer DT resolves the flange impacts, which last about a millisecond). Printed per
+// candidate: wall time per simulated second, and against the reference the largest difference of the leading wheelset's
 // lateral and vertical displacement and attack angle on the straights and in the steady curve, and the
 // count, peak and mean of its flange-force bursts (runs of samples with flange contact) in the transitions.
 // method: bdf | adams | auto; max_step 0 = none; rtol/atol 0 = the scene's. Exit 1 when a run stops early.
@@ -85,11 +85,24 @@ std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double
   return out;
 }
 
-bool write(const std::string& path, const std::vector<Sample>& v) {
+// The reference's first line: what it was made from (scene hash, reference settings, sampling interval and
+// kResultsRevision); a reference whose line differs is refused, not compared against.
+const char* const kProvenanceHead = "# bench_vehicle_accuracy reference:";
+const Candidate kReference{"adams", 5e-6, 0.0, 0.0};
+
+std::string provenance(const core::Scene& scene, double sample) {
+  char line[256];
+  std::snprintf(line, sizeof line, "%s scene_hash %016llx, %s max_step %g s, sample %g s, results_revision %d",
+                kProvenanceHead, static_cast<unsigned long long>(scene.hash), kReference.method.c_str(),
+                kReference.max_step, sample, vehicle::kResultsRevision);
+  return line;
+}
+
+bool write(const std::string& path, const std::string& provenance_line, const std::vector<Sample>& v) {
   std::ofstream f(path);
   if (!f) return false;
   f.precision(17);
-  f << "t,s,lateral,vertical,attack,flange_left,flange_right\n";
+  f << provenance_line << '\n' << "t,s,lateral,vertical,attack,flange_left,flange_right\n";
   for (const Sample& x : v) {
     f << x.t << ',' << x.s << ',' << x.lateral << ',' << x.vertical << ',' << x.attack << ',' << x.flange_left << ','
       << x.flange_right << '\n';
@@ -98,18 +111,39 @@ bool write(const std::string& path, const std::vector<Sample>& v) {
   return static_cast<bool>(f);
 }
 
-bool read(const std::string& path, std::vector<Sample>& v) {
+// Reads a reference made with provenance_line; false with the reason in `error` when the file is from
+// another scene, setting or build, or a line is not seven numbers. A missing file is `missing`, no error.
+bool read(const std::string& path, const std::string& provenance_line, std::vector<Sample>& v, bool& missing,
+          std::string& error) {
   std::ifstream f(path);
-  if (!f) return false;
+  missing = !f;
+  if (missing) return false;
   std::string line;
   std::getline(f, line);
-  while (std::getline(f, line)) {
+  if (line.rfind(kProvenanceHead, 0) != 0) {
+    error = " has no provenance line (made by an older build); delete it to make a new reference";
+    return false;
+  }
+  if (line != provenance_line) {
+    error = " was made from another scene, setting or build:\n  it says: " + line.substr(2) +
+            "\n  needed:  " + provenance_line.substr(2) + "\ndelete it to make a new reference";
+    return false;
+  }
+  std::getline(f, line);  // the column names
+  for (int number = 3; std::getline(f, line); ++number) {
     std::replace(line.begin(), line.end(), ',', ' ');
     std::istringstream is(line);
     Sample x;
     is >> x.t >> x.s >> x.lateral >> x.vertical >> x.attack >> x.flange_left >> x.flange_right;
+    std::string rest;
+    if (is.fail() || (is >> rest)) {
+      error = ":" + std::to_string(number) +
+              ": expected seven numbers (t,s,lateral,vertical,attack,flange_left,flange_right)";
+      return false;
+    }
     v.push_back(x);
   }
+  if (v.empty()) error = " has no samples";
   return !v.empty();
 }
 
@@ -160,7 +194,8 @@ const char* const kUsage =
     "on the first call): per candidate the wall time per simulated second and the largest differences of the\n"
     "leading wheelset on the straights and the steady curve, and its flange-force bursts in the transitions.\n"
     "method: bdf | adams | auto; max_step 0 = none; rtol/atol 0 = the scene's. --sample: the sampling\n"
-    "interval of both runs in s (default 1e-3; a reference.csv is reused only with the same interval).\n"
+    "interval of both runs in s (default 1e-3). A reference.csv is reused only when its first line matches\n"
+    "this run (scene hash, sampling interval, results revision of the build); otherwise exit 2.\n"
     "Exit 1 when a run stops before the scene's end (a stopped reference is not written), 2 on bad arguments.\n";
 }  // namespace
 
@@ -205,8 +240,15 @@ int runBenchmark(int argc, char** argv) {
   }
   const core::Scene scene = core::loadSceneFile(argv[first]);
   const std::string reference_path = argv[first + 1];
+  const std::string provenance_line = provenance(scene, sample);
   std::vector<Sample> ref;
-  const bool have_reference = read(reference_path, ref);
+  bool missing = false;
+  std::string error;
+  const bool have_reference = read(reference_path, provenance_line, ref, missing, error);
+  if (!have_reference && !missing) {
+    std::fprintf(stderr, "bench_vehicle_accuracy: %s%s\n", reference_path.c_str(), error.c_str());
+    return 2;
+  }
   const std::filesystem::path reference_dir = std::filesystem::path(reference_path).parent_path();
   if (!have_reference && ::access(reference_dir.empty() ? "." : reference_dir.c_str(), W_OK) != 0) {
     std::fprintf(stderr, "bench_vehicle_accuracy: %s: cannot write the reference there (%s)\n", reference_path.c_str(),
@@ -216,20 +258,16 @@ int runBenchmark(int argc, char** argv) {
   if (!have_reference) {
     double wall = 0.0;
     bool finished = false;
-    ref = simulate(scene, Candidate{"adams", 5e-6, 0.0, 0.0}, sample, wall, finished);
+    ref = simulate(scene, kReference, sample, wall, finished);
     if (!finished) {
       std::fprintf(stderr, "bench_vehicle_accuracy: the reference run stopped before the scene's end; %s not written\n",
                    reference_path.c_str());
       return 1;
     }
-    if (!write(reference_path, ref)) {
+    if (!write(reference_path, provenance_line, ref)) {
       std::fprintf(stderr, "bench_vehicle_accuracy: %s: cannot write the reference\n", reference_path.c_str());
       return 1;
     }
-  } else if (ref.size() > 1 && std::abs((ref[1].t - ref[0].t) - sample) > 1e-3 * sample) {
-    std::fprintf(stderr, "bench_vehicle_accuracy: %s was sampled every %g s, not every %g s (--sample)\n",
-                 reference_path.c_str(), ref[1].t - ref[0].t, sample);
-    return 2;
   }
   if (candidates.empty()) candidates.push_back(Candidate{});
   // Windows by the leading wheelset's arc length on the paper scene's layout: straight 0-100 m, transition

@@ -46,6 +46,11 @@ class WheelWrenchSource {
 // few evaluations, and the integrator's step collapses to ~1e-7 s (doc/simulator.md).
 contact::WheelContactOptions defaultVehicleContactOptions();
 
+// Revision of the vehicle-alone results: raised by every change that moves them (a cached reference run,
+// such as bench_vehicle_accuracy's, carries it and is refused under another). 2: warm starts held at
+// accepted steps.
+constexpr int kResultsRevision = 2;
+
 // What the scene does not say (constant after building).
 struct SimulatorSettings {
   // Contact data the scene has no key for: materials, Polach parameters, detection settings. The scene's
