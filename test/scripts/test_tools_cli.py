@@ -224,6 +224,18 @@ class ScriptsOnBadInput(unittest.TestCase):
                 self.assertIn("%s: /nonexistent/scene.yaml: cannot read the scene file" % tool, p.stderr)
                 self.assertNotIn("terminate called", p.stderr)
 
+    def test_analysis_commands_name_a_missing_python_module(self):
+        # A Python without the system's site packages (as a pyenv or conda interpreter ahead of /usr/bin):
+        # one line naming the interpreter and the module, exit 1, no traceback.
+        for script in ("railsim_map", "railsim_safety", "railsim_analyze"):
+            with self.subTest(script=script):
+                p = run([PY, "-S", os.path.join(REPO, "src", "rail_analysis", "scripts", script), "x.yaml"])
+                self.assertEqual(p.returncode, 1, p.stdout + p.stderr)
+                self.assertRegex(p.stderr, r"^rail_analysis: %s has no Python module '(matplotlib|numpy|yaml)' "
+                                 r"\(Debian: apt install python3-\1\)" % re.escape(PY))
+                self.assertNotIn("Traceback", p.stderr)
+                self.assertEqual(p.stdout, "")
+
     def test_worn_profile_maker_names_the_missing_standard_shape(self):
         d = os.path.join(tempfile.mkdtemp(prefix="tools_cli_prof_"), "none")
         p = run([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "make_worn_profiles.py"), "--profiles", d])
