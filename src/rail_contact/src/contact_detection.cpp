@@ -195,7 +195,7 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
   }
   if (o.max_iterations < 1 || !(o.tolerance > 0.0) || !(o.max_step_length > 0.0) || !(o.max_step_angle > 0.0) ||
       !(o.max_penetration > 0.0) || !(o.min_normal_opposition > 0.0 && o.min_normal_opposition <= 1.0) ||
-      !(o.search_cell > 0.0) || !(o.search_margin > 0.0) || !(o.search_spacing > 0.0))
+      !(o.search_cell > 0.0) || !(o.search_margin > 0.0) || !(o.search_spacing > 0.0) || !(o.end_seed_reach >= 0.0))
     throw std::runtime_error("ContactDetector: DetectionOptions has a non-positive or out-of-range value");
   if (tread_.numSegments() < 1 || flange_.numSegments() < 1 || rail_.numSegments() < 1)
     throw std::runtime_error("ContactDetector: empty wheel or rail profile curve");
@@ -337,7 +337,7 @@ void ContactDetector::sectionPose(const WheelPose& pose, const TrackGeometry& tr
 template <class Deformation>
 bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
                              const Deformation& deformation, Vector4d& x_seed, double& distance, Vector3d& p_wheel_seed,
-                             double& min_distance, SectionPose& section) const noexcept {
+                             double& min_distance, SectionPose& section, bool& end_seed) const noexcept {
   WheelFrame wf;
   makeWheelFrame(pose, wf);
   sectionPose(pose, track, deformation, wf.c, wf.a, section);
@@ -364,6 +364,21 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
     }
     d_prev2 = d_prev;
     d_prev = d;
+  }
+  end_seed = false;
+  if (best < 0 && n >= 2) {
+    // No interior minimum: the surface's nearest point may lie in its last sample interval.
+    for (const int i : {0, n - 1}) {
+      const Vector3d q = wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * e_r;
+      const Vector3d rel = q - o;
+      const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
+      if (d <= min_any && d < options_.end_seed_reach) {
+        best = i;
+        best_d = d;
+        end_seed = true;
+        break;
+      }
+    }
   }
   distance = best >= 0 ? best_d : min_any;
   min_distance = min_any;
@@ -497,7 +512,9 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     ++work.searches;
     Vector4d seed;
     double min_distance = 0.0;
-    const bool found = search(surface, pose, track, deformation, seed, search_distance, p_seed, min_distance, section);
+    bool end_seed = false;
+    const bool found =
+        search(surface, pose, track, deformation, seed, search_distance, p_seed, min_distance, section, end_seed);
     work.has_search_reference = false;
     if (!found) {
       if constexpr (Deformation::kRigid) {
@@ -515,6 +532,14 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     x = seed;
     ok = newton(x);
     status = DetectionStatus::kConvergedAfterSearch;
+    if (!ok && end_seed) {
+      // An end sample is no contact of this surface unless Newton converges inside it.
+      out.status = DetectionStatus::kOutOfBounds;
+      out.valid = out.in_contact = false;
+      out.penetration = -std::min(search_distance, 1.0);
+      work.has_warm_start = false;
+      return;
+    }
     if (!ok) {
       // Approximate: the search's best pair.
       x = seed;

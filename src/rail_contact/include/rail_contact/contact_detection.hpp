@@ -70,6 +70,11 @@ struct DetectionOptions {
   /// least this much farther from the rail than the wheel can have moved since (relative to the rail
   /// section) is reported out of contact without a new search, m.
   double skip_clearance = 1e-3;
+  /// A search whose sampled distance has no interior minimum seeds Newton at the nearer end sample of the
+  /// surface when that sample is within this distance of the rail, m; only a converged point inside the
+  /// surface is taken from it. The nearest point of a yawed wheel's flange can lie in the last sample
+  /// interval, where the sampled minimum is the end sample; 0 = interior minima only.
+  double end_seed_reach = 1e-3;
 };
 
 /// Caller-owned per-pair state: warm start and counters (one per wheel surface and wheel).
@@ -221,11 +226,12 @@ class ContactDetector {
   void sectionPose(const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
                    const Eigen::Vector3d& c, const Eigen::Vector3d& a, SectionPose& out) const noexcept;
 
-  // min_distance: the smallest sample distance (whether or not a seed was found).
+  // min_distance: the smallest sample distance (whether or not a seed was found); end_seed: the seed is an
+  // end sample of the surface (DetectionOptions::end_seed_reach), not an interior minimum.
   template <class Deformation>
   bool search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
               Eigen::Vector4d& x_seed, double& distance, Eigen::Vector3d& p_wheel_seed, double& min_distance,
-              SectionPose& section) const noexcept;
+              SectionPose& section, bool& end_seed) const noexcept;
 };
 
 }  // namespace contact
