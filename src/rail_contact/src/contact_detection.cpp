@@ -234,6 +234,10 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
       const Vector2d p = profileCurveAt(k, u, u_local).position(u_local);
       samples_[k][i] = {u, p.x(), p.y()};
       search_lever_[k] = std::max(search_lever_[k], std::abs(p.x()) + 2.2 * std::abs(r0_ - p.y()));
+      if (i > 0) {
+        const double dy = std::abs(p.x() - samples_[k][i - 1].y), dz = std::abs(p.y() - samples_[k][i - 1].z);
+        search_slope_[k] = std::max(search_slope_[k], std::min(dz, kMaxSearchSlope * dy) / std::max(dy, 1e-12));
+      }
     }
   }
 
@@ -345,17 +349,37 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   const Vector3d o = section.o, T = section.T, Ny = section.Ny, B = section.B;
   // Lowest circle direction of the wheel with respect to the rail's up axis.
   const double th = std::atan2(-B.dot(wf.f0), -B.dot(wf.d0));
-  const Vector3d e_r = std::cos(th) * wf.d0 + std::sin(th) * wf.f0;
-  const std::vector<Sample>& smp = samples_[static_cast<int>(surface)];
+  // A wheel yawed by psi against the rail touches a profile slope tan(delta) about psi tan(delta) rad
+  // ahead of or behind that plane (the flange lead), so each sample is taken over a fan of planes.
+  const int k = static_cast<int>(surface);
+  const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
+  const int n_planes = options_.search_plane_step > 0.0
+                           ? static_cast<int>(std::ceil(fan / options_.search_plane_step))
+                           : 0;
+  const std::vector<Sample>& smp = samples_[k];
   const int n = static_cast<int>(smp.size());
+  // Distance of sample i: its smallest over the fan of planes, and the plane's angle.
+  auto sampleDistance = [&](int i, double& th_i) {
+    double d_i = std::numeric_limits<double>::infinity();
+    for (int j = -n_planes; j <= n_planes; ++j) {
+      const double th_j = th + j * options_.search_plane_step;
+      const Vector3d e_r = std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0;
+      const Vector3d rel = wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * e_r - o;
+      const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
+      if (d < d_i) {
+        d_i = d;
+        th_i = th_j;
+      }
+    }
+    return d_i;
+  };
   double d_prev2 = 0.0, d_prev = 0.0;
   int best = -1;
   double best_d = std::numeric_limits<double>::infinity();
   double min_any = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {
-    const Vector3d q = wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * e_r;
-    const Vector3d rel = q - o;
-    const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
+    double th_i = th;
+    const double d = sampleDistance(i, th_i);
     min_any = std::min(min_any, d);
     // Interior local minimum at i - 1.
     if (i >= 2 && d_prev <= d_prev2 && d_prev <= d && d_prev < best_d) {
@@ -369,9 +393,8 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   if (best < 0 && n >= 2) {
     // No interior minimum: the surface's nearest point may lie in its last sample interval.
     for (const int i : {0, n - 1}) {
-      const Vector3d q = wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * e_r;
-      const Vector3d rel = q - o;
-      const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
+      double th_i = th;
+      const double d = sampleDistance(i, th_i);
       if (d <= min_any && d < options_.end_seed_reach) {
         best = i;
         best_d = d;
@@ -383,11 +406,14 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   distance = best >= 0 ? best_d : min_any;
   min_distance = min_any;
   if (best < 0 || !(best_d < 0.9 * options_.search_margin)) return false;
+  double th_best = th;
+  sampleDistance(best, th_best);
+  const Vector3d e_r = std::cos(th_best) * wf.d0 + std::sin(th_best) * wf.f0;
   const Vector3d q = wf.c + (wf.ls * smp[best].y) * wf.a + (r0_ - smp[best].z) * e_r;
   const Vector3d rel = q - o;
   double u_r = 0.0;
   railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), &u_r);
-  x_seed = Vector4d(th, smp[best].u, s + T.dot(rel), u_r);
+  x_seed = Vector4d(th_best, smp[best].u, s + T.dot(rel), u_r);
   p_wheel_seed = q;
   return true;
 }

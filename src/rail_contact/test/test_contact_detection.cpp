@@ -631,3 +631,45 @@ TEST(ContactDetection, AHeldWarmStartIsNotSteeredByTrialDetections) {
   EXPECT_TRUE(held.hold_warm_start);
   EXPECT_FALSE(held.has_committed_warm_start);
 }
+
+TEST(ContactDetection, AYawedFlangeContactIsFoundAlikeWarmAndFresh) {
+  Scene& s = scene();
+  // A wheelset yawed by 10 or 20 mrad (a flanging wheelset's angle of attack in a tight curve), 20, 100 or
+  // 300 um below the tread-contact height at y = 6 mm, moved away from the flange in 5 um steps: wherever
+  // the flange surface's detection warm-started along the sweep is in contact, a fresh detection (no warm
+  // start) of the same pose must be too, or the force depends on where Newton started. A yawed flange
+  // touches ahead of the wheel's lowest plane, and its nearest point can lie in the surface's last sample
+  // interval: a search in the lowest plane with interior minima only missed up to 61 of these poses.
+  const rc::ContactDetector& detector = s.table.model().detector();
+  const double e = s.table.wheelHalfDistance();
+  for (const double yaw : {0.01, 0.02}) {
+    const rc::ContactGeometryRow before = s.table.table(0.0, 0.006, 0.5e-3, yaw).back();
+    const Matrix3d R =
+        (Eigen::AngleAxisd(yaw, Vector3d::UnitZ()) * Eigen::AngleAxisd(before.roll, Vector3d::UnitX())).toRotationMatrix();
+    for (const double down : {20e-6, 100e-6, 300e-6}) {
+      SCOPED_TRACE(testing::Message() << "yaw " << yaw << " rad, " << down << " m down");
+      rc::DetectionWork warm;
+      int in_contact = 0, missed = 0;
+      for (double y = 0.0095; y > 0.004; y -= 0.005e-3) {
+        rc::WheelPose pose;
+        pose.R_wheelset_to_world = R;
+        pose.p_wheel_in_world = Vector3d(10.0, y, before.z - down) + R * Vector3d(0.0, e, 0.0);
+        pose.side = rc::RailSide::kLeft;
+        pose.arc_length = 10.0;
+        rc::ContactGeometry g_warm, g_fresh;
+        detector.detect(rc::WheelSurface::kFlange, pose, s.table.track(), rc::RigidRailDeformation(), warm, g_warm);
+        rc::DetectionWork fresh;
+        detector.detect(rc::WheelSurface::kFlange, pose, s.table.track(), rc::RigidRailDeformation(), fresh, g_fresh);
+        if (!(g_warm.valid && g_warm.in_contact)) continue;
+        ++in_contact;
+        if (!(g_fresh.valid && g_fresh.in_contact)) {
+          ++missed;
+          ADD_FAILURE() << "y = " << y << ": warm penetration " << g_warm.penetration << " m at u_w " << g_warm.u_w
+                        << ", fresh " << rc::toString(g_fresh.status) << " " << g_fresh.penetration;
+          if (missed > 3) break;
+        }
+      }
+      EXPECT_GT(in_contact, 100);
+    }
+  }
+}

@@ -75,6 +75,12 @@ struct DetectionOptions {
   /// surface is taken from it. The nearest point of a yawed wheel's flange can lie in the last sample
   /// interval, where the sampled minimum is the end sample; 0 = interior minima only.
   double end_seed_reach = 1e-3;
+  /// The search takes each wheel profile sample over a fan of wheel planes around the lowest one, this far
+  /// apart (rad), as wide as 1.5 |psi| tan(delta_max) for a wheel yawed by psi against the rail (delta_max:
+  /// the surface's steepest slope, at most 80 deg), since a yawed flange touches ahead of or behind the
+  /// lowest plane. 0 = the lowest plane only.
+  double search_plane_step = 0.01;
+  double search_fan_max = 0.25;  ///< the fan's half-width at most, rad
 };
 
 /// Caller-owned per-pair state: warm start and counters (one per wheel surface and wheel).
@@ -214,6 +220,8 @@ class ContactDetector {
   std::vector<float> grid_dist_, grid_u_;
 
   double search_lever_[2] = {0.0, 0.0};  // max over a surface's samples of |y| + 2.2 |r0 - z|, m
+  static constexpr double kMaxSearchSlope = 5.67;  // tan(80 deg)
+  double search_slope_[2] = {0.0, 0.0};  // steepest |dz/dy| between a surface's samples, capped
 
   // The rail section nearest to the wheel centre, as the search uses it, and the wheel's pose in it.
   struct SectionPose {
