@@ -1,5 +1,6 @@
 #include "rail_contact/contact_detection.hpp"
 
+#include <cstdio>
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -353,16 +354,18 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   // ahead of or behind that plane (the flange lead), so each sample is taken over a fan of planes.
   const int k = static_cast<int>(surface);
   const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
-  const int n_planes = options_.search_plane_step > 0.0
-                           ? static_cast<int>(std::ceil(fan / options_.search_plane_step))
-                           : 0;
+  // Planes evenly across [-fan, fan], at most search_plane_step apart; a fan narrower than half a step is
+  // the lowest plane alone.
+  const int n_planes =
+      options_.search_plane_step > 0.0 ? static_cast<int>(std::ceil(fan / options_.search_plane_step - 0.5)) : 0;
+  const double plane_step = n_planes > 0 ? fan / n_planes : 0.0;
   const std::vector<Sample>& smp = samples_[k];
   const int n = static_cast<int>(smp.size());
   // Distance of sample i: its smallest over the fan of planes, and the plane's angle.
   auto sampleDistance = [&](int i, double& th_i) {
     double d_i = std::numeric_limits<double>::infinity();
     for (int j = -n_planes; j <= n_planes; ++j) {
-      const double th_j = th + j * options_.search_plane_step;
+      const double th_j = th + j * plane_step;
       const Vector3d e_r = std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0;
       const Vector3d rel = wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * e_r - o;
       const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
