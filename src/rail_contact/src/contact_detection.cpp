@@ -1,9 +1,9 @@
 #include "rail_contact/contact_detection.hpp"
 
-#include <cstdio>
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -38,6 +38,10 @@ std::string describe(const DetectionCounts& c) {
   if (c.approximations > 0)
     m << " (Newton did not converge after the search: the search grid's point pair, within half a grid cell "
          "of the contact, was used)";
+  if (c.unresolved > 0)
+    m << "; " << c.unresolved
+      << " evaluations found a wheel surface inside the rail with its nearest point past the surface's end, "
+         "where the neighbouring surface had no contact: a second contact on that surface was not evaluated";
   return m.str();
 }
 
@@ -566,6 +570,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
       out.status = DetectionStatus::kOutOfBounds;
       out.valid = out.in_contact = false;
       out.penetration = -std::min(search_distance, 1.0);
+      out.p_wheel_in_world = p_seed;  // the end sample (inside the rail when penetration > 0)
       work.has_warm_start = false;
       return;
     }

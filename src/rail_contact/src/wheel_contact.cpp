@@ -62,6 +62,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const double ls = side == RailSide::kLeft ? -1.0 : 1.0;
 
   bool tread_on_own_surface = true;
+  bool unresolved[2] = {false, false};  // a search ended inside the rail without a point on its surface
+  Eigen::Vector3d p_unresolved[2];
   for (int k = 0; k < 2; ++k) {
     ContactPointResult& c = out.contact[k];
     c = ContactPointResult();
@@ -88,6 +90,10 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     }
     c.status = input_ok ? g.status : DetectionStatus::kInvalidInput;
     c.penetration = std::isfinite(g.penetration) ? g.penetration : -1.0;
+    if (g.status == DetectionStatus::kOutOfBounds && g.penetration > 0.0) {
+      unresolved[k] = true;
+      p_unresolved[k] = g.p_wheel_in_world;
+    }
     if (!g.valid || !input_ok) {
       updateImpactMemory(memory, -1.0, 0.0);
       continue;
@@ -189,6 +195,15 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     c.force_on_wheel_in_world = contactForceInWorld(c.R_contact_to_world, c.F_long, c.F_lat, c.N);
     c.rail_wrench = railSectionWrench(-c.force_on_wheel_in_world, Eigen::Vector3d::Zero(),
                                       c.p_rail_in_world - c.p_section_centre_in_world, Eigen::Vector3d::Zero());
+  }
+
+  // A search that ended inside the rail past its surface's end points at the other surface; unless that
+  // surface has a contact there, the penetration is one it does not follow (counted, not evaluated).
+  for (int k = 0; k < 2; ++k) {
+    const ContactPointResult& other = out.contact[1 - k];
+    if (unresolved[k] && !((other.active || other.merged) &&
+                           (other.p_wheel_in_world - p_unresolved[k]).norm() < options_.merge_distance))
+      ++work.detection[k].unresolved;
   }
 
   // Eq. 13: both contacts to the wheel centre (inactive contacts carry zero force).

@@ -583,6 +583,14 @@ TEST(DetectionCounts, SumAndDescribeSayWhatApproximateMeans) {
       std::string::npos)
       << s;
   EXPECT_EQ(rc::describe(rc::DetectionCounts()).find("(Newton"), std::string::npos);
+  EXPECT_EQ(s.find("inside the rail"), std::string::npos) << s;
+  b.unresolved = 2;
+  rc::DetectionCounts d;
+  d.add(b);
+  EXPECT_NE(rc::describe(d).find("; 2 evaluations found a wheel surface inside the rail with its nearest point past "
+                                 "the surface's end, where the neighbouring surface had no contact"),
+            std::string::npos)
+      << rc::describe(d);
 }
 
 TEST(ContactDetection, AHeldWarmStartIsNotSteeredByTrialDetections) {
@@ -644,8 +652,8 @@ TEST(ContactDetection, AYawedFlangeContactIsFoundAlikeWarmAndFresh) {
   const double e = s.table.wheelHalfDistance();
   for (const double yaw : {0.01, 0.02}) {
     const rc::ContactGeometryRow before = s.table.table(0.0, 0.006, 0.5e-3, yaw).back();
-    const Matrix3d R =
-        (Eigen::AngleAxisd(yaw, Vector3d::UnitZ()) * Eigen::AngleAxisd(before.roll, Vector3d::UnitX())).toRotationMatrix();
+    const Matrix3d R = (Eigen::AngleAxisd(yaw, Vector3d::UnitZ()) * Eigen::AngleAxisd(before.roll, Vector3d::UnitX()))
+                           .toRotationMatrix();
     for (const double down : {20e-6, 100e-6, 300e-6}) {
       SCOPED_TRACE(testing::Message() << "yaw " << yaw << " rad, " << down << " m down");
       rc::DetectionWork warm;

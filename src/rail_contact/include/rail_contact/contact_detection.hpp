@@ -91,7 +91,12 @@ struct DetectionWork {
   long long newton_iterations = 0;  ///< total Newton iterations
   long long searches = 0;           ///< robust searches run (initial and fallback)
   long long fallbacks = 0;          ///< searches caused by a failed warm-started Newton
-  long long approximations = 0;     ///< results returned as kApproximate
+  /// evaluations (counted by WheelContactModel) where a search found the surface inside the rail with its
+  /// nearest point past the surface's end, and the neighbouring surface had no contact within merge_distance
+  /// of it: a second point on that surface (which follows one point only), e.g. a root contact beside a
+  /// tread contact, was not evaluated
+  long long unresolved = 0;
+  long long approximations = 0;  ///< results returned as kApproximate
   /// Rigid rail only, set by the caller: a surface far from its rail skips the search (a flange off the
   /// rail searched ~130 profile samples at every evaluation, a quarter of the vehicle's time on a straight).
   /// Its out-of-contact result then carries a lower bound of the gap, not the gap: callers that publish the
@@ -122,20 +127,22 @@ struct DetectionWork {
 
 /// Counters of several DetectionWork summed (every wheel, both surfaces) for a run's closing summary.
 struct DetectionCounts {
-  long long calls = 0, newton_iterations = 0, searches = 0, fallbacks = 0, approximations = 0, skipped = 0;
+  long long calls = 0, newton_iterations = 0, searches = 0, fallbacks = 0, unresolved = 0, approximations = 0,
+            skipped = 0;
   void add(const DetectionWork& w) {
     calls += w.calls;
     newton_iterations += w.newton_iterations;
     searches += w.searches;
     fallbacks += w.fallbacks;
+    unresolved += w.unresolved;
     approximations += w.approximations;
     skipped += w.skipped;
   }
 };
 
 /// One line for a run's log: "N detections, I Newton iterations each, S searches (F after a failed warm
-/// start), K skipped far from the rail, A approximate"; with A > 0 what approximate means. Not for a time
-/// step.
+/// start), K skipped far from the rail, A approximate"; with A > 0 what approximate means, with unresolved
+/// searches U > 0 how many and what they mean. Not for a time step.
 std::string describe(const DetectionCounts& counts);
 
 /// Wheel pose for the detection (world frame).
@@ -219,9 +226,9 @@ class ContactDetector {
   int grid_ny_ = 0, grid_nz_ = 0;
   std::vector<float> grid_dist_, grid_u_;
 
-  double search_lever_[2] = {0.0, 0.0};  // max over a surface's samples of |y| + 2.2 |r0 - z|, m
+  double search_lever_[2] = {0.0, 0.0};            // max over a surface's samples of |y| + 2.2 |r0 - z|, m
   static constexpr double kMaxSearchSlope = 5.67;  // tan(80 deg)
-  double search_slope_[2] = {0.0, 0.0};  // steepest |dz/dy| between a surface's samples, capped
+  double search_slope_[2] = {0.0, 0.0};            // steepest |dz/dy| between a surface's samples, capped
 
   // The rail section nearest to the wheel centre, as the search uses it, and the wheel's pose in it.
   struct SectionPose {
