@@ -40,8 +40,8 @@ std::string describe(const DetectionCounts& c) {
          "of the contact, was used)";
   if (c.unresolved > 0)
     m << "; " << c.unresolved
-      << " evaluations found a wheel surface inside the rail with its nearest point past the surface's end, "
-         "where the neighbouring surface had no contact: a second contact on that surface was not evaluated";
+      << " evaluations found a penetrating point past a wheel surface's end, on the neighbouring surface, away "
+         "from that surface's own contact: a second contact on that surface was not evaluated";
   return m.str();
 }
 
@@ -430,6 +430,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
                              const Deformation& deformation, DetectionWork& work, ContactGeometry& out) const noexcept {
   ++work.calls;
   out.iterations = 0;
+  out.past_end = false;
   if (work.hold_warm_start) {
     work.x = work.x_committed;
     work.has_warm_start = work.has_committed_warm_start;
@@ -466,12 +467,17 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
           std::abs(F[3]) * r0_ < opt.tolerance) {
         // Converged: check the bounds and that this is a contact-type pair.
         const double eps = 1e-7;
-        if (x[1] < u_lo - eps || x[1] > u_hi + eps) return false;
         if (x[3] < rail_.uMin() - eps || x[3] > rail_.uMax() + eps) return false;
         if (x[2] < track.sStart() || x[2] > track.sEnd()) return false;
         if (std::cos(x[0]) < 0.5) return false;
         if (-w.n.dot(e.n) < opt.min_normal_opposition) return false;
         if (-d.dot(e.n) > opt.max_penetration) return false;
+        if (x[1] < u_lo - eps || x[1] > u_hi + eps) {
+          // A contact-type pair on the neighbouring surface: not this surface's, but said when it penetrates.
+          out.past_end = -d.dot(e.n) > 0.0;
+          if (out.past_end) out.p_wheel_in_world = w.p;
+          return false;
+        }
         return true;
       }
       if (it == opt.max_iterations) break;
@@ -538,6 +544,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   bool ok = false;
   DetectionStatus status = DetectionStatus::kConverged;
   if (work.has_warm_start) ok = newton(x);
+  out.past_end = false;
   double search_distance = 0.0;
   Vector3d p_seed;
   if (!ok) {
@@ -565,12 +572,12 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     x = seed;
     ok = newton(x);
     status = DetectionStatus::kConvergedAfterSearch;
+    if (!end_seed) out.past_end = false;  // past_end reports an end seed only (an interior seed gives kApproximate)
     if (!ok && end_seed) {
       // An end sample is no contact of this surface unless Newton converges inside it.
       out.status = DetectionStatus::kOutOfBounds;
       out.valid = out.in_contact = false;
       out.penetration = -std::min(search_distance, 1.0);
-      out.p_wheel_in_world = p_seed;  // the end sample (inside the rail when penetration > 0)
       work.has_warm_start = false;
       return;
     }

@@ -62,7 +62,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const double ls = side == RailSide::kLeft ? -1.0 : 1.0;
 
   bool tread_on_own_surface = true;
-  bool unresolved[2] = {false, false};  // a search ended inside the rail without a point on its surface
+  bool unresolved[2] = {false, false};  // a search converged to a penetrating point past its surface's end
   Eigen::Vector3d p_unresolved[2];
   for (int k = 0; k < 2; ++k) {
     ContactPointResult& c = out.contact[k];
@@ -90,7 +90,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     }
     c.status = input_ok ? g.status : DetectionStatus::kInvalidInput;
     c.penetration = std::isfinite(g.penetration) ? g.penetration : -1.0;
-    if (g.status == DetectionStatus::kOutOfBounds && g.penetration > 0.0) {
+    if (g.past_end) {
       unresolved[k] = true;
       p_unresolved[k] = g.p_wheel_in_world;
     }
@@ -197,8 +197,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
                                       c.p_rail_in_world - c.p_section_centre_in_world, Eigen::Vector3d::Zero());
   }
 
-  // A search that ended inside the rail past its surface's end points at the other surface; unless that
-  // surface has a contact there, the penetration is one it does not follow (counted, not evaluated).
+  // A penetrating point past a surface's end lies on the other surface; unless that surface has its contact
+  // there, it is a second point the other surface does not follow (counted, not evaluated).
   for (int k = 0; k < 2; ++k) {
     const ContactPointResult& other = out.contact[1 - k];
     if (unresolved[k] && !((other.active || other.merged) &&

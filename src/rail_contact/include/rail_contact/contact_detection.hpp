@@ -91,9 +91,9 @@ struct DetectionWork {
   long long newton_iterations = 0;  ///< total Newton iterations
   long long searches = 0;           ///< robust searches run (initial and fallback)
   long long fallbacks = 0;          ///< searches caused by a failed warm-started Newton
-  /// evaluations (counted by WheelContactModel) where a search found the surface inside the rail with its
-  /// nearest point past the surface's end, and the neighbouring surface had no contact within merge_distance
-  /// of it: a second point on that surface (which follows one point only), e.g. a root contact beside a
+  /// evaluations (counted by WheelContactModel) where a search converged to a penetrating point past the
+  /// surface's end (ContactGeometry::past_end), and the neighbouring surface had no contact within
+  /// merge_distance of it: a second point on that surface (which follows one point only), e.g. a root contact beside a
   /// tread contact, was not evaluated
   long long unresolved = 0;
   long long approximations = 0;  ///< results returned as kApproximate
@@ -175,6 +175,9 @@ struct ContactGeometry {
   double rail_y = 0.0, rail_z = 0.0;    ///< contact point in the rail profile frame, m
   int iterations = 0;                   ///< Newton iterations of this call
   bool on_own_surface = true;           ///< u_w inside the surface itself, not in its continuation past the split
+  /// kOutOfBounds after a search whose Newton converged to a penetrating point pair past the surface's end
+  /// (its continuation included), on the neighbouring surface; p_wheel_in_world is that wheel point
+  bool past_end = false;
 };
 
 /// Detector for one wheel profile on one rail profile. Constant after building; shared by all wheels

@@ -86,8 +86,8 @@ class ProgressLine {
 void logProgress(const std::string& node, double t, double t_end, double real_time_factor, double eta_s,
                  const char* extra = "");
 
-// "<node>: <how the contact was found>" as INFO, or as WARN when some points were approximate, so that a run
-// never hides them.
+// "<node>: <how the contact was found>" as INFO, or as WARN when some points were approximate or a second
+// contact past a surface's end was not evaluated, so that a run never hides them.
 void logDetection(const std::string& node, const contact::DetectionCounts& counts);
 
 // The end of a run that a lost master or a signal may have cut short. A lost master gives an ERROR line
