@@ -3,7 +3,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -365,13 +364,16 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   const double plane_step = n_planes > 0 ? fan / n_planes : 0.0;
   const std::vector<Sample>& smp = samples_[k];
   const int n = static_cast<int>(smp.size());
-  // Distance of sample i: its smallest over the fan of planes, and the plane's angle.
+  // Wheel point of sample i in the plane at circle angle th_j.
+  auto samplePoint = [&](int i, double th_j) -> Vector3d {
+    return wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * (std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0);
+  };
+  // Distance of sample i: its smallest over the fan of planes, and that plane's angle.
   auto sampleDistance = [&](int i, double& th_i) {
     double d_i = std::numeric_limits<double>::infinity();
     for (int j = -n_planes; j <= n_planes; ++j) {
       const double th_j = th + j * plane_step;
-      const Vector3d e_r = std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0;
-      const Vector3d rel = wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * e_r - o;
+      const Vector3d rel = samplePoint(i, th_j) - o;
       const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
       if (d < d_i) {
         d_i = d;
@@ -380,31 +382,36 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
     }
     return d_i;
   };
-  double d_prev2 = 0.0, d_prev = 0.0;
+  double d_prev2 = 0.0, d_prev = 0.0, th_prev = th;
+  double d_first = 0.0, th_first = th;
   int best = -1;
-  double best_d = std::numeric_limits<double>::infinity();
+  double best_d = std::numeric_limits<double>::infinity(), th_best = th;
   double min_any = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {
     double th_i = th;
     const double d = sampleDistance(i, th_i);
     min_any = std::min(min_any, d);
+    if (i == 0) d_first = d, th_first = th_i;
     // Interior local minimum at i - 1.
     if (i >= 2 && d_prev <= d_prev2 && d_prev <= d && d_prev < best_d) {
       best_d = d_prev;
       best = i - 1;
+      th_best = th_prev;
     }
     d_prev2 = d_prev;
     d_prev = d;
+    th_prev = th_i;
   }
   end_seed = false;
   if (best < 0 && n >= 2) {
-    // No interior minimum: the surface's nearest point may lie in its last sample interval.
-    for (const int i : {0, n - 1}) {
-      double th_i = th;
-      const double d = sampleDistance(i, th_i);
-      if (d <= min_any && d < options_.end_seed_reach) {
-        best = i;
-        best_d = d;
+    // No interior minimum: the surface's nearest point may lie in its last sample interval (the first end
+    // sample first, then the last: d_prev and th_prev hold the last).
+    const double d_end[2] = {d_first, d_prev}, th_end[2] = {th_first, th_prev};
+    for (int e = 0; e < 2; ++e) {
+      if (d_end[e] <= min_any && d_end[e] < options_.end_seed_reach) {
+        best = e == 0 ? 0 : n - 1;
+        best_d = d_end[e];
+        th_best = th_end[e];
         end_seed = true;
         break;
       }
@@ -413,10 +420,7 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   distance = best >= 0 ? best_d : min_any;
   min_distance = min_any;
   if (best < 0 || !(best_d < 0.9 * options_.search_margin)) return false;
-  double th_best = th;
-  sampleDistance(best, th_best);
-  const Vector3d e_r = std::cos(th_best) * wf.d0 + std::sin(th_best) * wf.f0;
-  const Vector3d q = wf.c + (wf.ls * smp[best].y) * wf.a + (r0_ - smp[best].z) * e_r;
+  const Vector3d q = samplePoint(best, th_best);
   const Vector3d rel = q - o;
   double u_r = 0.0;
   railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), &u_r);
@@ -431,6 +435,8 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   ++work.calls;
   out.iterations = 0;
   out.past_end = false;
+  bool past_end = false;  // the last Newton converged to a penetrating pair past the surface's end, at p_past_end
+  Vector3d p_past_end;
   if (work.hold_warm_start) {
     work.x = work.x_committed;
     work.has_warm_start = work.has_committed_warm_start;
@@ -474,8 +480,8 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
         if (-d.dot(e.n) > opt.max_penetration) return false;
         if (x[1] < u_lo - eps || x[1] > u_hi + eps) {
           // A contact-type pair on the neighbouring surface: not this surface's, but said when it penetrates.
-          out.past_end = -d.dot(e.n) > 0.0;
-          if (out.past_end) out.p_wheel_in_world = w.p;
+          past_end = -d.dot(e.n) > 0.0;
+          p_past_end = w.p;
           return false;
         }
         return true;
@@ -544,7 +550,6 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   bool ok = false;
   DetectionStatus status = DetectionStatus::kConverged;
   if (work.has_warm_start) ok = newton(x);
-  out.past_end = false;
   double search_distance = 0.0;
   Vector3d p_seed;
   if (!ok) {
@@ -570,14 +575,17 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
       return;
     }
     x = seed;
+    past_end = false;
     ok = newton(x);
     status = DetectionStatus::kConvergedAfterSearch;
-    if (!end_seed) out.past_end = false;  // past_end reports an end seed only (an interior seed gives kApproximate)
     if (!ok && end_seed) {
-      // An end sample is no contact of this surface unless Newton converges inside it.
+      // An end sample is no contact of this surface unless Newton converges inside it; where it converged
+      // past the end into the rail, the point belongs to the neighbouring surface and is reported.
       out.status = DetectionStatus::kOutOfBounds;
       out.valid = out.in_contact = false;
       out.penetration = -std::min(search_distance, 1.0);
+      out.past_end = past_end;
+      if (past_end) out.p_wheel_in_world = p_past_end;
       work.has_warm_start = false;
       return;
     }
