@@ -37,10 +37,10 @@ std::string describe(const DetectionCounts& c) {
   if (c.approximations > 0)
     m << " (Newton did not converge after the search: the search grid's point pair, within half a grid cell "
          "of the contact, was used)";
-  if (c.unresolved > 0)
-    m << "; " << c.unresolved
-      << " evaluations found a penetrating point past a wheel surface's end, on the neighbouring surface, away "
-         "from that surface's own contact: a second contact on that surface was not evaluated";
+  if (c.past_end_contacts > 0)
+    m << "; " << c.past_end_contacts
+      << " contacts evaluated past their surface's end (a second contact on the neighbouring surface's part of "
+         "the profile, beside that surface's own contact)";
   return m.str();
 }
 
@@ -364,16 +364,17 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   const double plane_step = n_planes > 0 ? fan / n_planes : 0.0;
   const std::vector<Sample>& smp = samples_[k];
   const int n = static_cast<int>(smp.size());
-  // Wheel point of sample i in the plane at circle angle th_j.
-  auto samplePoint = [&](int i, double th_j) -> Vector3d {
-    return wf.c + (wf.ls * smp[i].y) * wf.a + (r0_ - smp[i].z) * (std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0);
+  // Wheel profile point (y, z) in the plane at circle angle th_j.
+  auto profilePoint = [&](double y, double z, double th_j) -> Vector3d {
+    return wf.c + (wf.ls * y) * wf.a + (r0_ - z) * (std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0);
   };
-  // Distance of sample i: its smallest over the fan of planes, and that plane's angle.
-  auto sampleDistance = [&](int i, double& th_i) {
+  auto samplePoint = [&](int i, double th_j) { return profilePoint(smp[i].y, smp[i].z, th_j); };
+  // Distance of profile point (y, z): its smallest over the fan of planes, and that plane's angle.
+  auto pointDistance = [&](double y, double z, double& th_i) {
     double d_i = std::numeric_limits<double>::infinity();
     for (int j = -n_planes; j <= n_planes; ++j) {
       const double th_j = th + j * plane_step;
-      const Vector3d rel = samplePoint(i, th_j) - o;
+      const Vector3d rel = profilePoint(y, z, th_j) - o;
       const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
       if (d < d_i) {
         d_i = d;
@@ -382,6 +383,7 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
     }
     return d_i;
   };
+  auto sampleDistance = [&](int i, double& th_i) { return pointDistance(smp[i].y, smp[i].z, th_i); };
   double d_prev2 = 0.0, d_prev = 0.0, th_prev = th;
   double d_first = 0.0, th_first = th;
   int best = -1;
@@ -420,11 +422,32 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   distance = best >= 0 ? best_d : min_any;
   min_distance = min_any;
   if (best < 0 || !(best_d < 0.9 * options_.search_margin)) return false;
-  const Vector3d q = samplePoint(best, th_best);
+  double u_best = smp[best].u;
+  Vector3d q = samplePoint(best, th_best);
+  if (end_seed) {
+    // The gap may keep falling past the end sample, onto the neighbouring surface's part of the profile (a
+    // second contact there, ContactGeometry::past_end), and Newton from the end sample can miss that
+    // minimum: the samples are continued outward while the distance falls, and the seed is the last.
+    const double du = (best == 0 ? -1.0 : 1.0) * options_.search_spacing;
+    for (int j = 1; j * options_.search_spacing <= kPastEndScan; ++j) {
+      const double u_j = smp[best].u + j * du;
+      double u_local = 0.0;
+      const ProfileCurve& curve = profileCurveAt(k, u_j, u_local);
+      if (u_local < curve.uMin() || u_local > curve.uMax()) break;
+      const Vector2d p = curve.position(u_local);
+      double th_j = th;
+      const double d_j = pointDistance(p.x(), p.y(), th_j);
+      if (!(d_j < best_d)) break;
+      best_d = d_j;
+      u_best = u_j;
+      th_best = th_j;
+      q = profilePoint(p.x(), p.y(), th_j);
+    }
+  }
   const Vector3d rel = q - o;
   double u_r = 0.0;
   railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), &u_r);
-  x_seed = Vector4d(th_best, smp[best].u, s + T.dot(rel), u_r);
+  x_seed = Vector4d(th_best, u_best, s + T.dot(rel), u_r);
   p_wheel_seed = q;
   return true;
 }
@@ -435,8 +458,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   ++work.calls;
   out.iterations = 0;
   out.past_end = false;
-  bool past_end = false;  // the last Newton converged to a penetrating pair past the surface's end, at p_past_end
-  Vector3d p_past_end;
+  bool past_end = false;  // the last Newton converged to a penetrating pair past the surface's end
   if (work.hold_warm_start) {
     work.x = work.x_committed;
     work.has_warm_start = work.has_committed_warm_start;
@@ -481,7 +503,6 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
         if (x[1] < u_lo - eps || x[1] > u_hi + eps) {
           // A contact-type pair on the neighbouring surface: not this surface's, but said when it penetrates.
           past_end = -d.dot(e.n) > 0.0;
-          p_past_end = w.p;
           return false;
         }
         return true;
@@ -549,11 +570,22 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   Vector4d x = work.x;
   bool ok = false;
   DetectionStatus status = DetectionStatus::kConverged;
-  if (work.has_warm_start) ok = newton(x);
+  // A warm start that converges to a penetrating pair past the surface's end keeps it as a candidate: the
+  // search looks for the surface's own contact first, and the candidate is taken when there is none.
+  bool warm_past_end = false;
+  Vector4d x_warm_past_end = Vector4d::Zero();
+  if (work.has_warm_start) {
+    ok = newton(x);
+    if (!ok && past_end) {
+      warm_past_end = true;
+      x_warm_past_end = x;
+    }
+  }
   double search_distance = 0.0;
   Vector3d p_seed;
+  bool take_past_end = false;  // the result is a penetrating pair past the surface's end, at x
   if (!ok) {
-    if (work.has_warm_start) ++work.fallbacks;
+    if (work.has_warm_start && !warm_past_end) ++work.fallbacks;
     ++work.searches;
     Vector4d seed;
     double min_distance = 0.0;
@@ -561,35 +593,45 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     const bool found =
         search(surface, pose, track, deformation, seed, search_distance, p_seed, min_distance, section, end_seed);
     work.has_search_reference = false;
-    if (!found) {
-      if constexpr (Deformation::kRigid) {
-        work.has_search_reference = true;
-        work.reference_distance = min_distance;
-        work.reference_centre = section.centre;
-        work.reference_axle = section.axle;
+    if (found) {
+      x = seed;
+      past_end = false;
+      ok = newton(x);
+      status = DetectionStatus::kConvergedAfterSearch;
+      if (!ok && past_end) {
+        take_past_end = true;
+      } else if (warm_past_end && (!ok || -(w.p - e.r).dot(e.n) <= 0.0)) {
+        // The surface's own point is not in contact: the penetrating candidate is the contact.
+        x = x_warm_past_end;
+        take_past_end = true;
+        status = DetectionStatus::kConverged;
+      }
+    } else if (warm_past_end) {
+      x = x_warm_past_end;
+      take_past_end = true;
+      status = DetectionStatus::kConverged;
+    }
+    if (take_past_end) {
+      ok = true;
+      wheelAt(x[0], x[1]);
+      evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
+    } else if (!found || (!ok && end_seed)) {
+      // No seed, or an end sample that Newton could not move inside the surface nor into the rail past it:
+      // no contact of this surface.
+      if (!found) {
+        if constexpr (Deformation::kRigid) {
+          work.has_search_reference = true;
+          work.reference_distance = min_distance;
+          work.reference_centre = section.centre;
+          work.reference_axle = section.axle;
+        }
       }
       out.status = DetectionStatus::kOutOfBounds;
       out.valid = out.in_contact = false;
       out.penetration = -std::min(search_distance, 1.0);
       work.has_warm_start = false;
       return;
-    }
-    x = seed;
-    past_end = false;
-    ok = newton(x);
-    status = DetectionStatus::kConvergedAfterSearch;
-    if (!ok && end_seed) {
-      // An end sample is no contact of this surface unless Newton converges inside it; where it converged
-      // past the end into the rail, the point belongs to the neighbouring surface and is reported.
-      out.status = DetectionStatus::kOutOfBounds;
-      out.valid = out.in_contact = false;
-      out.penetration = -std::min(search_distance, 1.0);
-      out.past_end = past_end;
-      if (past_end) out.p_wheel_in_world = p_past_end;
-      work.has_warm_start = false;
-      return;
-    }
-    if (!ok) {
+    } else if (!ok) {
       // Approximate: the search's best pair.
       x = seed;
       wheelAt(x[0], x[1]);
@@ -599,6 +641,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
       ++work.approximations;
     }
   }
+  out.past_end = take_past_end;
   work.x = x;
   work.has_warm_start = status != DetectionStatus::kApproximate;
 

@@ -97,7 +97,9 @@ double ContactGeometryTable::wheelGap(const ContactGeometry* g, int& kind) const
   kind = -1;
   double gap = std::numeric_limits<double>::infinity();
   for (int s = 0; s < 2; ++s) {
-    if (!g[s].valid) continue;
+    // A point past a surface's end is the other surface's (taken only when it penetrates): the table's gap
+    // is each surface's own nearest point, continuous through zero.
+    if (!g[s].valid || g[s].past_end) continue;
     if (-g[s].penetration < gap) {
       gap = -g[s].penetration;
       kind = s;

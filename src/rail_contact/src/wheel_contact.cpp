@@ -62,8 +62,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const double ls = side == RailSide::kLeft ? -1.0 : 1.0;
 
   bool tread_on_own_surface = true;
-  bool unresolved[2] = {false, false};  // a search converged to a penetrating point past its surface's end
-  Eigen::Vector3d p_unresolved[2];
+  bool past_end[2] = {false, false};
   for (int k = 0; k < 2; ++k) {
     ContactPointResult& c = out.contact[k];
     c = ContactPointResult();
@@ -90,15 +89,12 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     }
     c.status = input_ok ? g.status : DetectionStatus::kInvalidInput;
     c.penetration = std::isfinite(g.penetration) ? g.penetration : -1.0;
-    if (g.past_end) {
-      unresolved[k] = true;
-      p_unresolved[k] = g.p_wheel_in_world;
-    }
     if (!g.valid || !input_ok) {
       updateImpactMemory(memory, -1.0, 0.0);
       continue;
     }
     if (k == kTread) tread_on_own_surface = g.on_own_surface;
+    past_end[k] = g.past_end;
     c.s_r = g.s_r;
     c.p_wheel_in_world = g.p_wheel_in_world;
     c.p_rail_in_world = g.p_rail_in_world;
@@ -197,13 +193,8 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
                                       c.p_rail_in_world - c.p_section_centre_in_world, Eigen::Vector3d::Zero());
   }
 
-  // A penetrating point past a surface's end lies on the other surface; unless that surface has its contact
-  // there, it is a second point the other surface does not follow (counted, not evaluated).
   for (int k = 0; k < 2; ++k) {
-    const ContactPointResult& other = out.contact[1 - k];
-    if (unresolved[k] && !((other.active || other.merged) &&
-                           (other.p_wheel_in_world - p_unresolved[k]).norm() < options_.merge_distance))
-      ++work.detection[k].unresolved;
+    if (past_end[k] && out.contact[k].active) ++work.detection[k].past_end_contacts;
   }
 
   // Eq. 13: both contacts to the wheel centre (inactive contacts carry zero force).

@@ -123,7 +123,7 @@ void logProgress(const std::string& node, double t, double t_end, double real_ti
 }
 
 void logDetection(const std::string& node, const contact::DetectionCounts& counts) {
-  if (counts.approximations > 0 || counts.unresolved > 0) {
+  if (counts.approximations > 0) {
     ROS_WARN("%s: %s", node.c_str(), contact::describe(counts).c_str());
   } else {
     ROS_INFO("%s: %s", node.c_str(), contact::describe(counts).c_str());

@@ -91,11 +91,10 @@ struct DetectionWork {
   long long newton_iterations = 0;  ///< total Newton iterations
   long long searches = 0;           ///< robust searches run (initial and fallback)
   long long fallbacks = 0;          ///< searches caused by a failed warm-started Newton
-  /// evaluations (counted by WheelContactModel) where a search converged to a penetrating point past the
-  /// surface's end (ContactGeometry::past_end), and the neighbouring surface had no contact within
-  /// merge_distance of it: a second point on that surface (which follows one point only), e.g. a root contact beside a
-  /// tread contact, was not evaluated
-  long long unresolved = 0;
+  /// contacts evaluated (counted by WheelContactModel) at a point past this surface's end, on the
+  /// neighbouring surface's part of the profile, away from that surface's own contact: a second contact
+  /// there, e.g. at the flange root beside a tread contact (ContactGeometry::past_end)
+  long long past_end_contacts = 0;
   long long approximations = 0;  ///< results returned as kApproximate
   /// Rigid rail only, set by the caller: a surface far from its rail skips the search (a flange off the
   /// rail searched ~130 profile samples at every evaluation, a quarter of the vehicle's time on a straight).
@@ -127,22 +126,22 @@ struct DetectionWork {
 
 /// Counters of several DetectionWork summed (every wheel, both surfaces) for a run's closing summary.
 struct DetectionCounts {
-  long long calls = 0, newton_iterations = 0, searches = 0, fallbacks = 0, unresolved = 0, approximations = 0,
+  long long calls = 0, newton_iterations = 0, searches = 0, fallbacks = 0, past_end_contacts = 0, approximations = 0,
             skipped = 0;
   void add(const DetectionWork& w) {
     calls += w.calls;
     newton_iterations += w.newton_iterations;
     searches += w.searches;
     fallbacks += w.fallbacks;
-    unresolved += w.unresolved;
+    past_end_contacts += w.past_end_contacts;
     approximations += w.approximations;
     skipped += w.skipped;
   }
 };
 
 /// One line for a run's log: "N detections, I Newton iterations each, S searches (F after a failed warm
-/// start), K skipped far from the rail, A approximate"; with A > 0 what approximate means, with unresolved
-/// searches U > 0 how many and what they mean. Not for a time step.
+/// start), K skipped far from the rail, A approximate"; with A > 0 what approximate means, with P > 0
+/// contacts past a surface's end how many and what they are. Not for a time step.
 std::string describe(const DetectionCounts& counts);
 
 /// Wheel pose for the detection (world frame).
@@ -175,8 +174,10 @@ struct ContactGeometry {
   double rail_y = 0.0, rail_z = 0.0;    ///< contact point in the rail profile frame, m
   int iterations = 0;                   ///< Newton iterations of this call
   bool on_own_surface = true;           ///< u_w inside the surface itself, not in its continuation past the split
-  /// kOutOfBounds after a search whose Newton converged to a penetrating point pair past the surface's end
-  /// (its continuation included), on the neighbouring surface; p_wheel_in_world is that wheel point
+  /// The point pair lies past the surface's end (its continuation included), on the neighbouring surface's
+  /// part of the profile, and penetrates: taken when the surface's own point is not in contact, so that a
+  /// surface whose neighbour follows another point still carries a second contact (e.g. a flange-root
+  /// contact beside the tread's taping-line contact). valid and in_contact are set; on_own_surface is false.
   bool past_end = false;
 };
 
@@ -231,6 +232,7 @@ class ContactDetector {
 
   double search_lever_[2] = {0.0, 0.0};            // max over a surface's samples of |y| + 2.2 |r0 - z|, m
   static constexpr double kMaxSearchSlope = 5.67;  // tan(80 deg)
+  static constexpr double kPastEndScan = 0.015;    // how far a penetrating end sample's scan goes outward, m
   double search_slope_[2] = {0.0, 0.0};            // steepest |dz/dy| between a surface's samples, capped
 
   // The rail section nearest to the wheel centre, as the search uses it, and the wheel's pose in it.
