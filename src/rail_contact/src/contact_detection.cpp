@@ -598,15 +598,10 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
       past_end = false;
       ok = newton(x);
       status = DetectionStatus::kConvergedAfterSearch;
-      if (!ok && past_end) {
-        take_past_end = true;
-      } else if (warm_past_end && (!ok || -(w.p - e.r).dot(e.n) <= 0.0)) {
-        // The surface's own point is not in contact: the penetrating candidate is the contact.
-        x = x_warm_past_end;
-        take_past_end = true;
-        status = DetectionStatus::kConverged;
-      }
-    } else if (warm_past_end) {
+      take_past_end = !ok && past_end;
+    }
+    if (!take_past_end && warm_past_end && (!ok || -(w.p - e.r).dot(e.n) <= 0.0)) {
+      // The surface's own point is not in contact: the penetrating candidate is the contact.
       x = x_warm_past_end;
       take_past_end = true;
       status = DetectionStatus::kConverged;
@@ -618,8 +613,8 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     } else if (!found || (!ok && end_seed)) {
       // No seed, or an end sample that Newton could not move inside the surface nor into the rail past it:
       // no contact of this surface.
-      if (!found) {
-        if constexpr (Deformation::kRigid) {
+      if constexpr (Deformation::kRigid) {
+        if (!found) {
           work.has_search_reference = true;
           work.reference_distance = min_distance;
           work.reference_centre = section.centre;
