@@ -689,7 +689,7 @@ TEST(WheelContact, ASecondContactPastASurfacesEndIsTheContactOfAProfileSplitBelo
   // continuation onto the tread). The flange surface takes that penetrating point and it is evaluated.
   // Checked against a model whose profile is split where the root is on the flange surface: the same point
   // (same equations, Newton tolerance 1e-10 m: within 1e-7 m) and the same normal force within 1e-4 (the
-  // re-split profile is splined through one other node; 8e-6 measured).
+  // re-split profile is splined through one other node; 6.3e-6 measured).
   const rc::WheelProfile wheel = rc::makeS1002();
   const rc::ProfileCurve rail = rc::makeUic60Rail(1.0 / 20.0);
   rc::WheelsetTrackSpec spec;
