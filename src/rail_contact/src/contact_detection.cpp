@@ -6,6 +6,9 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string>
+
+#include "rail_contact/format.hpp"
 
 namespace rail {
 namespace contact {
@@ -245,6 +248,13 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
     }
   }
 
+  const std::size_t n_samples = samples_[0].size() + samples_[1].size();
+  if (n_samples > static_cast<std::size_t>(ProfileScan::kMaxSamples)) {
+    throw std::runtime_error("ContactDetector: DetectionOptions.search_spacing = " + formatNumber(o.search_spacing) +
+                             " m gives " + std::to_string(n_samples) + " wheel profile samples, more than " +
+                             std::to_string(ProfileScan::kMaxSamples) + " (use a coarser spacing)");
+  }
+
   // Signed-distance grid of the rail profile: exact distance to a 1 mm polyline of the curve, sign from
   // the curve's outward normal at the foot point.
   const int n_poly = std::max(8, static_cast<int>(std::ceil(rail_.uMax() / 1e-3)));
@@ -452,6 +462,106 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   return true;
 }
 
+int ProfileScan::nearest(double U) const noexcept {
+  const double* end = profile_u + n;
+  const double* it = std::lower_bound(profile_u, end, U);
+  if (it == end) return n - 1;
+  const int i = static_cast<int>(it - profile_u);
+  return i > 0 && U - profile_u[i - 1] < profile_u[i] - U ? i - 1 : i;
+}
+
+bool ProfileScan::samePatch(double U_a, double U_b, double dip, double min_dip) const noexcept {
+  if (n <= 0) return false;
+  const int a = nearest(U_a), b = nearest(U_b);
+  const int lo = std::min(a, b), hi = std::max(a, b);
+  if (hi - lo <= 1) return true;
+  const double shallower = std::max(distance[a], distance[b]);  // < 0 interpenetrating
+  const double threshold = std::min(shallower + std::max(dip * std::abs(shallower), min_dip), 0.0);
+  double saddle = -std::numeric_limits<double>::infinity();
+  for (int i = lo + 1; i < hi; ++i) saddle = std::max(saddle, distance[i]);
+  return saddle < threshold;
+}
+
+template <class Deformation>
+void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
+                                  bool include_flange, ProfileScan& out) const noexcept {
+  out.n = 0;
+  out.n_minima = 0;
+  WheelFrame wf;
+  if (!makeWheelFrame(pose, wf)) return;
+  SectionPose section;
+  sectionPose(pose, track, deformation, wf.c, wf.a, section);
+  const Vector3d o = section.o, T = section.T, Ny = section.Ny, B = section.B;
+  const double th = std::atan2(-B.dot(wf.f0), -B.dot(wf.d0));
+  int first[2] = {0, 0};
+  for (int k = 0; k < (include_flange ? 2 : 1); ++k) {
+    // Each part's own samples: the tread up to the split, the flange from it.
+    const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
+    const int n_planes =
+        options_.search_plane_step > 0.0 ? static_cast<int>(std::ceil(fan / options_.search_plane_step - 0.5)) : 0;
+    const double plane_step = n_planes > 0 ? fan / n_planes : 0.0;
+    first[k] = out.n;
+    for (const Sample& smp : samples_[k]) {
+      if (k == 0 ? smp.u > tread_.uMax() : smp.u < 0.0) continue;
+      double d_i = std::numeric_limits<double>::infinity();
+      for (int j = -n_planes; j <= n_planes; ++j) {
+        const double th_j = th + j * plane_step;
+        const Vector3d q =
+            wf.c + (wf.ls * smp.y) * wf.a + (r0_ - smp.z) * (std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0);
+        const Vector3d rel = q - o;
+        d_i = std::min(d_i, railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel))));
+      }
+      out.profile_u[out.n] = profileU(k, smp.u);
+      out.distance[out.n] = d_i;
+      ++out.n;
+    }
+  }
+  // Interpenetrating interior minima, deepest first, each with a Newton seed on its part's surface.
+  for (int i = 1; i + 1 < out.n; ++i) {
+    const double d = out.distance[i];
+    if (!(d < 0.0) || d > out.distance[i - 1] || d > out.distance[i + 1]) continue;
+    if (out.n_minima == ProfileScan::kMaxMinima && !(d < out.distance[out.minima[out.n_minima - 1].sample])) continue;
+    const int k = include_flange && i >= first[1] ? 1 : 0;
+    const double u = k == 0 ? out.profile_u[i] : out.profile_u[i] - tread_.uMax();
+    double u_local = 0.0;
+    const Vector2d p = profileCurveAt(k, u, u_local).position(u_local);
+    // The plane of the sample's minimum, searched again (cheap: one sample).
+    const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
+    const int n_planes =
+        options_.search_plane_step > 0.0 ? static_cast<int>(std::ceil(fan / options_.search_plane_step - 0.5)) : 0;
+    const double plane_step = n_planes > 0 ? fan / n_planes : 0.0;
+    double best = std::numeric_limits<double>::infinity(), th_best = th;
+    Vector3d q_best = Vector3d::Zero();
+    for (int j = -n_planes; j <= n_planes; ++j) {
+      const double th_j = th + j * plane_step;
+      const Vector3d q =
+          wf.c + (wf.ls * p.x()) * wf.a + (r0_ - p.y()) * (std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0);
+      const Vector3d rel = q - o;
+      const double d_j = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
+      if (d_j < best) {
+        best = d_j;
+        th_best = th_j;
+        q_best = q;
+      }
+    }
+    const Vector3d rel = q_best - o;
+    double u_r = 0.0;
+    railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), &u_r);
+    ProfileScan::Minimum m;
+    m.sample = i;
+    m.surface = k;
+    m.seed = Vector4d(th_best, u, section.s + T.dot(rel), u_r);
+    // Insert by depth.
+    int pos = std::min(out.n_minima, ProfileScan::kMaxMinima - 1);
+    while (pos > 0 && out.distance[out.minima[pos - 1].sample] > d) {
+      if (pos < ProfileScan::kMaxMinima) out.minima[pos] = out.minima[pos - 1];
+      --pos;
+    }
+    out.minima[pos] = m;
+    out.n_minima = std::min(out.n_minima + 1, ProfileScan::kMaxMinima);
+  }
+}
+
 template <class Deformation>
 void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
                              const Deformation& deformation, DetectionWork& work, ContactGeometry& out) const noexcept {
@@ -461,6 +571,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   bool past_end = false;  // the last Newton converged to a penetrating pair past the surface's end
   if (work.hold_warm_start) {
     work.x = work.x_committed;
+    work.x_surface = work.x_surface_committed;
     work.has_warm_start = work.has_committed_warm_start;
   }
   WheelFrame wf;
@@ -549,95 +660,120 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   };
 
   SectionPose section;
-  if constexpr (Deformation::kRigid) {
-    // The last search failed with every sample at least reference_distance from the rail; each sample has
-    // moved since by at most |d centre| + lever |d axle| relative to the rail section, and the grid's
-    // distance changes by at most sqrt(2) per unit of that (bilinear on a distance field).
-    if (work.skip_far_searches && work.has_search_reference && !work.has_warm_start) {
-      sectionPose(pose, track, deformation, wf.c, wf.a, section);
-      const double moved = std::sqrt(2.0) * ((section.centre - work.reference_centre).norm() +
-                                             search_lever_[k] * (section.axle - work.reference_axle).norm());
-      const double clearance = work.reference_distance - moved;
-      if (clearance > opt.skip_clearance && std::abs(section.axle[2]) < 0.3) {
-        ++work.skipped;
-        out.status = DetectionStatus::kOutOfBounds;
-        out.valid = out.in_contact = false;
-        out.penetration = -std::min(clearance, 1.0);
-        return;
-      }
-    }
-  }
   Vector4d x = work.x;
   bool ok = false;
   DetectionStatus status = DetectionStatus::kConverged;
-  // A warm start that converges to a penetrating pair past the surface's end keeps it as a candidate: the
-  // search looks for the surface's own contact first, and the candidate is taken when there is none.
-  bool warm_past_end = false;
-  Vector4d x_warm_past_end = Vector4d::Zero();
-  if (work.has_warm_start) {
-    ok = newton(x);
-    if (!ok && past_end) {
-      warm_past_end = true;
-      x_warm_past_end = x;
-    }
-  }
   double search_distance = 0.0;
-  Vector3d p_seed;
   bool take_past_end = false;  // the result is a penetrating pair past the surface's end, at x
-  if (!ok) {
-    if (work.has_warm_start && !warm_past_end) ++work.fallbacks;
-    ++work.searches;
-    Vector4d seed;
-    double min_distance = 0.0;
-    bool end_seed = false;
-    const bool found =
-        search(surface, pose, track, deformation, seed, search_distance, p_seed, min_distance, section, end_seed);
-    work.has_search_reference = false;
-    if (found) {
-      x = seed;
-      past_end = false;
-      ok = newton(x);
+  if (work.seeded) {
+    // A further contact of the wheel: Newton from the warm start when it is on this surface, else (or when
+    // that fails) from the caller's seed; only a converged, penetrating pair of the surface's own part.
+    const bool warm = work.seed_continues_warm_start && work.has_warm_start && work.x_surface == k;
+    bool converged = false;
+    if (warm) {
+      converged = newton(x) && -(w.p - e.r).dot(e.n) > 0.0;
+    }
+    if (!converged) {
+      ++work.searches;
       status = DetectionStatus::kConvergedAfterSearch;
-      take_past_end = !ok && past_end;
+      x = work.seed;
+      converged = newton(x) && -(w.p - e.r).dot(e.n) > 0.0;
     }
-    if (!take_past_end && warm_past_end && (!ok || -(w.p - e.r).dot(e.n) <= 0.0)) {
-      // The surface's own point is not in contact: the penetrating candidate is the contact.
-      x = x_warm_past_end;
-      take_past_end = true;
-      status = DetectionStatus::kConverged;
-    }
-    if (take_past_end) {
-      ok = true;
-      wheelAt(x[0], x[1]);
-      evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
-    } else if (!found || (!ok && end_seed)) {
-      // No seed, or an end sample that Newton could not move inside the surface nor into the rail past it:
-      // no contact of this surface.
-      if constexpr (Deformation::kRigid) {
-        if (!found) {
-          work.has_search_reference = true;
-          work.reference_distance = min_distance;
-          work.reference_centre = section.centre;
-          work.reference_axle = section.axle;
-        }
-      }
+    if (!converged) {
       out.status = DetectionStatus::kOutOfBounds;
       out.valid = out.in_contact = false;
-      out.penetration = -std::min(search_distance, 1.0);
+      out.penetration = -1.0;
       work.has_warm_start = false;
       return;
-    } else if (!ok) {
-      // Approximate: the search's best pair.
-      x = seed;
-      wheelAt(x[0], x[1]);
-      evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
-      w.p = p_seed;
-      status = DetectionStatus::kApproximate;
-      ++work.approximations;
+    }
+    ok = true;
+  } else {
+    if constexpr (Deformation::kRigid) {
+      // The last search failed with every sample at least reference_distance from the rail; each sample has
+      // moved since by at most |d centre| + lever |d axle| relative to the rail section, and the grid's
+      // distance changes by at most sqrt(2) per unit of that (bilinear on a distance field).
+      if (work.skip_far_searches && work.has_search_reference && !work.has_warm_start) {
+        sectionPose(pose, track, deformation, wf.c, wf.a, section);
+        const double moved = std::sqrt(2.0) * ((section.centre - work.reference_centre).norm() +
+                                               search_lever_[k] * (section.axle - work.reference_axle).norm());
+        const double clearance = work.reference_distance - moved;
+        if (clearance > opt.skip_clearance && std::abs(section.axle[2]) < 0.3) {
+          ++work.skipped;
+          out.status = DetectionStatus::kOutOfBounds;
+          out.valid = out.in_contact = false;
+          out.penetration = -std::min(clearance, 1.0);
+          return;
+        }
+      }
+    }
+    // A warm start that converges to a penetrating pair past the surface's end keeps it as a candidate: the
+    // search looks for the surface's own contact first, and the candidate is taken when there is none.
+    bool warm_past_end = false;
+    Vector4d x_warm_past_end = Vector4d::Zero();
+    if (work.has_warm_start) {
+      ok = newton(x);
+      if (!ok && past_end) {
+        warm_past_end = true;
+        x_warm_past_end = x;
+      }
+    }
+    Vector3d p_seed;
+    if (!ok) {
+      if (work.has_warm_start && !warm_past_end) ++work.fallbacks;
+      ++work.searches;
+      Vector4d seed;
+      double min_distance = 0.0;
+      bool end_seed = false;
+      const bool found =
+          search(surface, pose, track, deformation, seed, search_distance, p_seed, min_distance, section, end_seed);
+      work.has_search_reference = false;
+      if (found) {
+        x = seed;
+        past_end = false;
+        ok = newton(x);
+        status = DetectionStatus::kConvergedAfterSearch;
+        take_past_end = !ok && past_end;
+      }
+      if (!take_past_end && warm_past_end && (!ok || -(w.p - e.r).dot(e.n) <= 0.0)) {
+        // The surface's own point is not in contact: the penetrating candidate is the contact.
+        x = x_warm_past_end;
+        take_past_end = true;
+        status = DetectionStatus::kConverged;
+      }
+      if (take_past_end) {
+        ok = true;
+        wheelAt(x[0], x[1]);
+        evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
+      } else if (!found || (!ok && end_seed)) {
+        // No seed, or an end sample that Newton could not move inside the surface nor into the rail past it:
+        // no contact of this surface.
+        if constexpr (Deformation::kRigid) {
+          if (!found) {
+            work.has_search_reference = true;
+            work.reference_distance = min_distance;
+            work.reference_centre = section.centre;
+            work.reference_axle = section.axle;
+          }
+        }
+        out.status = DetectionStatus::kOutOfBounds;
+        out.valid = out.in_contact = false;
+        out.penetration = -std::min(search_distance, 1.0);
+        work.has_warm_start = false;
+        return;
+      } else if (!ok) {
+        // Approximate: the search's best pair.
+        x = seed;
+        wheelAt(x[0], x[1]);
+        evalRail(track, pose.side, rail_, rail_normal_sign_, section_centre_, deformation, x[2], x[3], e);
+        w.p = p_seed;
+        status = DetectionStatus::kApproximate;
+        ++work.approximations;
+      }
     }
   }
   out.past_end = take_past_end;
   work.x = x;
+  work.x_surface = k;
   work.has_warm_start = status != DetectionStatus::kApproximate;
 
   out.status = status;
@@ -646,6 +782,7 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   out.u_w = x[1];
   out.s_r = x[2];
   out.u_r = x[3];
+  out.profile_u = profileU(k, x[1]);
   out.p_wheel_in_world = w.p;
   out.p_rail_in_world = e.r;
   out.n_in_world = e.n;
@@ -683,6 +820,14 @@ template void ContactDetector::detect<BeamRailDeformation>(WheelSurface, const W
 template void ContactDetector::detect<RailDeformation>(WheelSurface, const WheelPose&, const TrackGeometry&,
                                                        const RailDeformation&, DetectionWork&,
                                                        ContactGeometry&) const noexcept;
+template void ContactDetector::scanProfile<RigidRailDeformation>(const WheelPose&, const TrackGeometry&,
+                                                                 const RigidRailDeformation&, bool,
+                                                                 ProfileScan&) const noexcept;
+template void ContactDetector::scanProfile<BeamRailDeformation>(const WheelPose&, const TrackGeometry&,
+                                                                const BeamRailDeformation&, bool,
+                                                                ProfileScan&) const noexcept;
+template void ContactDetector::scanProfile<RailDeformation>(const WheelPose&, const TrackGeometry&,
+                                                            const RailDeformation&, bool, ProfileScan&) const noexcept;
 
 }  // namespace contact
 }  // namespace rail

@@ -47,7 +47,10 @@ ContactGeometryTable::ContactGeometryTable(const WheelProfile& wheel, const Prof
   x0_ = 10.0;
   const Eigen::Vector2d centre =
       spec.rail_section_centre_yz.allFinite() ? spec.rail_section_centre_yz : railSectionCentre(rail);
-  model_ = std::make_unique<WheelContactModel>(wheel, spec.nominal_radius, rail, centre, options);
+  // A table row is one contact point per surface (the benchmark's convention): no second contacts.
+  WheelContactOptions table_options = options;
+  table_options.second_contacts = false;
+  model_ = std::make_unique<WheelContactModel>(wheel, spec.nominal_radius, rail, centre, table_options);
   rail_top_yz_ = railTopPoint(rail);
   z_guess_ = spec.nominal_radius + rail_top_yz_.y();
   roll_guess_ = 0.0;

@@ -28,6 +28,9 @@ void validate(const WheelContactOptions& o) {
   validate(o.damping);
   validate(o.polach);
   if (!(o.merge_distance >= 0.0)) fail("merge_distance", o.merge_distance, "m must not be negative");
+  if (!(o.patch_dip >= 0.0) || !(o.patch_dip < 1.0)) fail("patch_dip", o.patch_dip, "must be in [0, 1)");
+  if (!(o.patch_min_dip >= 0.0) || !(o.patch_min_dip < 1e-3))
+    fail("patch_min_dip", o.patch_min_dip, "m must be in [0, 1e-3)");
   if (!(o.max_lateral_semi_axis >= 0.0))
     fail("max_lateral_semi_axis", o.max_lateral_semi_axis, "m must not be negative (0 = no limit)");
   if (!(o.creepage.v_eps > 0.0)) fail("creepage.v_eps", o.creepage.v_eps, "m/s must be positive");
@@ -43,6 +46,38 @@ WheelContactModel::WheelContactModel(const WheelProfile& wheel, double nominal_r
   G_ = combinedShearModulus(options_.wheel_material, options_.rail_material);
   nu_ = combinedPoissonRatio(options_.wheel_material, options_.rail_material);
   kalker_ = &KalkerTable::builtin();
+}
+
+void sumContactWrenches(const Eigen::Vector3d& p_wheel_in_world, const Eigen::Matrix3d& R_wheelset_to_world,
+                        WheelContactResult& out) noexcept {
+  // Eq. 15 about one section centre: the first active contact's (the tread's if active).
+  int ref = kTread;
+  for (int k = 0; k < kContactSlots; ++k) {
+    if (out.contact[k].active) {
+      ref = k;
+      break;
+    }
+  }
+  const Eigen::Vector3d& c_section = out.contact[ref].p_section_centre_in_world;
+  out.rail_section_s = out.contact[ref].s_r;
+  out.wheel_centre = WheelsetWrench();
+  out.rail_section = RailWrench();
+  const Eigen::Vector3d zero = Eigen::Vector3d::Zero();
+  for (const ContactPointResult& c : out.contact) {
+    if (!c.active) continue;
+    // Eq. 13: to the wheel centre.
+    accumulate(out.wheel_centre,
+               wheelCentreWrench(c.force_on_wheel_in_world, zero,
+                                 R_wheelset_to_world.transpose() * (c.p_wheel_in_world - p_wheel_in_world), zero,
+                                 R_wheelset_to_world));
+    const RailWrench one = railSectionWrench(-c.force_on_wheel_in_world, zero, c.p_rail_in_world - c_section, zero);
+    out.rail_section.force_in_world += one.force_in_world;
+    out.rail_section.moment_in_world += one.moment_in_world;
+  }
+  if (!out.wheel_centre.force_in_world.allFinite() || !out.wheel_centre.moment_in_wheelset.allFinite()) {
+    out.wheel_centre = WheelsetWrench();
+    out.rail_section = RailWrench();
+  }
 }
 
 template <class Deformation>
@@ -61,39 +96,192 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
   const Eigen::Vector3d axle = ws.R_wheelset_to_world.col(1).normalized();
   const double ls = side == RailSide::kLeft ? -1.0 : 1.0;
 
-  bool tread_on_own_surface = true;
-  bool past_end[2] = {false, false};
-  for (int k = 0; k < 2; ++k) {
-    ContactPointResult& c = out.contact[k];
-    c = ContactPointResult();
-    if (k == kFlange && !options_.flange_contact) {
-      c.searched = false;
-      c.status = DetectionStatus::kOutOfBounds;
-      work.impact[k] = work.impact_next[k] = ImpactMemory();
-      continue;
-    }
-    c.searched = true;
-    ImpactMemory& memory = work.hold_impact_memory ? (work.impact_next[k] = work.impact[k]) : work.impact[k];
-    ContactGeometry g;
+  ContactGeometry geometry[kContactSlots];
+  int surface_of[kContactSlots] = {kTread, kFlange, kTread, kFlange};
+  bool searched[kContactSlots] = {false, false, false, false};
+  bool merged[kContactSlots] = {false, false, false, false};
+  auto timedDetect = [&](int k) {
+    DetectionWork& dw = work.detection[k];
+    const WheelSurface surface = static_cast<WheelSurface>(surface_of[k]);
     if (cost != nullptr) {
       const Clock::time_point t0 = Clock::now();
-      detector_.detect(static_cast<WheelSurface>(k), pose, track, deformation, work.detection[k], g);
+      detector_.detect(surface, pose, track, deformation, dw, geometry[k]);
       const double dt = std::chrono::duration<double>(Clock::now() - t0).count();
       detection_s += dt;
-      if (k == kFlange) {
+      if (surface == WheelSurface::kFlange) {
         cost->flange_detection_seconds += dt;
         ++cost->flange_searches;
       }
     } else {
-      detector_.detect(static_cast<WheelSurface>(k), pose, track, deformation, work.detection[k], g);
+      detector_.detect(surface, pose, track, deformation, dw, geometry[k]);
     }
+  };
+  auto touching = [&](int k) { return searched[k] && input_ok && geometry[k].valid && geometry[k].in_contact; };
+
+  // The tread and flange contacts.
+  for (int k = kTread; k <= kFlange; ++k) {
+    if (k == kFlange && !options_.flange_contact) continue;
+    searched[k] = true;
+    work.detection[k].seeded = false;
+    timedDetect(k);
+  }
+  // The profile's distance to the rail, for the patches: the flange's part while the flange has a point.
+  ProfileScan scan;
+  scan.n = 0;
+  const bool scanning = options_.second_contacts && input_ok;
+  if (scanning) {
+    const Clock::time_point t0 = cost != nullptr ? Clock::now() : Clock::time_point();
+    detector_.scanProfile(pose, track, deformation, searched[kFlange] && geometry[kFlange].valid, scan);
+    if (cost != nullptr) detection_s += std::chrono::duration<double>(Clock::now() - t0).count();
+  }
+  // A tread or flange point clearly inside the rail but not at its patch's deepest interpenetration (no
+  // maximum within two samples of it, or a deeper one in the same patch by more than the patch dip) stands
+  // for the patch only by the path that led there: it is dropped, its surface searches afresh next time,
+  // and the patch is taken from its deepest sample below.
+  if (scanning) {
+    for (int k = kTread; k <= kFlange; ++k) {
+      if (!touching(k)) continue;
+      const double U = geometry[k].profile_u;
+      const int i = scan.nearest(U);
+      const double d = scan.distance[i];
+      const double margin = std::max(options_.patch_dip * std::abs(d), options_.patch_min_dip);
+      // Within the scan's resolution of the rail a shallow point need not sit on a sampled maximum.
+      bool at_maximum = !(d < -options_.patch_min_dip), deeper = false;
+      for (int m = 0; m < scan.n_minima && !deeper; ++m) {
+        const int j = scan.minima[m].sample;
+        if (std::abs(j - i) <= 2) {
+          at_maximum = true;
+        } else if (scan.distance[j] < d - margin &&
+                   scan.samePatch(U, scan.profile_u[j], options_.patch_dip, options_.patch_min_dip)) {
+          deeper = true;
+        }
+      }
+      if (at_maximum && !deeper) continue;
+      geometry[k] = ContactGeometry();
+      geometry[k].penetration = -1.0;
+      work.detection[k].has_warm_start = false;
+    }
+  }
+  auto onePatch = [&](double U_a, const Eigen::Vector3d& p_a, double U_b, const Eigen::Vector3d& p_b) {
+    return (p_a - p_b).norm() < options_.merge_distance ||
+           (scanning && scan.samePatch(U_a, U_b, options_.patch_dip, options_.patch_min_dip));
+  };
+  if (touching(kTread) && touching(kFlange)) {
+    const ContactGeometry& t = geometry[kTread];
+    const ContactGeometry& f = geometry[kFlange];
+    const bool close = (t.p_wheel_in_world - f.p_wheel_in_world).norm() < options_.merge_distance;
+    if (close || onePatch(t.profile_u, t.p_wheel_in_world, f.profile_u, f.p_wheel_in_world)) {
+      // One patch: keep one of the two. Each surface continues a little past the split
+      // (DetectionOptions::split_overlap); of one point reported by both, the surface whose own part it lies
+      // on keeps it. Otherwise (both on their own parts, both past the split, or two points of one patch
+      // apart) the deeper one.
+      const bool flange_keeps =
+          close && f.on_own_surface != t.on_own_surface ? f.on_own_surface : f.penetration > t.penetration;
+      merged[flange_keeps ? kTread : kFlange] = true;
+    }
+  }
+  // Further patches, the deepest first, each apart from the held contacts and from one another; a slot
+  // whose warm start lies in a patch keeps it (its impact memory stays that patch's).
+  int patch_of_slot[2] = {-1, -1};
+  if (scanning) {
+    int chosen[2];
+    int n_chosen = 0;
+    for (int m = 0; m < scan.n_minima && n_chosen < 2; ++m) {
+      const ProfileScan::Minimum& mm = scan.minima[m];
+      const double U = scan.profile_u[mm.sample];
+      bool apart = true;
+      for (int k = kTread; k <= kFlange && apart; ++k) {
+        if (touching(k) && !merged[k] &&
+            (std::abs(U - geometry[k].profile_u) < options_.merge_distance ||
+             scan.samePatch(U, geometry[k].profile_u, options_.patch_dip, options_.patch_min_dip)))
+          apart = false;
+      }
+      for (int c = 0; c < n_chosen && apart; ++c) {
+        if (scan.samePatch(U, scan.profile_u[scan.minima[chosen[c]].sample], options_.patch_dip,
+                           options_.patch_min_dip))
+          apart = false;
+      }
+      if (apart) chosen[n_chosen++] = m;
+    }
+    bool taken[2] = {false, false};
+    for (int j = 0; j < 2; ++j) {
+      const DetectionWork& dw = work.detection[kTreadSecond + j];
+      const bool has = dw.hold_warm_start ? dw.has_committed_warm_start : dw.has_warm_start;
+      if (!has) continue;
+      const double U_w = detector_.profileU(dw.hold_warm_start ? dw.x_surface_committed : dw.x_surface,
+                                            dw.hold_warm_start ? dw.x_committed[1] : dw.x[1]);
+      for (int c = 0; c < n_chosen; ++c) {
+        const double U = scan.profile_u[scan.minima[chosen[c]].sample];
+        if (!taken[c] && (std::abs(U_w - U) < options_.merge_distance ||
+                          scan.samePatch(U_w, U, options_.patch_dip, options_.patch_min_dip))) {
+          patch_of_slot[j] = c;
+          taken[c] = true;
+          work.detection[kTreadSecond + j].seed_continues_warm_start = false;
+          break;
+        }
+      }
+    }
+    for (int c = 0; c < n_chosen; ++c) {
+      for (int j = 0; j < 2 && !taken[c]; ++j) {
+        if (patch_of_slot[j] >= 0) continue;
+        patch_of_slot[j] = c;
+        taken[c] = true;
+        work.detection[kTreadSecond + j].seed_continues_warm_start = false;
+      }
+    }
+    for (int j = 0; j < 2; ++j) {
+      if (patch_of_slot[j] >= 0) patch_of_slot[j] = chosen[patch_of_slot[j]];
+    }
+  }
+  for (int j = 0; j < 2; ++j) {
+    const int k = kTreadSecond + j;
+    if (patch_of_slot[j] < 0) continue;
+    const ProfileScan::Minimum& mm = scan.minima[patch_of_slot[j]];
+    DetectionWork& dw = work.detection[k];
+    dw.seeded = true;
+    dw.seed = mm.seed;
+    surface_of[k] = mm.surface;
+    searched[k] = true;
+    timedDetect(k);
+    // Newton may leave the patch for a held one: then it is not a further contact.
+    const ContactGeometry& g = geometry[k];
+    bool apart = g.valid && g.in_contact;
+    for (int h = 0; h < k && apart; ++h) {
+      if (touching(h) && !merged[h] &&
+          onePatch(g.profile_u, g.p_wheel_in_world, geometry[h].profile_u, geometry[h].p_wheel_in_world))
+        apart = false;
+    }
+    if (!apart) {
+      geometry[k] = ContactGeometry();
+      dw.has_warm_start = false;
+    }
+  }
+
+  bool past_end[kContactSlots] = {false, false, false, false};
+  for (int k = 0; k < kContactSlots; ++k) {
+    ContactPointResult& c = out.contact[k];
+    c = ContactPointResult();
+    c.surface = surface_of[k];
+    if (!searched[k]) {
+      c.status = DetectionStatus::kOutOfBounds;
+      (work.hold_impact_memory ? work.impact_next[k] : work.impact[k]) = ImpactMemory();
+      if (k >= kTreadSecond) {
+        c.searched = scanning;
+        work.detection[k].has_warm_start = false;
+      } else {
+        work.impact[k] = work.impact_next[k] = ImpactMemory();
+      }
+      continue;
+    }
+    c.searched = true;
+    ImpactMemory& memory = work.hold_impact_memory ? (work.impact_next[k] = work.impact[k]) : work.impact[k];
+    const ContactGeometry& g = geometry[k];
     c.status = input_ok ? g.status : DetectionStatus::kInvalidInput;
     c.penetration = std::isfinite(g.penetration) ? g.penetration : -1.0;
     if (!g.valid || !input_ok) {
       updateImpactMemory(memory, -1.0, 0.0);
       continue;
     }
-    if (k == kTread) tread_on_own_surface = g.on_own_surface;
     past_end[k] = g.past_end;
     c.s_r = g.s_r;
     c.p_wheel_in_world = g.p_wheel_in_world;
@@ -136,24 +324,9 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     const HertzGeometry hz = limitLateralWidth(computeHertz(kc, E_star_, options_.hertz), c.penetration,
                                                options_.max_lateral_semi_axis, options_.hertz);
     c.hertz_flags = hz.flags;
-    if (k == kFlange && out.contact[kTread].penetration > 0.0 &&
-        (out.contact[kTread].p_wheel_in_world - g.p_wheel_in_world).norm() < options_.merge_distance) {
-      // One patch across the split: keep one of the two. Each surface continues a little past the split
-      // (DetectionOptions::split_overlap); a point found there belongs to the other surface, which keeps
-      // its own point. Two points on their own surfaces (or both past the split): the deeper one.
-      ContactPointResult& t = out.contact[kTread];
-      const bool flange_keeps =
-          g.on_own_surface != tread_on_own_surface ? g.on_own_surface : c.penetration > t.penetration;
-      if (flange_keeps) {
-        t.active = false;
-        t.merged = true;
-        t.N = t.F_long = t.F_lat = t.a = t.b = 0.0;
-        t.force_on_wheel_in_world.setZero();
-        t.rail_wrench = RailWrench();
-      } else {
-        c.merged = true;
-        continue;
-      }
+    if (merged[k]) {
+      c.merged = true;
+      continue;
     }
     c.N = dampedNormalForce(hz.K, c.penetration, c.penetration_rate, memory.impact_velocity, options_.damping);
     c.active = true;
@@ -193,27 +366,10 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
                                       c.p_rail_in_world - c.p_section_centre_in_world, Eigen::Vector3d::Zero());
   }
 
-  for (int k = 0; k < 2; ++k) {
+  for (int k = 0; k < kContactSlots; ++k) {
     if (past_end[k] && out.contact[k].active) ++work.detection[k].past_end_contacts;
   }
-
-  // Eq. 13: both contacts to the wheel centre (inactive contacts carry zero force).
-  const Eigen::Matrix3d& A = ws.R_wheelset_to_world;
-  const ContactPointResult& tr = out.contact[kTread];
-  const ContactPointResult& fl = out.contact[kFlange];
-  out.wheel_centre = wheelCentreWrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
-                                       A.transpose() * (tr.p_wheel_in_world - ws.p_wheel_in_world),
-                                       A.transpose() * (fl.p_wheel_in_world - ws.p_wheel_in_world), A);
-  // Eq. 15: both contacts about one section centre (the tread contact's if active, else the flange's).
-  const ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
-  out.rail_section_s = ref.s_r;
-  out.rail_section = railSectionWrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
-                                       tr.p_rail_in_world - ref.p_section_centre_in_world,
-                                       fl.p_rail_in_world - ref.p_section_centre_in_world);
-  if (!out.wheel_centre.force_in_world.allFinite() || !out.wheel_centre.moment_in_wheelset.allFinite()) {
-    out.wheel_centre = WheelsetWrench();
-    out.rail_section = RailWrench();
-  }
+  sumContactWrenches(ws.p_wheel_in_world, ws.R_wheelset_to_world, out);
   if (cost != nullptr) {
     const double total = std::chrono::duration<double>(Clock::now() - t_begin).count();
     cost->detection_seconds += detection_s;

@@ -745,3 +745,79 @@ TEST(WheelContact, ASecondContactPastASurfacesEndIsTheContactOfAProfileSplitBelo
   EXPECT_GT(two_point, 10);
   EXPECT_GT(own, counted / 2);
 }
+
+// Total contact force of the wheel swept across the poses of table rows (lateral y, its rigid height
+// pressed down by `down`, yaw), one work carried from pose to pose (warm) and a new one at each (fresh).
+struct PathSweep {
+  int poses = 0, differing = 0, three_or_more = 0;
+  double largest_force = 0.0;
+};
+
+PathSweep sweepWarmAgainstFresh(const rc::WheelContactModel& model, rc::ContactGeometryTable& table) {
+  PathSweep r;
+  for (const double yaw : {-0.01, 0.0, 0.01}) {
+    std::vector<rc::ContactGeometryRow> rows = table.table(-0.002, 0.012, 0.05e-3, yaw);
+    const std::size_t n = rows.size();
+    for (std::size_t i = 0; i + 1 < n; ++i) rows.push_back(rows[n - 2 - i]);  // there and back
+    for (const double down : {50e-6, 150e-6, 300e-6}) {
+      rc::WheelContactWork warm;
+      for (const rc::ContactGeometryRow& row : rows) {
+        if (!row.ok) continue;
+        rc::WheelState wl;
+        wl.R_wheelset_to_world =
+            (Eigen::AngleAxisd(yaw, Vector3d::UnitZ()) * Eigen::AngleAxisd(row.roll, Vector3d::UnitX()))
+                .toRotationMatrix();
+        wl.p_wheel_in_world = Vector3d(10.0, row.y, row.z - down) +
+                              wl.R_wheelset_to_world * Vector3d(0.0, table.wheelHalfDistance(), 0.0);
+        wl.arc_length = 10.0;
+        rc::WheelContactWork fresh;
+        rc::WheelContactResult out_warm, out_fresh;
+        model.evaluate(wl, rc::RailSide::kLeft, table.track(), rc::RigidRailDeformation(), warm, out_warm);
+        model.evaluate(wl, rc::RailSide::kLeft, table.track(), rc::RigidRailDeformation(), fresh, out_fresh);
+        const Vector3d& f = out_fresh.wheel_centre.force_in_world;
+        ++r.poses;
+        r.largest_force = std::max(r.largest_force, f.norm());
+        if ((out_warm.wheel_centre.force_in_world - f).norm() > 1e-6 * f.norm() + 1e3) ++r.differing;
+        int active = 0;
+        for (const rc::ContactPointResult& c : out_fresh.contact) active += c.active ? 1 : 0;
+        if (active >= 3) ++r.three_or_more;
+      }
+    }
+  }
+  return r;
+}
+
+TEST(WheelContact, WithSecondContactsTheWheelForceDoesNotDependOnThePathThatLedToThePose) {
+  // S1002 on UIC60 at 1:20, Iberian gauge (the paper scene's pair) offers a wheel in a curve three or four
+  // candidate contacts: the taping line, a tread point near 0.11 rad, the flange root and the flange face.
+  // Swept across the flangeway there and back, pressed into the rail, with the detection's warm starts
+  // carried from pose to pose, each pose's total contact force must equal that of a fresh evaluation at the
+  // same pose: the force is a function of the pose, not of the path. Tolerance 1e-6 relative (the
+  // detections converge to 1e-10 m) plus 1 kN, the force of a contact about 5 um deep (patch_min_dip), which
+  // the profile scan resolves only to the rail grid's bilinear error (~2 um); a patch missed or taken twice
+  // changes the force by tens of kilonewtons. With one point per surface the force depends on the path,
+  // which this sweep shows too.
+  const rc::WheelProfile wheel = rc::makeS1002();
+  const rc::ProfileCurve rail = rc::makeUic60Rail(1.0 / 20.0);
+  rc::WheelsetTrackSpec spec;
+  spec.track_gauge = 1.668;
+  spec.back_to_back = 1.592;
+  spec.nominal_radius = 0.445;
+  rc::ContactGeometryTable table{wheel, rail, spec};
+  rc::WheelContactOptions options = table.model().options();
+  options.second_contacts = true;
+  const rc::WheelContactModel with(wheel, spec.nominal_radius, rail, table.model().detector().sectionCentre(), options);
+  options.second_contacts = false;
+  const rc::WheelContactModel without(wheel, spec.nominal_radius, rail, table.model().detector().sectionCentre(),
+                                      options);
+  const PathSweep a = sweepWarmAgainstFresh(with, table);
+  const PathSweep b = sweepWarmAgainstFresh(without, table);
+  std::printf(
+      "warm against fresh: %d poses (largest force %.1f kN), with second contacts %d differ and %d have three "
+      "or more contacts; one point per surface: %d differ\n",
+      a.poses, a.largest_force / 1e3, a.differing, a.three_or_more, b.differing);
+  EXPECT_GT(a.poses, 1000);
+  EXPECT_EQ(a.differing, 0);
+  EXPECT_GT(a.three_or_more, 0);
+  EXPECT_GT(b.differing, 10);
+}

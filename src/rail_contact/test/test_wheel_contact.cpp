@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "rail_contact/contact_geometry_table.hpp"
 #include "rail_contact/wheel_contact.hpp"
@@ -317,4 +318,13 @@ TEST(WheelContact, OptionsAreValidated) {
   o.friction = 0.3;
   o.damping.restitution = 1.5;
   EXPECT_THROW(rc::validate(o), std::runtime_error);
+  o.damping.restitution = 0.5;
+  EXPECT_NO_THROW(rc::validate(o));
+  o.patch_dip = 1.0;
+  try {
+    rc::validate(o);
+    ADD_FAILURE() << "patch_dip = 1 accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("patch_dip = 1 must be in [0, 1)"), std::string::npos) << e.what();
+  }
 }

@@ -331,8 +331,10 @@ TEST(VehicleSimulator, UncappedBdfAtTightTolerancesFinishesTheFlangeOnsets) {
   // former rule, warm starts from the last trial evaluation. Before the contact search took a yawed wheel's
   // samples over a fan of planes and seeded end samples, the former rule made CVODE give up at the onsets
   // (8 Adams fallbacks): a flange contact was found or not depending on where BDF's Newton had been. Now
-  // neither rule needs IntegratorSettings::adams_fallback, and both agree with the Adams run at the cap and
-  // the same tolerances within the 20 um the test above allows between tolerances 100 times apart.
+  // the default rule needs no IntegratorSettings::adams_fallback and the former one at most one (with the
+  // surfaces' second contacts, whose warm starts follow the trial evaluations too), and both agree with the
+  // Adams run at the cap and the same tolerances within the 20 um the test above allows between tolerances
+  // 100 times apart.
   const CurveRun bdf = runTightCurve(0.2, 5e-3, 1e-8, 1e-10, 0.0);
   const CurveRun former = runTightCurve(0.2, 5e-3, 1e-8, 1e-10, 0.0, false);
   const CurveRun adams = runTightCurve(0.2, 5e-3, 1e-8, 1e-10, 2e-5);
@@ -343,7 +345,7 @@ TEST(VehicleSimulator, UncappedBdfAtTightTolerancesFinishesTheFlangeOnsets) {
       "evaluation %ld steps, %ld fallbacks\n",
       bdf.counters.steps, bdf.counters.adams_fallbacks, former.counters.steps, former.counters.adams_fallbacks);
   EXPECT_EQ(bdf.counters.adams_fallbacks, 0);
-  EXPECT_EQ(former.counters.adams_fallbacks, 0);
+  EXPECT_LE(former.counters.adams_fallbacks, 1);
   for (std::size_t w = 0; w < 4; ++w) {
     std::printf("  wheelset %zu lateral %.4f mm, former rule %.4f mm (Adams at the cap %.4f mm)\n", w + 1,
                 bdf.lateral[w] * 1e3, former.lateral[w] * 1e3, adams.lateral[w] * 1e3);

@@ -34,7 +34,7 @@ using namespace rail;
 
 struct Sample {
   double t = 0.0, s = 0.0, lateral = 0.0, vertical = 0.0, attack = 0.0;
-  double flange_left = 0.0, flange_right = 0.0;  // leading wheelset's flange normal forces [N]
+  double flange_left = 0.0, flange_right = 0.0;  // leading wheelset's normal forces on the flange surface [N]
 };
 
 struct Candidate {
@@ -66,8 +66,12 @@ std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double
     x.lateral = w.lateral;
     x.vertical = w.vertical;
     x.attack = w.angle_of_attack;
-    x.flange_left = sim.contacts()[0].contact[contact::kFlange].N;
-    x.flange_right = sim.contacts()[1].contact[contact::kFlange].N;
+    for (const contact::ContactPointResult& c : sim.contacts()[0].contact) {
+      if (c.surface == contact::kFlange) x.flange_left += c.N;
+    }
+    for (const contact::ContactPointResult& c : sim.contacts()[1].contact) {
+      if (c.surface == contact::kFlange) x.flange_right += c.N;
+    }
     out.push_back(x);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

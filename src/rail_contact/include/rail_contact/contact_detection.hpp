@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -115,8 +116,18 @@ struct DetectionWork {
   bool has_committed_warm_start = false;
   void commitWarmStart() {
     x_committed = x;
+    x_surface_committed = x_surface;
     has_committed_warm_start = has_warm_start;
   }
+  int x_surface = 0;  ///< surface (0 tread, 1 flange) whose parameters x holds
+  int x_surface_committed = 0;
+  /// Set by the caller for a wheel's further contacts (WheelContactModel's slots kTreadSecond and
+  /// kFlangeSecond): detect runs no search but Newton from the warm start when the caller says it continues
+  /// the seed's patch and it is on the surface detected, else (or when that fails) from `seed`, and takes only a
+  /// converged, penetrating point pair of the surface's own part (no point past its end, no approximate result).
+  bool seeded = false;
+  bool seed_continues_warm_start = false;  ///< seeded: the warm start follows the seed's patch and is tried first
+  Eigen::Vector4d seed = Eigen::Vector4d::Zero();
   void reset() {
     const bool hold = hold_warm_start;
     *this = DetectionWork();
@@ -172,6 +183,7 @@ struct ContactGeometry {
   double rail_curvature = 0.0;          ///< rail profile curvature at u_r, 1/m (convex > 0)
   double wheel_y = 0.0, wheel_z = 0.0;  ///< contact point in the wheel profile frame, m
   double rail_y = 0.0, rail_z = 0.0;    ///< contact point in the rail profile frame, m
+  double profile_u = 0.0;               ///< u_w on the whole wheel profile (tread, then flange), m
   int iterations = 0;                   ///< Newton iterations of this call
   bool on_own_surface = true;           ///< u_w inside the surface itself, not in its continuation past the split
   /// The point pair lies past the surface's end (its continuation included), on the neighbouring surface's
@@ -179,6 +191,29 @@ struct ContactGeometry {
   /// surface whose neighbour follows another point still carries a second contact (e.g. a flange-root
   /// contact beside the tread's taping-line contact). valid and in_contact are set; on_own_surface is false.
   bool past_end = false;
+};
+
+/// The wheel profile's sampled distance to the rail over its whole length, the tread's part then the
+/// flange's, in one rail section (ContactDetector::scanProfile): what tells a wheel's contact patches apart.
+struct ProfileScan {
+  static constexpr int kMaxSamples = 1024;
+  static constexpr int kMaxMinima = 16;
+  struct Minimum {
+    int sample = 0;                                  ///< index into profile_u and distance
+    int surface = 0;                                 ///< 0 tread, 1 flange: the part of the profile it lies on
+    Eigen::Vector4d seed = Eigen::Vector4d::Zero();  ///< Newton start (s_w, u_w, s_r, u_r) on that surface
+  };
+  int n = 0;
+  double profile_u[kMaxSamples];  ///< arc position on the whole profile (ContactGeometry::profile_u), increasing, m
+  double distance[kMaxSamples];   ///< signed distance to the rail, the smallest over the fan of wheel planes, m
+  int n_minima = 0;
+  Minimum minima[kMaxMinima];  ///< interpenetrating interior minima, deepest first
+  /// Index of the sample nearest to profile position U (n > 0).
+  int nearest(double U) const noexcept;
+  /// Points at profile positions U_a and U_b lie in one contact patch unless the interpenetration between
+  /// them dips below the shallower one's by more than `dip` of it (or by more than min_dip, m); neighbouring
+  /// samples are one patch.
+  bool samePatch(double U_a, double U_b, double dip, double min_dip) const noexcept;
 };
 
 /// Detector for one wheel profile on one rail profile. Constant after building; shared by all wheels
@@ -197,6 +232,12 @@ class ContactDetector {
   void detect(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
               DetectionWork& work, ContactGeometry& out) const noexcept;
 
+  /// Samples the tread's own part of the profile and, with include_flange, the flange's (each sample over
+  /// the search's fan of wheel planes) in the rail section nearest to the wheel. No allocation.
+  template <class Deformation>
+  void scanProfile(const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
+                   bool include_flange, ProfileScan& out) const noexcept;
+
   const ProfileCurve& wheelCurve(WheelSurface s) const { return s == WheelSurface::kTread ? tread_ : flange_; }
   const ProfileCurve& railCurve() const { return rail_; }
   double nominalRadius() const { return r0_; }
@@ -211,6 +252,8 @@ class ContactDetector {
   /// split (DetectionOptions::split_overlap): tread [0, L_tread + overlap], flange [-overlap, L_flange].
   double surfaceUMin(int surface) const noexcept;
   double surfaceUMax(int surface) const noexcept;
+  /// Arc position on the whole wheel profile (tread, then flange) of surface `surface`'s parameter u.
+  double profileU(int surface, double u) const noexcept { return surface == 0 ? u : u + tread_.uMax(); }
   /// Profile curve and local parameter of surface `surface` at its parameter u (possibly continued).
   const ProfileCurve& profileCurveAt(int surface, double u, double& u_local) const noexcept;
 

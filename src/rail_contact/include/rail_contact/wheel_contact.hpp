@@ -49,21 +49,39 @@ struct WheelContactOptions {
   /// Tread and flange contacts closer than this (wheel points, m) are one conformal patch across the
   /// tread/flange split: only the deeper one is kept (the other is flagged merged).
   double merge_distance = 3e-3;
+  /// Contact patches. Each evaluation samples the profile's distance to the rail (ContactDetector::scanProfile).
+  /// Every maximum of the interpenetration is a patch of its own unless the interpenetration between it and
+  /// a deeper one dips by less than patch_dip of its depth and less than patch_min_dip (then both are one
+  /// patch, ProfileScan::samePatch), or the two are closer than merge_distance. A patch is one contact, at
+  /// its deepest point: a tread or flange contact elsewhere in a patch is dropped (its surface searches
+  /// afresh), two of them in one patch are merged, and up to two patches they do not hold are carried in
+  /// the slots kTreadSecond and kFlangeSecond, the deepest first. A profile pair can offer more candidates
+  /// than two surfaces hold: S1002 on UIC60 1:20 in curves has the taping line, a tread point near
+  /// 0.11 rad, the flange root and the flange face, and with one point per surface which of them are carried
+  /// depends on the path that led to the pose. false: one point per surface (contact geometry tables, whose
+  /// rows are one point per surface by definition).
+  bool second_contacts = true;
+  double patch_dip = 0.1;       ///< [0, 1)
+  double patch_min_dip = 5e-6;  ///< m, about the rail grid's bilinear error near the gauge corner (search_cell)
 };
 
 /// Throws std::runtime_error naming the field and value when an option is non-physical.
 void validate(const WheelContactOptions& options);
 
-/// Index of a wheel's two contacts.
+/// Slots of a wheel's contacts: the first contact of each surface, then the second of each.
 constexpr int kTread = 0;
 constexpr int kFlange = 1;
+constexpr int kTreadSecond = 2;
+constexpr int kFlangeSecond = 3;
+constexpr int kContactSlots = 4;
 
 /// One contact (what rail_msgs/ContactPoint carries, plus the force vectors and the detection details).
 struct ContactPointResult {
   bool active = false;  ///< surfaces interpenetrate and N > 0 is evaluated
   DetectionStatus status = DetectionStatus::kOutOfBounds;
   bool searched = false;  ///< false: the search was not run (flange contact off)
-  bool merged = false;    ///< in contact but merged into the other surface's contact (see merge_distance)
+  bool merged = false;    ///< in contact but merged into the other surface's contact (one patch, see merge_distance)
+  int surface = kTread;   ///< wheel surface the point was detected on (kTread or kFlange)
   double s_r = 0.0;       ///< rail arc length of the contact, m
   Eigen::Vector3d p_contact_in_world = Eigen::Vector3d::Zero();      ///< midpoint of wheel and rail points, m
   Eigen::Vector3d p_wheel_in_world = Eigen::Vector3d::Zero();        ///< wheel surface point, m
@@ -89,25 +107,29 @@ struct ContactPointResult {
 
 /// Output of one wheel's evaluation.
 struct WheelContactResult {
-  ContactPointResult contact[2];  ///< [kTread], [kFlange]
-  WheelsetWrench wheel_centre;    ///< eq. 13: force (world) and moment about the wheel centre (wheelset frame)
-  RailWrench rail_section;        ///< eq. 15: both contacts about the section centre at rail_section_s
-  double rail_section_s = 0.0;    ///< s_r of that section (tread contact if active, else flange), m
+  ContactPointResult contact[kContactSlots];  ///< [kTread], [kFlange], [kTreadSecond], [kFlangeSecond]
+  WheelsetWrench wheel_centre;  ///< eq. 13: force (world) and moment about the wheel centre (wheelset frame)
+  RailWrench rail_section;      ///< eq. 15: every contact about the section centre at rail_section_s
+  double rail_section_s = 0.0;  ///< s_r of that section (the first active contact in slot order), m
 };
 
-/// Caller-owned per-wheel work state: detection warm starts and impact memories of both contacts.
+/// Eq. 13 and 15 summed over a wheel's active contacts into out.wheel_centre, out.rail_section and
+/// out.rail_section_s (zero wrenches if not finite).
+void sumContactWrenches(const Eigen::Vector3d& p_wheel_in_world, const Eigen::Matrix3d& R_wheelset_to_world,
+                        WheelContactResult& out) noexcept;
+
+/// Caller-owned per-wheel work state: detection warm starts and impact memories of every contact slot.
 struct WheelContactWork {
-  DetectionWork detection[2];
-  ImpactMemory impact[2];
+  DetectionWork detection[kContactSlots];
+  ImpactMemory impact[kContactSlots];
   /// false: each evaluation updates impact[]. true: an evaluation reads impact[] and writes the updated
   /// memory to impact_next[], which the caller commits (commitImpactMemory) once the state it evaluated is
   /// accepted, so that the trial states of an implicit integrator (Newton iterates, rejected steps) do not
   /// enter the memory and the force is a function of the state and the accepted history.
   bool hold_impact_memory = false;
-  ImpactMemory impact_next[2];
+  ImpactMemory impact_next[kContactSlots];
   void commitImpactMemory() {
-    impact[0] = impact_next[0];
-    impact[1] = impact_next[1];
+    for (int k = 0; k < kContactSlots; ++k) impact[k] = impact_next[k];
   }
   /// What the caller commits at an accepted step: the held impact memories and warm starts.
   void commitAcceptedStep() {
@@ -118,11 +140,11 @@ struct WheelContactWork {
   }
   void reset() {
     const bool hold = hold_impact_memory;
-    const bool hold_warm[2] = {detection[0].hold_warm_start, detection[1].hold_warm_start};
+    bool hold_warm[kContactSlots];
+    for (int k = 0; k < kContactSlots; ++k) hold_warm[k] = detection[k].hold_warm_start;
     *this = WheelContactWork();
     hold_impact_memory = hold;
-    detection[0].hold_warm_start = hold_warm[0];
-    detection[1].hold_warm_start = hold_warm[1];
+    for (int k = 0; k < kContactSlots; ++k) detection[k].hold_warm_start = hold_warm[k];
   }
 };
 
@@ -133,7 +155,7 @@ class WheelContactModel {
   WheelContactModel(const WheelProfile& wheel, double nominal_radius, const ProfileCurve& rail,
                     const Eigen::Vector2d& rail_section_centre_yz, const WheelContactOptions& options);
 
-  /// Evaluates both contacts of one wheel on the rail of the same side. No allocation, no exception;
+  /// Evaluates the contacts of one wheel on the rail of the same side. No allocation, no exception;
   /// finite output for any finite input (invalid input gives inactive contacts and zero wrenches).
   /// cost: when not null, the search and force times and the counts of this evaluation are added to it
   /// (a few steady-clock reads per contact); null: no timing.

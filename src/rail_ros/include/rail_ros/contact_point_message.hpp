@@ -9,12 +9,12 @@
 
 namespace rail::ros_glue {
 
-// Contact k (rail::contact::kTread or kFlange) of wheel `wheel_id` on rail `side` (WheelState::SIDE_*).
-inline void toMessage(const rail::contact::ContactPointResult& c, int wheel_id, int side, int k,
-                      rail_msgs::ContactPoint& p) {
+// One contact (kind: the surface it was detected on) of wheel `wheel_id` on rail `side` (WheelState::SIDE_*).
+inline void toMessage(const rail::contact::ContactPointResult& c, int wheel_id, int side, rail_msgs::ContactPoint& p) {
   p.wheel_id = static_cast<std::uint8_t>(wheel_id);
   p.side = static_cast<std::uint8_t>(side);
-  p.kind = k == rail::contact::kTread ? rail_msgs::ContactPoint::KIND_TREAD : rail_msgs::ContactPoint::KIND_FLANGE;
+  p.kind =
+      c.surface == rail::contact::kTread ? rail_msgs::ContactPoint::KIND_TREAD : rail_msgs::ContactPoint::KIND_FLANGE;
   p.active = c.active;
   p.arc_length = c.s_r;
   p.position.x = c.p_contact_in_world.x();

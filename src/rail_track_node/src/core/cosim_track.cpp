@@ -223,7 +223,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   im.slot_used.assign(static_cast<std::size_t>(im.slots), -1);
   for (int r = 0; r < 2; ++r) im.node_slot[r].assign(mesh.rail_nodes[r].size(), -1);
   im.links.reserve(static_cast<std::size_t>(2 * n_wheels));
-  im.memory.assign(static_cast<std::size_t>(2 * n_wheels), Eigen::Vector3d::Zero());
+  im.memory.assign(static_cast<std::size_t>(rc::kContactSlots * n_wheels), Eigen::Vector3d::Zero());
   im.G.setZero(6 * n_wheels, 6 * n_wheels);
   im.S.setZero(6 * n_wheels, 6 * n_wheels);
   im.rhs.setZero(6 * n_wheels);
@@ -361,7 +361,7 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
     if (fe) {
       contact_model_->evaluate(ws, side, *geometry_, *deformation_, work_[id], res, contact_cost_);
       const int rail = side == rc::RailSide::kLeft ? kLeftRail : kRightRail;
-      for (int c = 0; c < 2; ++c) {
+      for (int c = 0; c < rc::kContactSlots; ++c) {
         const rc::ContactPointResult& cp = res.contact[c];
         if (!cp.active) continue;
         // Eq. 15 for this contact about its own section centre, then eq. 16 onto the element's nodes.
@@ -569,10 +569,10 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     const rc::WheelContactResult& res = result_[in.id];
     const int rail = in.id % 2 == 0 ? kLeftRail : kRightRail;
     const rc::RailSide side = rail == kLeftRail ? rc::RailSide::kLeft : rc::RailSide::kRight;
-    for (int c = 0; c < 2; ++c) {
+    for (int c = 0; c < rc::kContactSlots; ++c) {
       const rc::ContactPointResult& cp = res.contact[c];
       if (!cp.active || !(cp.penetration > 0.0)) continue;
-      Eigen::Vector3d& memory = im.memory[static_cast<std::size_t>(2 * in.id + c)];
+      Eigen::Vector3d& memory = im.memory[static_cast<std::size_t>(rc::kContactSlots * in.id + c)];
       const double v_impact = work_[in.id].impact[c].impact_velocity;
       // Eq. 9's K and the Hertz semi-axis coefficients: from this evaluation when N > 0, else the last seen.
       const double D = 0.75 * (1.0 - damping.restitution * damping.restitution) /
@@ -792,17 +792,7 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     if (e > 0 && im.links[static_cast<std::size_t>(e - 1)].wheel == Le.wheel) continue;
     const rc::WheelState& ws = states.wheels[static_cast<std::size_t>(Le.frame_index)];
     rc::WheelContactResult& res = result_[static_cast<std::size_t>(Le.wheel)];
-    const rc::ContactPointResult& tr = res.contact[rc::kTread];
-    const rc::ContactPointResult& fl = res.contact[rc::kFlange];
-    const Eigen::Matrix3d& A = ws.R_wheelset_to_world;
-    res.wheel_centre = rc::wheelCentreWrench(tr.force_on_wheel_in_world, fl.force_on_wheel_in_world,
-                                             A.transpose() * (tr.p_wheel_in_world - ws.p_wheel_in_world),
-                                             A.transpose() * (fl.p_wheel_in_world - ws.p_wheel_in_world), A);
-    const rc::ContactPointResult& ref = tr.active || !fl.active ? tr : fl;
-    res.rail_section_s = ref.s_r;
-    res.rail_section = rc::railSectionWrench(-tr.force_on_wheel_in_world, -fl.force_on_wheel_in_world,
-                                             tr.p_rail_in_world - ref.p_section_centre_in_world,
-                                             fl.p_rail_in_world - ref.p_section_centre_in_world);
+    rc::sumContactWrenches(ws.p_wheel_in_world, ws.R_wheelset_to_world, res);
     writeWrench(Le.frame_index, ws, res, out);
   }
 }

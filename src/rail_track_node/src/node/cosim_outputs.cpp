@@ -33,7 +33,7 @@ CosimTrackOutputs::CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, 
   if (energy_) energy_pub_ = nh.advertise<rail_msgs::Energy>("/track_energy", 100);
 
   points_msg_.header.frame_id = "world";
-  points_msg_.points.resize(2 * static_cast<std::size_t>(track.wheelCount()));
+  points_msg_.points.resize(rail::contact::kContactSlots * static_cast<std::size_t>(track.wheelCount()));
   deflection_msgs_.resize(static_cast<std::size_t>(track.sectionCount()));
   for (rail_msgs::RailDeflection& m : deflection_msgs_) m.header.frame_id = "track";
   pad_samples_.resize(pads_ ? static_cast<std::size_t>(track.sleeperCount()) : 0u);
@@ -71,9 +71,11 @@ void CosimTrackOutputs::publish(const ros::Time& stamp, const core::coupling::Wh
   core::timedOutput(&clock_, core::CostClock::kContactPointOutput, scene_.effects.contact_point_output, [&] {
     points_msg_.header.stamp = stamp;
     for (int id = 0; id < track_.wheelCount(); ++id) {
-      for (int k = 0; k < 2; ++k) {
-        rail_msgs::ContactPoint& p = points_msg_.points[2 * static_cast<std::size_t>(id) + static_cast<std::size_t>(k)];
-        rail::ros_glue::toMessage(track_.contact(id).contact[k], id, id % 2, k, p);
+      for (int k = 0; k < rail::contact::kContactSlots; ++k) {
+        rail_msgs::ContactPoint& p =
+            points_msg_
+                .points[rail::contact::kContactSlots * static_cast<std::size_t>(id) + static_cast<std::size_t>(k)];
+        rail::ros_glue::toMessage(track_.contact(id).contact[k], id, id % 2, p);
       }
     }
     points_pub_.publish(points_msg_);

@@ -49,8 +49,9 @@ contact::WheelContactOptions defaultVehicleContactOptions();
 // Revision of the vehicle-alone results: raised by every change that moves them (a cached reference run,
 // such as bench_vehicle_accuracy's, carries it and is refused under another). 2: warm starts held at
 // accepted steps; 3: the contact search seeds yawed flange contacts and end samples; 4: a surface takes a
-// penetrating point past its end (a second contact beside its neighbour's).
-constexpr int kResultsRevision = 4;
+// penetrating point past its end (a second contact beside its neighbour's); 5: each surface carries a
+// second contact separated from the wheel's others (WheelContactOptions::second_contacts).
+constexpr int kResultsRevision = 5;
 
 // What the scene does not say (constant after building).
 struct SimulatorSettings {

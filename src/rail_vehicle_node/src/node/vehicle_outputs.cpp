@@ -48,7 +48,7 @@ struct OutputMessages {
     const std::size_t n = sim.wheels().size();
     wheel_states.wheels.resize(n);
     wheel_states.scene_hash = scene.hash;
-    contact_points.points.resize(2 * n);
+    contact_points.points.resize(contact::kContactSlots * n);
     contact_wrenches.wrenches.resize(n);
     contact_wrenches.scene_hash = scene.hash;
     kinematics.wheelsets.resize(sim.wheelsets().size());
@@ -115,10 +115,10 @@ struct OutputMessages {
       cw.wheel_id = m.wheel_id;
       fill(cw.force, w.force_in_world);
       fill(cw.moment, w.moment_in_world);
-      for (int k = 0; k < 2; ++k) {
+      for (int k = 0; k < contact::kContactSlots; ++k) {
         const contact::ContactPointResult& c = sim.contacts()[i].contact[k];
-        rail_msgs::ContactPoint& p = contact_points.points[2 * i + static_cast<std::size_t>(k)];
-        rail::ros_glue::toMessage(c, m.wheel_id, m.side, k, p);
+        rail_msgs::ContactPoint& p = contact_points.points[contact::kContactSlots * i + static_cast<std::size_t>(k)];
+        rail::ros_glue::toMessage(c, m.wheel_id, m.side, p);
       }
     }
     for (std::size_t w = 0; w < sim.wheelsets().size(); ++w) {
