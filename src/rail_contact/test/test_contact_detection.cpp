@@ -682,6 +682,32 @@ TEST(ContactDetection, AYawedFlangeContactIsFoundAlikeWarmAndFresh) {
   }
 }
 
+// S1002 on UIC60 at 1:20, Iberian gauge: the paper scene's profile pair.
+struct IberianPair {
+  rc::WheelProfile wheel = rc::makeS1002();
+  rc::ProfileCurve rail = rc::makeUic60Rail(1.0 / 20.0);
+  rc::WheelsetTrackSpec spec = [] {
+    rc::WheelsetTrackSpec s;
+    s.track_gauge = 1.668;
+    s.back_to_back = 1.592;
+    s.nominal_radius = 0.445;
+    return s;
+  }();
+  rc::ContactGeometryTable table{wheel, rail, spec};
+};
+
+// The left wheel of a table row's wheelset, yawed and pressed `down` below the row's rigid contact height.
+rc::WheelState pressedLeftWheel(const rc::ContactGeometryTable& table, const rc::ContactGeometryRow& row, double yaw,
+                                double down) {
+  rc::WheelState wl;
+  wl.R_wheelset_to_world =
+      (Eigen::AngleAxisd(yaw, Vector3d::UnitZ()) * Eigen::AngleAxisd(row.roll, Vector3d::UnitX())).toRotationMatrix();
+  wl.p_wheel_in_world =
+      Vector3d(10.0, row.y, row.z - down) + wl.R_wheelset_to_world * Vector3d(0.0, table.wheelHalfDistance(), 0.0);
+  wl.arc_length = 10.0;
+  return wl;
+}
+
 TEST(WheelContact, ASecondContactPastASurfacesEndIsTheContactOfAProfileSplitBelowIt) {
   // S1002 on UIC60 at 1:20, Iberian gauge (the paper scene's pair): a wheelset moved toward the flange,
   // yawed, pressed below its rigid contact height, evaluated fresh at every pose. The tread follows its
@@ -690,13 +716,10 @@ TEST(WheelContact, ASecondContactPastASurfacesEndIsTheContactOfAProfileSplitBelo
   // Checked against a model whose profile is split where the root is on the flange surface: the same point
   // (same equations, Newton tolerance 1e-10 m: within 1e-7 m) and the same normal force within 1e-4 (the
   // re-split profile is splined through one other node; 6.3e-6 measured).
-  const rc::WheelProfile wheel = rc::makeS1002();
-  const rc::ProfileCurve rail = rc::makeUic60Rail(1.0 / 20.0);
-  rc::WheelsetTrackSpec spec;
-  spec.track_gauge = 1.668;
-  spec.back_to_back = 1.592;
-  spec.nominal_radius = 0.445;
-  rc::ContactGeometryTable table{wheel, rail, spec};
+  IberianPair pair;
+  const rc::WheelsetTrackSpec& spec = pair.spec;
+  rc::ContactGeometryTable& table = pair.table;
+  const rc::ProfileCurve& rail = pair.rail;
   const rc::WheelContactModel& model = table.model();
   // The reference splits the profile at a slope of 0.2 rad instead of 45 deg.
   const rc::WheelContactModel wide(rc::makeS1002(0.2), spec.nominal_radius, rail, model.detector().sectionCentre(),
@@ -707,13 +730,7 @@ TEST(WheelContact, ASecondContactPastASurfacesEndIsTheContactOfAProfileSplitBelo
     for (const rc::ContactGeometryRow& row : table.table(0.0, 0.012, 0.02e-3, yaw)) {
       if (!row.ok) continue;
       for (const double down : {50e-6, 100e-6, 200e-6}) {
-        rc::WheelState wl;
-        wl.R_wheelset_to_world =
-            (Eigen::AngleAxisd(yaw, Vector3d::UnitZ()) * Eigen::AngleAxisd(row.roll, Vector3d::UnitX()))
-                .toRotationMatrix();
-        wl.p_wheel_in_world = Vector3d(10.0, row.y, row.z - down) +
-                              wl.R_wheelset_to_world * Vector3d(0.0, table.wheelHalfDistance(), 0.0);
-        wl.arc_length = 10.0;
+        const rc::WheelState wl = pressedLeftWheel(table, row, yaw, down);
         rc::WheelContactWork work, wide_work;
         rc::WheelContactResult out, wide_out;
         model.evaluate(wl, rc::RailSide::kLeft, table.track(), rc::RigidRailDeformation(), work, out);
@@ -763,13 +780,7 @@ PathSweep sweepWarmAgainstFresh(const rc::WheelContactModel& model, rc::ContactG
       rc::WheelContactWork warm;
       for (const rc::ContactGeometryRow& row : rows) {
         if (!row.ok) continue;
-        rc::WheelState wl;
-        wl.R_wheelset_to_world =
-            (Eigen::AngleAxisd(yaw, Vector3d::UnitZ()) * Eigen::AngleAxisd(row.roll, Vector3d::UnitX()))
-                .toRotationMatrix();
-        wl.p_wheel_in_world = Vector3d(10.0, row.y, row.z - down) +
-                              wl.R_wheelset_to_world * Vector3d(0.0, table.wheelHalfDistance(), 0.0);
-        wl.arc_length = 10.0;
+        const rc::WheelState wl = pressedLeftWheel(table, row, yaw, down);
         rc::WheelContactWork fresh;
         rc::WheelContactResult out_warm, out_fresh;
         model.evaluate(wl, rc::RailSide::kLeft, table.track(), rc::RigidRailDeformation(), warm, out_warm);
@@ -797,13 +808,11 @@ TEST(WheelContact, WithSecondContactsTheWheelForceDoesNotDependOnThePathThatLedT
   // the profile scan resolves only to the rail grid's bilinear error (~2 um); a patch missed or taken twice
   // changes the force by tens of kilonewtons. With one point per surface the force depends on the path,
   // which this sweep shows too.
-  const rc::WheelProfile wheel = rc::makeS1002();
-  const rc::ProfileCurve rail = rc::makeUic60Rail(1.0 / 20.0);
-  rc::WheelsetTrackSpec spec;
-  spec.track_gauge = 1.668;
-  spec.back_to_back = 1.592;
-  spec.nominal_radius = 0.445;
-  rc::ContactGeometryTable table{wheel, rail, spec};
+  IberianPair pair;
+  rc::ContactGeometryTable& table = pair.table;
+  const rc::WheelProfile& wheel = pair.wheel;
+  const rc::ProfileCurve& rail = pair.rail;
+  const rc::WheelsetTrackSpec& spec = pair.spec;
   rc::WheelContactOptions options = table.model().options();
   options.second_contacts = true;
   const rc::WheelContactModel with(wheel, spec.nominal_radius, rail, table.model().detector().sectionCentre(), options);
