@@ -666,19 +666,11 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
   double search_distance = 0.0;
   bool take_past_end = false;  // the result is a penetrating pair past the surface's end, at x
   if (work.seeded) {
-    // A further contact of the wheel: Newton from the warm start when it is on this surface, else (or when
-    // that fails) from the caller's seed; only a converged, penetrating pair of the surface's own part.
-    const bool warm = work.seed_continues_warm_start && work.has_warm_start && work.x_surface == k;
-    bool converged = false;
-    if (warm) {
-      converged = newton(x) && -(w.p - e.r).dot(e.n) > 0.0;
-    }
-    if (!converged) {
-      ++work.searches;
-      status = DetectionStatus::kConvergedAfterSearch;
-      x = work.seed;
-      converged = newton(x) && -(w.p - e.r).dot(e.n) > 0.0;
-    }
+    // A further contact of the wheel: Newton from the caller's seed (its patch's deepest sample); only a
+    // converged, penetrating pair of the surface's own part.
+    status = DetectionStatus::kConvergedAfterSearch;
+    x = work.seed;
+    const bool converged = newton(x) && -(w.p - e.r).dot(e.n) > 0.0;
     if (!converged) {
       out.status = DetectionStatus::kOutOfBounds;
       out.valid = out.in_contact = false;

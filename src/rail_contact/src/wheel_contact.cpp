@@ -216,7 +216,6 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
                           scan.samePatch(U_w, U, options_.patch_dip, options_.patch_min_dip))) {
           patch_of_slot[j] = c;
           taken[c] = true;
-          work.detection[kTreadSecond + j].seed_continues_warm_start = false;
           break;
         }
       }
@@ -226,7 +225,6 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
         if (patch_of_slot[j] >= 0) continue;
         patch_of_slot[j] = c;
         taken[c] = true;
-        work.detection[kTreadSecond + j].seed_continues_warm_start = false;
       }
     }
     for (int j = 0; j < 2; ++j) {

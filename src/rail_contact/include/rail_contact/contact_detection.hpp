@@ -122,11 +122,9 @@ struct DetectionWork {
   int x_surface = 0;  ///< surface (0 tread, 1 flange) whose parameters x holds
   int x_surface_committed = 0;
   /// Set by the caller for a wheel's further contacts (WheelContactModel's slots kTreadSecond and
-  /// kFlangeSecond): detect runs no search but Newton from the warm start when the caller says it continues
-  /// the seed's patch and it is on the surface detected, else (or when that fails) from `seed`, and takes only a
-  /// converged, penetrating point pair of the surface's own part (no point past its end, no approximate result).
+  /// kFlangeSecond): detect runs no search but Newton from `seed`, and takes only a converged, penetrating
+  /// point pair of the surface's own part (no point past its end, no approximate result).
   bool seeded = false;
-  bool seed_continues_warm_start = false;  ///< seeded: the warm start follows the seed's patch and is tried first
   Eigen::Vector4d seed = Eigen::Vector4d::Zero();
   void reset() {
     const bool hold = hold_warm_start;
