@@ -493,13 +493,19 @@ void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& tr
   sectionPose(pose, track, deformation, wf.c, wf.a, section);
   const Vector3d o = section.o, T = section.T, Ny = section.Ny, B = section.B;
   const double th = std::atan2(-B.dot(wf.f0), -B.dot(wf.d0));
+  // The search's fan of wheel planes for surface k (see search).
+  auto planes = [&](int k, int& n_planes, double& plane_step) {
+    const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
+    n_planes =
+        options_.search_plane_step > 0.0 ? static_cast<int>(std::ceil(fan / options_.search_plane_step - 0.5)) : 0;
+    plane_step = n_planes > 0 ? fan / n_planes : 0.0;
+  };
   int first[2] = {0, 0};
   for (int k = 0; k < (include_flange ? 2 : 1); ++k) {
     // Each part's own samples: the tread up to the split, the flange from it.
-    const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
-    const int n_planes =
-        options_.search_plane_step > 0.0 ? static_cast<int>(std::ceil(fan / options_.search_plane_step - 0.5)) : 0;
-    const double plane_step = n_planes > 0 ? fan / n_planes : 0.0;
+    int n_planes = 0;
+    double plane_step = 0.0;
+    planes(k, n_planes, plane_step);
     first[k] = out.n;
     for (const Sample& smp : samples_[k]) {
       if (k == 0 ? smp.u > tread_.uMax() : smp.u < 0.0) continue;
@@ -526,10 +532,9 @@ void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& tr
     double u_local = 0.0;
     const Vector2d p = profileCurveAt(k, u, u_local).position(u_local);
     // The plane of the sample's minimum, searched again (cheap: one sample).
-    const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
-    const int n_planes =
-        options_.search_plane_step > 0.0 ? static_cast<int>(std::ceil(fan / options_.search_plane_step - 0.5)) : 0;
-    const double plane_step = n_planes > 0 ? fan / n_planes : 0.0;
+    int n_planes = 0;
+    double plane_step = 0.0;
+    planes(k, n_planes, plane_step);
     double best = std::numeric_limits<double>::infinity(), th_best = th;
     Vector3d q_best = Vector3d::Zero();
     for (int j = -n_planes; j <= n_planes; ++j) {

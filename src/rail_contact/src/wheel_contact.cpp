@@ -134,6 +134,9 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     detector_.scanProfile(pose, track, deformation, searched[kFlange] && geometry[kFlange].valid, scan);
     if (cost != nullptr) detection_s += std::chrono::duration<double>(Clock::now() - t0).count();
   }
+  auto samePatch = [&](double U_a, double U_b) {
+    return scan.samePatch(U_a, U_b, options_.patch_dip, options_.patch_min_dip);
+  };
   // A tread or flange point clearly inside the rail but not at its patch's deepest interpenetration (no
   // maximum within two samples of it, or a deeper one in the same patch by more than the patch dip) stands
   // for the patch only by the path that led there: it is dropped, its surface searches afresh next time,
@@ -151,8 +154,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
         const int j = scan.minima[m].sample;
         if (std::abs(j - i) <= 2) {
           at_maximum = true;
-        } else if (scan.distance[j] < d - margin &&
-                   scan.samePatch(U, scan.profile_u[j], options_.patch_dip, options_.patch_min_dip)) {
+        } else if (scan.distance[j] < d - margin && samePatch(U, scan.profile_u[j])) {
           deeper = true;
         }
       }
@@ -163,14 +165,17 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     }
   }
   auto onePatch = [&](double U_a, const Eigen::Vector3d& p_a, double U_b, const Eigen::Vector3d& p_b) {
-    return (p_a - p_b).norm() < options_.merge_distance ||
-           (scanning && scan.samePatch(U_a, U_b, options_.patch_dip, options_.patch_min_dip));
+    return (p_a - p_b).norm() < options_.merge_distance || (scanning && samePatch(U_a, U_b));
+  };
+  // The same with the distance taken along the profile (points of the scan, not yet detected).
+  auto onePatchAlong = [&](double U_a, double U_b) {
+    return std::abs(U_a - U_b) < options_.merge_distance || samePatch(U_a, U_b);
   };
   if (touching(kTread) && touching(kFlange)) {
     const ContactGeometry& t = geometry[kTread];
     const ContactGeometry& f = geometry[kFlange];
     const bool close = (t.p_wheel_in_world - f.p_wheel_in_world).norm() < options_.merge_distance;
-    if (close || onePatch(t.profile_u, t.p_wheel_in_world, f.profile_u, f.p_wheel_in_world)) {
+    if (close || (scanning && samePatch(t.profile_u, f.profile_u))) {
       // One patch: keep one of the two. Each surface continues a little past the split
       // (DetectionOptions::split_overlap); of one point reported by both, the surface whose own part it lies
       // on keeps it. Otherwise (both on their own parts, both past the split, or two points of one patch
@@ -191,15 +196,10 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
       const double U = scan.profile_u[mm.sample];
       bool apart = true;
       for (int k = kTread; k <= kFlange && apart; ++k) {
-        if (touching(k) && !merged[k] &&
-            (std::abs(U - geometry[k].profile_u) < options_.merge_distance ||
-             scan.samePatch(U, geometry[k].profile_u, options_.patch_dip, options_.patch_min_dip)))
-          apart = false;
+        if (touching(k) && !merged[k] && onePatchAlong(U, geometry[k].profile_u)) apart = false;
       }
       for (int c = 0; c < n_chosen && apart; ++c) {
-        if (scan.samePatch(U, scan.profile_u[scan.minima[chosen[c]].sample], options_.patch_dip,
-                           options_.patch_min_dip))
-          apart = false;
+        if (samePatch(U, scan.profile_u[scan.minima[chosen[c]].sample])) apart = false;
       }
       if (apart) chosen[n_chosen++] = m;
     }
@@ -212,8 +212,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
                                             dw.hold_warm_start ? dw.x_committed[1] : dw.x[1]);
       for (int c = 0; c < n_chosen; ++c) {
         const double U = scan.profile_u[scan.minima[chosen[c]].sample];
-        if (!taken[c] && (std::abs(U_w - U) < options_.merge_distance ||
-                          scan.samePatch(U_w, U, options_.patch_dip, options_.patch_min_dip))) {
+        if (!taken[c] && onePatchAlong(U_w, U)) {
           patch_of_slot[j] = c;
           taken[c] = true;
           break;
