@@ -80,6 +80,31 @@ bool makeWheelFrame(const WheelPose& pose, WheelFrame& wf) {
   return true;
 }
 
+constexpr int kMaxFanPlanes = 64;  // planes on each side of the lowest (the options are checked against it)
+
+// A fan of wheel planes: circle angles th + j step, j = -n..n, and their radial directions in the wheel.
+struct PlaneFan {
+  int n = 0;
+  double th[2 * kMaxFanPlanes + 1];
+  Vector3d dir[2 * kMaxFanPlanes + 1];
+};
+
+int fanPlanes(double fan, double plane_step_max) {
+  return plane_step_max > 0.0 ? static_cast<int>(std::ceil(fan / plane_step_max - 0.5)) : 0;
+}
+
+// Planes evenly across [th - fan, th + fan], at most plane_step_max apart; a fan narrower than half a step
+// is the lowest plane alone.
+void makePlaneFan(const WheelFrame& wf, double th, double fan, double plane_step_max, PlaneFan& out) {
+  out.n = std::min(fanPlanes(fan, plane_step_max), kMaxFanPlanes);
+  const double step = out.n > 0 ? fan / out.n : 0.0;
+  for (int j = -out.n; j <= out.n; ++j) {
+    const double th_j = th + j * step;
+    out.th[j + out.n] = th_j;
+    out.dir[j + out.n] = std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0;
+  }
+}
+
 // Wheel surface point and first derivatives.
 struct WheelEval {
   Vector3d p, p_th, p_u, n, n_th, n_u, e_r, e_th;
@@ -204,6 +229,19 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
       !(o.max_penetration > 0.0) || !(o.min_normal_opposition > 0.0 && o.min_normal_opposition <= 1.0) ||
       !(o.search_cell > 0.0) || !(o.search_margin > 0.0) || !(o.search_spacing > 0.0) || !(o.end_seed_reach >= 0.0))
     throw std::runtime_error("ContactDetector: DetectionOptions has a non-positive or out-of-range value");
+  if (!(o.search_plane_step >= 0.0) || !(o.search_fan_max >= 0.0) || !(o.search_fan_max < 1.0) ||
+      fanPlanes(o.search_fan_max, o.search_plane_step) > kMaxFanPlanes) {
+    std::ostringstream m;
+    m << "ContactDetector: DetectionOptions.search_plane_step = " << o.search_plane_step
+      << " rad and search_fan_max = " << o.search_fan_max << " rad must be >= 0, the fan below 1 rad and at most "
+      << kMaxFanPlanes << " planes on each side (search_fan_max / search_plane_step)";
+    throw std::runtime_error(m.str());
+  }
+  if (!(o.scan_skip_clearance >= 0.0)) {
+    std::ostringstream m;
+    m << "ContactDetector: DetectionOptions.scan_skip_clearance = " << o.scan_skip_clearance << " m must be >= 0";
+    throw std::runtime_error(m.str());
+  }
   if (tread_.numSegments() < 1 || flange_.numSegments() < 1 || rail_.numSegments() < 1)
     throw std::runtime_error("ContactDetector: empty wheel or rail profile curve");
 
@@ -239,7 +277,9 @@ ContactDetector::ContactDetector(const WheelProfile& wheel, double nominal_radiu
       const double u = u0 + (u1 - u0) * i / (n - 1);
       double u_local = 0.0;
       const Vector2d p = profileCurveAt(k, u, u_local).position(u_local);
-      samples_[k][i] = {u, p.x(), p.y()};
+      samples_[k][i] = {
+          u, p.x(), p.y(),
+          i > 0 ? samples_[k][i - 1].arc + (p - Vector2d(samples_[k][i - 1].y, samples_[k][i - 1].z)).norm() : 0.0};
       search_lever_[k] = std::max(search_lever_[k], std::abs(p.x()) + 2.2 * std::abs(r0_ - p.y()));
       if (i > 0) {
         const double dy = std::abs(p.x() - samples_[k][i - 1].y), dz = std::abs(p.y() - samples_[k][i - 1].z);
@@ -352,6 +392,12 @@ void ContactDetector::sectionPose(const WheelPose& pose, const TrackGeometry& tr
   out.axle = Vector3d(out.T.dot(a), out.Ny.dot(a), out.B.dot(a));
 }
 
+double ContactDetector::fanWidth(int surface, const SectionPose& section) const noexcept {
+  // A wheel yawed by psi against the rail touches a profile slope tan(delta) about psi tan(delta) rad
+  // ahead of or behind its lowest plane (the flange lead).
+  return std::min(1.5 * std::abs(section.axle[0]) * search_slope_[surface], options_.search_fan_max);
+}
+
 template <class Deformation>
 bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const TrackGeometry& track,
                              const Deformation& deformation, Vector4d& x_seed, double& distance, Vector3d& p_wheel_seed,
@@ -363,67 +409,64 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   const Vector3d o = section.o, T = section.T, Ny = section.Ny, B = section.B;
   // Lowest circle direction of the wheel with respect to the rail's up axis.
   const double th = std::atan2(-B.dot(wf.f0), -B.dot(wf.d0));
-  // A wheel yawed by psi against the rail touches a profile slope tan(delta) about psi tan(delta) rad
-  // ahead of or behind that plane (the flange lead), so each sample is taken over a fan of planes.
+  // Each sample is taken over a fan of planes around that one (fanWidth).
   const int k = static_cast<int>(surface);
-  const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
-  // Planes evenly across [-fan, fan], at most search_plane_step apart; a fan narrower than half a step is
-  // the lowest plane alone.
-  const int n_planes =
-      options_.search_plane_step > 0.0 ? static_cast<int>(std::ceil(fan / options_.search_plane_step - 0.5)) : 0;
-  const double plane_step = n_planes > 0 ? fan / n_planes : 0.0;
+  PlaneFan fan;
+  makePlaneFan(wf, th, fanWidth(k, section), options_.search_plane_step, fan);
   const std::vector<Sample>& smp = samples_[k];
   const int n = static_cast<int>(smp.size());
-  // Wheel profile point (y, z) in the plane at circle angle th_j.
-  auto profilePoint = [&](double y, double z, double th_j) -> Vector3d {
-    return wf.c + (wf.ls * y) * wf.a + (r0_ - z) * (std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0);
+  // Wheel profile point (y, z) in the fan's plane jj.
+  auto profilePoint = [&](double y, double z, int jj) -> Vector3d {
+    return wf.c + (wf.ls * y) * wf.a + (r0_ - z) * fan.dir[jj];
   };
-  auto samplePoint = [&](int i, double th_j) { return profilePoint(smp[i].y, smp[i].z, th_j); };
-  // Distance of profile point (y, z): its smallest over the fan of planes, and that plane's angle.
-  auto pointDistance = [&](double y, double z, double& th_i) {
+  // Distance of profile point (y, z): its smallest over the fan of planes, and that plane's index.
+  auto pointDistance = [&](double y, double z, int& jj_i) {
     double d_i = std::numeric_limits<double>::infinity();
-    for (int j = -n_planes; j <= n_planes; ++j) {
-      const double th_j = th + j * plane_step;
-      const Vector3d rel = profilePoint(y, z, th_j) - o;
+    for (int jj = 0; jj <= 2 * fan.n; ++jj) {
+      const Vector3d rel = profilePoint(y, z, jj) - o;
       const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
       if (d < d_i) {
         d_i = d;
-        th_i = th_j;
+        jj_i = jj;
       }
     }
     return d_i;
   };
-  auto sampleDistance = [&](int i, double& th_i) { return pointDistance(smp[i].y, smp[i].z, th_i); };
-  double d_prev2 = 0.0, d_prev = 0.0, th_prev = th;
-  double d_first = 0.0, th_first = th;
+  const int lowest = fan.n;
+  double d_prev2 = 0.0, d_prev = 0.0;
+  int jj_prev = lowest;
+  double d_first = 0.0;
+  int jj_first = lowest;
   int best = -1;
-  double best_d = std::numeric_limits<double>::infinity(), th_best = th;
+  double best_d = std::numeric_limits<double>::infinity();
+  int jj_best = lowest;
   double min_any = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {
-    double th_i = th;
-    const double d = sampleDistance(i, th_i);
+    int jj_i = lowest;
+    const double d = pointDistance(smp[i].y, smp[i].z, jj_i);
     min_any = std::min(min_any, d);
-    if (i == 0) d_first = d, th_first = th_i;
+    if (i == 0) d_first = d, jj_first = jj_i;
     // Interior local minimum at i - 1.
     if (i >= 2 && d_prev <= d_prev2 && d_prev <= d && d_prev < best_d) {
       best_d = d_prev;
       best = i - 1;
-      th_best = th_prev;
+      jj_best = jj_prev;
     }
     d_prev2 = d_prev;
     d_prev = d;
-    th_prev = th_i;
+    jj_prev = jj_i;
   }
   end_seed = false;
   if (best < 0 && n >= 2) {
     // No interior minimum: the surface's nearest point may lie in its last sample interval (the first end
-    // sample first, then the last: d_prev and th_prev hold the last).
-    const double d_end[2] = {d_first, d_prev}, th_end[2] = {th_first, th_prev};
+    // sample first, then the last: d_prev and jj_prev hold the last).
+    const double d_end[2] = {d_first, d_prev};
+    const int jj_end[2] = {jj_first, jj_prev};
     for (int e = 0; e < 2; ++e) {
       if (d_end[e] <= min_any && d_end[e] < options_.end_seed_reach) {
         best = e == 0 ? 0 : n - 1;
         best_d = d_end[e];
-        th_best = th_end[e];
+        jj_best = jj_end[e];
         end_seed = true;
         break;
       }
@@ -433,7 +476,7 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   min_distance = min_any;
   if (best < 0 || !(best_d < 0.9 * options_.search_margin)) return false;
   double u_best = smp[best].u;
-  Vector3d q = samplePoint(best, th_best);
+  Vector3d q = profilePoint(smp[best].y, smp[best].z, jj_best);
   if (end_seed) {
     // The gap may keep falling past the end sample, onto the neighbouring surface's part of the profile (a
     // second contact there, ContactGeometry::past_end), and Newton from the end sample can miss that
@@ -445,19 +488,19 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
       const ProfileCurve& curve = profileCurveAt(k, u_j, u_local);
       if (u_local < curve.uMin() || u_local > curve.uMax()) break;
       const Vector2d p = curve.position(u_local);
-      double th_j = th;
-      const double d_j = pointDistance(p.x(), p.y(), th_j);
+      int jj_j = lowest;
+      const double d_j = pointDistance(p.x(), p.y(), jj_j);
       if (!(d_j < best_d)) break;
       best_d = d_j;
       u_best = u_j;
-      th_best = th_j;
-      q = profilePoint(p.x(), p.y(), th_j);
+      jj_best = jj_j;
+      q = profilePoint(p.x(), p.y(), jj_j);
     }
   }
   const Vector3d rel = q - o;
   double u_r = 0.0;
   railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), &u_r);
-  x_seed = Vector4d(th_best, u_best, s + T.dot(rel), u_r);
+  x_seed = Vector4d(fan.th[jj_best], u_best, s + T.dot(rel), u_r);
   p_wheel_seed = q;
   return true;
 }
@@ -493,29 +536,37 @@ void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& tr
   sectionPose(pose, track, deformation, wf.c, wf.a, section);
   const Vector3d o = section.o, T = section.T, Ny = section.Ny, B = section.B;
   const double th = std::atan2(-B.dot(wf.f0), -B.dot(wf.d0));
-  // The search's fan of wheel planes for surface k (see search).
-  auto planes = [&](int k, int& n_planes, double& plane_step) {
-    const double fan = std::min(1.5 * std::abs(section.axle[0]) * search_slope_[k], options_.search_fan_max);
-    n_planes =
-        options_.search_plane_step > 0.0 ? static_cast<int>(std::ceil(fan / options_.search_plane_step - 0.5)) : 0;
-    plane_step = n_planes > 0 ? fan / n_planes : 0.0;
+  // Each part's fan of planes (as in search).
+  PlaneFan fans[2];
+  const int n_parts = include_flange ? 2 : 1;
+  for (int k = 0; k < n_parts; ++k) makePlaneFan(wf, th, fanWidth(k, section), options_.search_plane_step, fans[k]);
+  auto planeDistance = [&](double y, double z, const Vector3d& dir, Vector3d& q) {
+    q = wf.c + (wf.ls * y) * wf.a + (r0_ - z) * dir;
+    const Vector3d rel = q - o;
+    return railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
   };
+  // A sample is taken unless the last one taken bounds its distance above scan_skip_clearance: along the
+  // profile the rail distance changes by at most kScanLipschitz times the arc between the two samples.
+  const double skip = options_.scan_skip_clearance;
   int first[2] = {0, 0};
-  for (int k = 0; k < (include_flange ? 2 : 1); ++k) {
+  for (int k = 0; k < n_parts; ++k) {
     // Each part's own samples: the tread up to the split, the flange from it.
-    int n_planes = 0;
-    double plane_step = 0.0;
-    planes(k, n_planes, plane_step);
+    const PlaneFan& fan = fans[k];
     first[k] = out.n;
+    double d_taken = 0.0, arc_taken = 0.0;
+    bool taken = false;
     for (const Sample& smp : samples_[k]) {
       if (k == 0 ? smp.u > tread_.uMax() : smp.u < 0.0) continue;
       double d_i = std::numeric_limits<double>::infinity();
-      for (int j = -n_planes; j <= n_planes; ++j) {
-        const double th_j = th + j * plane_step;
-        const Vector3d q =
-            wf.c + (wf.ls * smp.y) * wf.a + (r0_ - smp.z) * (std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0);
-        const Vector3d rel = q - o;
-        d_i = std::min(d_i, railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel))));
+      const double bound = std::min(d_taken, options_.search_margin) - kScanLipschitz * (smp.arc - arc_taken);
+      if (taken && skip > 0.0 && bound > skip) {
+        d_i = bound;
+      } else {
+        Vector3d q;
+        for (int jj = 0; jj <= 2 * fan.n; ++jj) d_i = std::min(d_i, planeDistance(smp.y, smp.z, fan.dir[jj], q));
+        d_taken = d_i;
+        arc_taken = smp.arc;
+        taken = true;
       }
       out.profile_u[out.n] = profileU(k, smp.u);
       out.distance[out.n] = d_i;
@@ -532,20 +583,16 @@ void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& tr
     double u_local = 0.0;
     const Vector2d p = profileCurveAt(k, u, u_local).position(u_local);
     // The plane of the sample's minimum, searched again (cheap: one sample).
-    int n_planes = 0;
-    double plane_step = 0.0;
-    planes(k, n_planes, plane_step);
-    double best = std::numeric_limits<double>::infinity(), th_best = th;
+    const PlaneFan& fan = fans[k];
+    double best = std::numeric_limits<double>::infinity();
+    int jj_best = fan.n;
     Vector3d q_best = Vector3d::Zero();
-    for (int j = -n_planes; j <= n_planes; ++j) {
-      const double th_j = th + j * plane_step;
-      const Vector3d q =
-          wf.c + (wf.ls * p.x()) * wf.a + (r0_ - p.y()) * (std::cos(th_j) * wf.d0 + std::sin(th_j) * wf.f0);
-      const Vector3d rel = q - o;
-      const double d_j = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
+    for (int jj = 0; jj <= 2 * fan.n; ++jj) {
+      Vector3d q;
+      const double d_j = planeDistance(p.x(), p.y(), fan.dir[jj], q);
       if (d_j < best) {
         best = d_j;
-        th_best = th_j;
+        jj_best = jj;
         q_best = q;
       }
     }
@@ -555,7 +602,7 @@ void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& tr
     ProfileScan::Minimum m;
     m.sample = i;
     m.surface = k;
-    m.seed = Vector4d(th_best, u, section.s + T.dot(rel), u_r);
+    m.seed = Vector4d(fan.th[jj_best], u, section.s + T.dot(rel), u_r);
     // Insert by depth.
     int pos = std::min(out.n_minima, ProfileScan::kMaxMinima - 1);
     while (pos > 0 && out.distance[out.minima[pos - 1].sample] > d) {

@@ -31,6 +31,9 @@ void validate(const WheelContactOptions& o) {
   if (!(o.patch_dip >= 0.0) || !(o.patch_dip < 1.0)) fail("patch_dip", o.patch_dip, "must be in [0, 1)");
   if (!(o.patch_min_dip >= 0.0) || !(o.patch_min_dip < 1e-3))
     fail("patch_min_dip", o.patch_min_dip, "m must be in [0, 1e-3)");
+  // A scan sample not taken must hold a value that no patch decision tells from its distance.
+  if (!(o.detection.scan_skip_clearance == 0.0 || o.detection.scan_skip_clearance > o.patch_min_dip))
+    fail("detection.scan_skip_clearance", o.detection.scan_skip_clearance, "m must be 0 or above patch_min_dip");
   if (!(o.max_lateral_semi_axis >= 0.0))
     fail("max_lateral_semi_axis", o.max_lateral_semi_axis, "m must not be negative (0 = no limit)");
   if (!(o.creepage.v_eps > 0.0)) fail("creepage.v_eps", o.creepage.v_eps, "m/s must be positive");

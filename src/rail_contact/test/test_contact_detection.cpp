@@ -9,6 +9,9 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "rail_contact/contact_detection.hpp"
@@ -561,6 +564,33 @@ TEST(ContactDetection, AFarFlangeSkipsItsSearchOnlyWhileItCannotReachTheRail) {
               contact_steps, 1e3 * smallest_skipped_gap);
 }
 
+TEST(ContactDetection, TheFanOfPlanesAndTheScanClearanceAreValidated) {
+  const Scene& s = scene();
+  auto message = [&](const rc::DetectionOptions& o) -> std::string {
+    try {
+      rc::ContactDetector d(s.wheel, kR0, s.rail, Vector2d(0.0, -0.08), o);
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "accepted";
+  };
+  rc::DetectionOptions o;
+  o.search_plane_step = 1e-3;  // 250 planes on each side of the lowest
+  EXPECT_NE(message(o).find("DetectionOptions.search_plane_step = 0.001 rad and search_fan_max = 0.25 rad"),
+            std::string::npos)
+      << message(o);
+  EXPECT_NE(message(o).find("at most 64 planes on each side"), std::string::npos) << message(o);
+  o.search_plane_step = 0.01;
+  o.search_fan_max = -0.1;
+  EXPECT_NE(message(o).find("search_fan_max = -0.1 rad"), std::string::npos) << message(o);
+  o.search_fan_max = 0.25;
+  o.scan_skip_clearance = -1e-4;
+  EXPECT_NE(message(o).find("DetectionOptions.scan_skip_clearance = -0.0001 m must be >= 0"), std::string::npos)
+      << message(o);
+  o.scan_skip_clearance = 0.0;
+  EXPECT_EQ(message(o), "accepted");
+}
+
 TEST(DetectionCounts, SumAndDescribeSayWhatApproximateMeans) {
   rc::DetectionWork a, b;
   a.calls = 10;
@@ -829,4 +859,73 @@ TEST(WheelContact, WithSecondContactsTheWheelForceDoesNotDependOnThePathThatLedT
   EXPECT_EQ(a.differing, 0);
   EXPECT_GT(a.three_or_more, 0);
   EXPECT_GT(b.differing, 10);
+}
+
+TEST(WheelContact, TheProfileScanSkipsOnlySamplesThatCannotChangeAContact) {
+  // scanProfile leaves out samples whose distance to the rail the samples taken before them bound above
+  // DetectionOptions::scan_skip_clearance. Against the scan that takes every sample, over the paper's pair
+  // swept across the flangeway and beyond, yawed, lifted and pressed: every sample within the clearance
+  // has exactly its distance, every other one a lower bound above the clearance; the minima are the same,
+  // and so is each pose's wheel force, to the last bit. Most samples are left out.
+  IberianPair pair;
+  rc::ContactGeometryTable& table = pair.table;
+  rc::WheelContactOptions options = table.model().options();
+  options.second_contacts = true;
+  const rc::WheelContactModel skipping(pair.wheel, pair.spec.nominal_radius, pair.rail,
+                                       table.model().detector().sectionCentre(), options);
+  options.detection.scan_skip_clearance = 0.0;
+  const rc::WheelContactModel every(pair.wheel, pair.spec.nominal_radius, pair.rail,
+                                    table.model().detector().sectionCentre(), options);
+  const double clearance = skipping.detector().options().scan_skip_clearance;
+  ASSERT_GT(clearance, 0.0);
+  auto scan = std::make_unique<rc::ProfileScan>();
+  auto exact = std::make_unique<rc::ProfileScan>();
+  int poses = 0, bad_samples = 0, bad_minima = 0, bad_forces = 0, in_contact = 0;
+  long long samples = 0, skipped = 0;
+  for (const double yaw : {-0.02, 0.0, 0.02}) {
+    for (const rc::ContactGeometryRow& row : table.table(-0.012, 0.014, 0.25e-3, yaw)) {
+      if (!row.ok) continue;
+      for (const double down : {-5e-3, -0.5e-3, 0.0, 50e-6, 300e-6, 1.5e-3}) {
+        const rc::WheelState ws = pressedLeftWheel(table, row, yaw, down);
+        rc::WheelPose pose;
+        pose.p_wheel_in_world = ws.p_wheel_in_world;
+        pose.R_wheelset_to_world = ws.R_wheelset_to_world;
+        pose.side = rc::RailSide::kLeft;
+        pose.arc_length = ws.arc_length;
+        ++poses;
+        for (const bool flange : {false, true}) {
+          skipping.detector().scanProfile(pose, table.track(), rc::RigidRailDeformation(), flange, *scan);
+          every.detector().scanProfile(pose, table.track(), rc::RigidRailDeformation(), flange, *exact);
+          ASSERT_EQ(scan->n, exact->n);
+          for (int i = 0; i < scan->n; ++i) {
+            ++samples;
+            const double d = scan->distance[i], d_exact = exact->distance[i];
+            if (d != d_exact) ++skipped;
+            const bool ok = d_exact <= clearance ? d == d_exact : d > clearance && d <= d_exact;
+            if (!ok || scan->profile_u[i] != exact->profile_u[i]) ++bad_samples;
+          }
+          bool same = scan->n_minima == exact->n_minima;
+          for (int m = 0; same && m < scan->n_minima; ++m) {
+            same = scan->minima[m].sample == exact->minima[m].sample &&
+                   scan->minima[m].surface == exact->minima[m].surface && scan->minima[m].seed == exact->minima[m].seed;
+          }
+          if (!same) ++bad_minima;
+        }
+        rc::WheelContactWork work_a, work_b;
+        rc::WheelContactResult a, b;
+        skipping.evaluate(ws, rc::RailSide::kLeft, table.track(), rc::RigidRailDeformation(), work_a, a);
+        every.evaluate(ws, rc::RailSide::kLeft, table.track(), rc::RigidRailDeformation(), work_b, b);
+        if (a.wheel_centre.force_in_world != b.wheel_centre.force_in_world) ++bad_forces;
+        if (b.wheel_centre.force_in_world.norm() > 0.0) ++in_contact;
+      }
+    }
+  }
+  std::printf("%d poses (%d in contact): %lld of %lld samples left out; %d samples, %d minima, %d forces differ\n",
+              poses, in_contact, skipped, samples, bad_samples, bad_minima, bad_forces);
+  EXPECT_GT(poses, 1000);
+  EXPECT_GT(in_contact, poses / 3);
+  EXPECT_EQ(bad_samples, 0);
+  EXPECT_EQ(bad_minima, 0);
+  EXPECT_EQ(bad_forces, 0);
+  EXPECT_GT(skipped, samples / 2);
 }

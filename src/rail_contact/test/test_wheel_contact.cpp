@@ -327,4 +327,16 @@ TEST(WheelContact, OptionsAreValidated) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("patch_dip = 1 must be in [0, 1)"), std::string::npos) << e.what();
   }
+  o.patch_dip = 0.1;
+  o.detection.scan_skip_clearance = 2e-6;  // below patch_min_dip (5 um)
+  try {
+    rc::validate(o);
+    ADD_FAILURE() << "scan_skip_clearance below patch_min_dip accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("detection.scan_skip_clearance = 2e-06 m must be 0 or above patch_min_dip"),
+              std::string::npos)
+        << e.what();
+  }
+  o.detection.scan_skip_clearance = 0.0;
+  EXPECT_NO_THROW(rc::validate(o));
 }

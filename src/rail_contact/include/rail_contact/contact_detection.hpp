@@ -82,6 +82,11 @@ struct DetectionOptions {
   /// lowest plane. 0 = the lowest plane only.
   double search_plane_step = 0.01;
   double search_fan_max = 0.25;  ///< the fan's half-width at most, rad
+  /// ContactDetector::scanProfile takes a wheel profile sample only when the samples taken before it do not
+  /// already bound its distance to the rail above this (m); a sample not taken holds that lower bound. The
+  /// bound is exact while the rail's signed distance is continuous along the profile, that is, everywhere but
+  /// behind the rail profile's ends. 0 = every sample taken.
+  double scan_skip_clearance = 1e-4;
 };
 
 /// Caller-owned per-pair state: warm start and counters (one per wheel surface and wheel).
@@ -203,7 +208,9 @@ struct ProfileScan {
   };
   int n = 0;
   double profile_u[kMaxSamples];  ///< arc position on the whole profile (ContactGeometry::profile_u), increasing, m
-  double distance[kMaxSamples];   ///< signed distance to the rail, the smallest over the fan of wheel planes, m
+  /// signed distance to the rail, the smallest over the fan of wheel planes, m; above
+  /// DetectionOptions::scan_skip_clearance a sample may hold a lower bound instead
+  double distance[kMaxSamples];
   int n_minima = 0;
   Minimum minima[kMaxMinima];  ///< interpenetrating interior minima, deepest first
   /// Index of the sample nearest to profile position U (n > 0).
@@ -258,6 +265,7 @@ class ContactDetector {
  private:
   struct Sample {
     double u, y, z;
+    double arc;  // chord length along the samples from the surface's first, m
   };
   ProfileCurve tread_, flange_, rail_;
   double r0_ = 0.0;
@@ -283,6 +291,12 @@ class ContactDetector {
     Eigen::Vector2d centre;       // wheel centre: (Ny, B) components of c - o
     Eigen::Vector3d axle;         // axle direction: (T, Ny, B) components
   };
+  // Half-width of the fan of wheel planes searched for surface `surface` (DetectionOptions::search_plane_step).
+  double fanWidth(int surface, const SectionPose& section) const noexcept;
+  // Bound on how fast the grid's signed distance changes along the wheel profile (bilinear interpolation of
+  // a distance: sqrt(2), with room for the grid's float rounding).
+  static constexpr double kScanLipschitz = 1.5;
+
   template <class Deformation>
   void sectionPose(const WheelPose& pose, const TrackGeometry& track, const Deformation& deformation,
                    const Eigen::Vector3d& c, const Eigen::Vector3d& a, SectionPose& out) const noexcept;
