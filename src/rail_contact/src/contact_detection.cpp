@@ -105,6 +105,27 @@ void makePlaneFan(const WheelFrame& wf, double th, double fan, double plane_step
   }
 }
 
+// Wheel profile point (y, z) in the fan's plane jj (r0: the profile's nominal radius).
+Vector3d fanPoint(const WheelFrame& wf, double r0, const PlaneFan& fan, double y, double z, int jj) {
+  return wf.c + (wf.ls * y) * wf.a + (r0 - z) * fan.dir[jj];
+}
+
+// The smallest rail distance of profile point (y, z) over the fan's planes (rail_distance of the point in
+// world), and that plane in jj_min (the first of equal ones; unchanged if none is finite).
+template <class RailDistance>
+double fanDistance(const WheelFrame& wf, double r0, const PlaneFan& fan, double y, double z,
+                   const RailDistance& rail_distance, int& jj_min) {
+  double d_min = std::numeric_limits<double>::infinity();
+  for (int jj = 0; jj <= 2 * fan.n; ++jj) {
+    const double d = rail_distance(fanPoint(wf, r0, fan, y, z, jj));
+    if (d < d_min) {
+      d_min = d;
+      jj_min = jj;
+    }
+  }
+  return d_min;
+}
+
 // Wheel surface point and first derivatives.
 struct WheelEval {
   Vector3d p, p_th, p_u, n, n_th, n_u, e_r, e_th;
@@ -415,22 +436,14 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   makePlaneFan(wf, th, fanWidth(k, section), options_.search_plane_step, fan);
   const std::vector<Sample>& smp = samples_[k];
   const int n = static_cast<int>(smp.size());
-  // Wheel profile point (y, z) in the fan's plane jj.
-  auto profilePoint = [&](double y, double z, int jj) -> Vector3d {
-    return wf.c + (wf.ls * y) * wf.a + (r0_ - z) * fan.dir[jj];
+  // Rail distance of world point p in the section (local copies of its axes: they stay in registers).
+  auto railDistance = [&](const Vector3d& p, double* u_closest = nullptr) {
+    const Vector3d rel = p - o;
+    return railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), u_closest);
   };
   // Distance of profile point (y, z): its smallest over the fan of planes, and that plane's index.
   auto pointDistance = [&](double y, double z, int& jj_i) {
-    double d_i = std::numeric_limits<double>::infinity();
-    for (int jj = 0; jj <= 2 * fan.n; ++jj) {
-      const Vector3d rel = profilePoint(y, z, jj) - o;
-      const double d = railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
-      if (d < d_i) {
-        d_i = d;
-        jj_i = jj;
-      }
-    }
-    return d_i;
+    return fanDistance(wf, r0_, fan, y, z, railDistance, jj_i);
   };
   const int lowest = fan.n;
   double d_prev2 = 0.0, d_prev = 0.0;
@@ -476,7 +489,7 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
   min_distance = min_any;
   if (best < 0 || !(best_d < 0.9 * options_.search_margin)) return false;
   double u_best = smp[best].u;
-  Vector3d q = profilePoint(smp[best].y, smp[best].z, jj_best);
+  Vector3d q = fanPoint(wf, r0_, fan, smp[best].y, smp[best].z, jj_best);
   if (end_seed) {
     // The gap may keep falling past the end sample, onto the neighbouring surface's part of the profile (a
     // second contact there, ContactGeometry::past_end), and Newton from the end sample can miss that
@@ -494,13 +507,12 @@ bool ContactDetector::search(WheelSurface surface, const WheelPose& pose, const 
       best_d = d_j;
       u_best = u_j;
       jj_best = jj_j;
-      q = profilePoint(p.x(), p.y(), jj_j);
+      q = fanPoint(wf, r0_, fan, p.x(), p.y(), jj_j);
     }
   }
-  const Vector3d rel = q - o;
   double u_r = 0.0;
-  railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), &u_r);
-  x_seed = Vector4d(fan.th[jj_best], u_best, s + T.dot(rel), u_r);
+  railDistance(q, &u_r);
+  x_seed = Vector4d(fan.th[jj_best], u_best, s + T.dot(q - o), u_r);
   p_wheel_seed = q;
   return true;
 }
@@ -540,10 +552,10 @@ void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& tr
   PlaneFan fans[2];
   const int n_parts = include_flange ? 2 : 1;
   for (int k = 0; k < n_parts; ++k) makePlaneFan(wf, th, fanWidth(k, section), options_.search_plane_step, fans[k]);
-  auto planeDistance = [&](double y, double z, const Vector3d& dir, Vector3d& q) {
-    q = wf.c + (wf.ls * y) * wf.a + (r0_ - z) * dir;
-    const Vector3d rel = q - o;
-    return railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)));
+  // Rail distance of world point p in the section (local copies of its axes: they stay in registers).
+  auto railDistance = [&](const Vector3d& p, double* u_closest = nullptr) {
+    const Vector3d rel = p - o;
+    return railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), u_closest);
   };
   // A sample is taken unless the last one taken bounds its distance above scan_skip_clearance: along the
   // profile the rail distance changes by at most kScanLipschitz times the arc between the two samples.
@@ -557,13 +569,13 @@ void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& tr
     bool taken = false;
     for (const Sample& smp : samples_[k]) {
       if (k == 0 ? smp.u > tread_.uMax() : smp.u < 0.0) continue;
-      double d_i = std::numeric_limits<double>::infinity();
+      double d_i = 0.0;
       const double bound = std::min(d_taken, options_.search_margin) - kScanLipschitz * (smp.arc - arc_taken);
       if (taken && skip > 0.0 && bound > skip) {
         d_i = bound;
       } else {
-        Vector3d q;
-        for (int jj = 0; jj <= 2 * fan.n; ++jj) d_i = std::min(d_i, planeDistance(smp.y, smp.z, fan.dir[jj], q));
+        int jj_unused = 0;
+        d_i = fanDistance(wf, r0_, fan, smp.y, smp.z, railDistance, jj_unused);
         d_taken = d_i;
         arc_taken = smp.arc;
         taken = true;
@@ -584,25 +596,15 @@ void ContactDetector::scanProfile(const WheelPose& pose, const TrackGeometry& tr
     const Vector2d p = profileCurveAt(k, u, u_local).position(u_local);
     // The plane of the sample's minimum, searched again (cheap: one sample).
     const PlaneFan& fan = fans[k];
-    double best = std::numeric_limits<double>::infinity();
     int jj_best = fan.n;
-    Vector3d q_best = Vector3d::Zero();
-    for (int jj = 0; jj <= 2 * fan.n; ++jj) {
-      Vector3d q;
-      const double d_j = planeDistance(p.x(), p.y(), fan.dir[jj], q);
-      if (d_j < best) {
-        best = d_j;
-        jj_best = jj;
-        q_best = q;
-      }
-    }
-    const Vector3d rel = q_best - o;
+    fanDistance(wf, r0_, fan, p.x(), p.y(), railDistance, jj_best);
+    const Vector3d q = fanPoint(wf, r0_, fan, p.x(), p.y(), jj_best);
     double u_r = 0.0;
-    railSignedDistance(Vector2d(Ny.dot(rel), B.dot(rel)), &u_r);
+    railDistance(q, &u_r);
     ProfileScan::Minimum m;
     m.sample = i;
     m.surface = k;
-    m.seed = Vector4d(fan.th[jj_best], u, section.s + T.dot(rel), u_r);
+    m.seed = Vector4d(fan.th[jj_best], u, section.s + T.dot(q - o), u_r);
     // Insert by depth.
     int pos = std::min(out.n_minima, ProfileScan::kMaxMinima - 1);
     while (pos > 0 && out.distance[out.minima[pos - 1].sample] > d) {
