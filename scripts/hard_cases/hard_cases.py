@@ -211,13 +211,6 @@ CHECK_NAMES = {"check_lift_off": "lift-off and re-contact", "check_two_point": "
 
 # -------------------------------------------------------------------------------------------- the cases
 
-# Below 2 m/s on its own contact the vehicle integrates with BDF (solver.vehicle_method auto), whose step is
-# then set by accuracy, not by the stiff regularised creep law: with the 2e-5 s cap of the co-simulation
-# it takes 50 000 steps per simulated second, with a 1 ms cap 16 000 (0.1 s of standstill: 1629 steps,
-# 2.2 s wall, against 3255 steps at 1e-4 s; railsim_check_inputs config/scenes/hard/standstill.yaml --set
-# effects.track_model=rigid --set solver.vehicle_max_step=1e-3 --vehicle-time 0.1). A co-simulation keeps
-# the cap at the track step (the scene loader refuses more), so only the rigid runs get it.
-LOW_SPEED_EXTRA = {"rigid": {"solver.vehicle_max_step": 1e-3}}
 
 CASES = [
     Case("lift_off_bump", "1. lift-off and re-contact over a 15 mm bump of one rail at 110 km/h",
@@ -234,11 +227,11 @@ CASES = [
     Case("standstill", "3a. start from standstill (speed 0)",
          "settles to the closed-form static wheel load Q0 = m g / 8", MODELS, ("rigid",),
          ("mean Q, last 0.2 s", "kN", 1e-3, mean_q_all, 0.01, "a static load: 1 %"),
-         specific=check_static, extra=LOW_SPEED_EXTRA),
+         specific=check_static),
     Case("creep_speed", "3b. run at 0.1 m/s",
          "settles to Q0 at a tiny rolling speed (creepages divided by ~0.1 m/s)", MODELS, ("rigid",),
          ("mean Q, last 0.2 s", "kN", 1e-3, mean_q_all, 0.01, "a static load: 1 %"),
-         specific=check_static, extra=LOW_SPEED_EXTRA),
+         specific=check_static),
     Case("hunting_high_speed", "4. 450 km/h on straight standard-gauge track (conicity 0.18) after a 4 mm alignment kink",
          "lateral motion bounded (limit cycle, no blow-up)", MODELS, (),
          ("lateral amplitude, 2nd half", "mm", 1e3, lateral_amplitude_late, 0.20,
@@ -294,8 +287,9 @@ def model_overrides(model, scene_path=None):
 
 
 def refined_overrides(scene_path, extra=None):
-    """Overrides of the convergence run: track step and vehicle max step halved, rtol and atol / 10, from the
-    scene's values with the case's extra overrides for the model applied."""
+    """Overrides of the convergence run: track step and vehicle max step (the co-simulation's cap) halved,
+    rtol and atol / 10, from the scene's values with the case's extra overrides for the model applied. The
+    vehicle alone has no cap (solver.standalone_max_step 0): its refinement is the tolerances."""
     s = (_load_yaml(scene_path).get("solver") or {})
     v = {k: float((extra or {}).get("solver." + k, s.get(k, d))) for k, d in SOLVER_DEFAULTS.items()}
     return {"solver.track_step": v["track_step"] / 2, "solver.vehicle_max_step": v["vehicle_max_step"] / 2,

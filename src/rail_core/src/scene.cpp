@@ -269,6 +269,7 @@ std::string toYaml(const Scene& s) {
   num(e, "vehicle_rtol", v.vehicle_rtol);
   num(e, "vehicle_atol", v.vehicle_atol);
   num(e, "vehicle_max_step", v.vehicle_max_step);
+  num(e, "standalone_max_step", v.standalone_max_step);
   kv(e, "vehicle_method", toString(v.vehicle_method));
   kv(e, "transport", toString(v.transport));
   num(e, "exchange_timeout", v.exchange_timeout);
@@ -383,8 +384,11 @@ std::string describe(const Scene& s, Role role) {
                                  : ", whole track integrated");
   }
   if (s.has_vehicle) {
+    // The cap this run uses: the co-simulation's, or the vehicle alone's (solver.standalone_max_step).
+    const double max_step = s.cosimulation() ? v.vehicle_max_step : v.standalone_max_step;
     o << ", vehicle rtol " << formatNumber(v.vehicle_rtol) << " atol " << formatNumber(v.vehicle_atol) << " max step "
-      << formatNumber(v.vehicle_max_step) << " s (" << toString(v.vehicle_method) << ")";
+      << (max_step > 0.0 ? formatNumber(max_step) + " s" : std::string("none")) << " (" << toString(v.vehicle_method)
+      << ")";
   }
   if (s.cosimulation())
     o << ", transport " << toString(v.transport) << ", timeout " << fixed(v.exchange_timeout, 1) << " s";

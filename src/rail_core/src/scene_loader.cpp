@@ -408,6 +408,9 @@ void readSolver(MapReader& root, Scene& s) {
   inRange(r, "vehicle_atol", v.vehicle_atol, 1e-15, 1e-1, "");
   r.number("vehicle_max_step", v.vehicle_max_step);
   inRange(r, "vehicle_max_step", v.vehicle_max_step, 1e-8, 1e-1, "s");
+  r.number("standalone_max_step", v.standalone_max_step);
+  if (v.standalone_max_step != 0.0)
+    inRange(r, "standalone_max_step", v.standalone_max_step, 1e-8, 1e-1, "s (or 0: none)");
   r.choice("vehicle_method", v.vehicle_method,
            {{"auto", VehicleMethod::kAuto}, {"bdf", VehicleMethod::kBdf}, {"adams", VehicleMethod::kAdams}});
   r.choice("transport", v.transport,

@@ -185,6 +185,8 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
       {"vehicle step above the track step", replaced(kBase, "vehicle_max_step: 1.0e-5", "vehicle_max_step: 5.0e-5"),
        "scene.yaml: solver.vehicle_max_step: must be at most solver.track_step (2e-05 s) in co-simulation, got 5e-05 "
        "(line 18)"},
+      {"vehicle-alone step out of range", replaced(kBase, "vehicle_max_step: 1.0e-5", "standalone_max_step: 1.0"),
+       "scene.yaml: solver.standalone_max_step: must be between 1e-08 and 0.1 s (or 0: none), got 1 (line 18)"},
       {"output needs a track node",
        replaced(replaced(kBase, "topics: [wheel_states]", "topics: [wheel_states, rail_deflection]"),
                 "track_model: rigid_fe", "track_model: rigid"),
@@ -295,6 +297,25 @@ TEST(Scene, DescribeListsEffectsAndComponents) {
   EXPECT_NE(v.find("wheel-centre wrenches from the track node over shm"), std::string::npos) << v;
   const std::string t = describe(s, Role::kTrack);
   EXPECT_NE(t.find("rigid FE rails: contact on the undeformed rails, no FE integration"), std::string::npos) << t;
+}
+
+TEST(Scene, TheVehicleAloneHasItsOwnStepCapAndTheSummarySaysWhichAppliesToTheRun) {
+  // The scene's vehicle_max_step is the co-simulation cap; a run without a track node takes
+  // standalone_max_step (0 = none) and the summary names the cap the run uses.
+  const Scene cosim = load(kBase);
+  EXPECT_DOUBLE_EQ(cosim.solver.standalone_max_step, 0.0);
+  EXPECT_NE(describe(cosim, Role::kVehicle).find("max step 1e-05 s (auto)"), std::string::npos)
+      << describe(cosim, Role::kVehicle);
+  const Scene alone = loadSceneText(kBase, "scene.yaml", kData, {"effects.track_model=rigid"});
+  EXPECT_NE(describe(alone, Role::kVehicle).find("max step none (auto)"), std::string::npos)
+      << describe(alone, Role::kVehicle);
+  const Scene capped =
+      loadSceneText(kBase, "scene.yaml", kData, {"effects.track_model=rigid", "solver.standalone_max_step=1e-4"});
+  EXPECT_DOUBLE_EQ(capped.solver.standalone_max_step, 1e-4);
+  EXPECT_NE(describe(capped, Role::kVehicle).find("max step 0.0001 s (auto)"), std::string::npos)
+      << describe(capped, Role::kVehicle);
+  EXPECT_NE(capped.hash, alone.hash);
+  EXPECT_NE(toYaml(capped).find("standalone_max_step: 0.0001"), std::string::npos) << toYaml(capped);
 }
 
 TEST(Scene, OverridesChangeKeysAsIfTheFileSaidSo) {

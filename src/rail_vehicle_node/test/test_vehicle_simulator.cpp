@@ -169,7 +169,6 @@ TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
   const double speed = 20.0;
   core::Scene scene = straightScene(speed, 3.4);
   scene.vehicle.wheelsets = 1;
-  scene.solver.vehicle_max_step = 2e-5;
   const double axle_load = kCoachMass * kG / 4.0;
   auto build = [&](VehicleModel& m) {
     RigidBody ws;
@@ -272,9 +271,9 @@ CurveRun runTightCurve(double t_end, double split_overlap, double rtol, double a
   scene.solver.end.value = t_end;
   scene.solver.vehicle_rtol = rtol;
   scene.solver.vehicle_atol = atol;
+  scene.solver.standalone_max_step = max_step;
   SimulatorSettings settings;
   settings.contact.detection.split_overlap = split_overlap;
-  settings.standalone_max_step = max_step;
   settings.warm_starts_at_accepted_steps = warm_starts_at_accepted_steps;
   VehicleSimulator sim(scene, settings);
   RunStatus status = RunStatus::kRunning;
@@ -599,11 +598,10 @@ struct CostRun {
   long long irregularity_stations_run = 0;    // ... during the run
 };
 
-CostRun runWithClock(const core::Scene& scene, double t_end = 0.02, double standalone_max_step = 0.0) {
+CostRun runWithClock(const core::Scene& scene, double t_end = 0.02) {
   CostRun r;
   SimulatorSettings settings;
   settings.cost = &r.clock;
-  settings.standalone_max_step = standalone_max_step;
   const long long s0 = rc::Irregularities::stationsEvaluated();
   VehicleSimulator sim(scene, settings);
   const long long s1 = rc::Irregularities::stationsEvaluated();
@@ -614,7 +612,9 @@ CostRun runWithClock(const core::Scene& scene, double t_end = 0.02, double stand
 }
 
 TEST(VehicleSimulatorCost, TheBuildIsNotTimedAndTheRunIs) {
-  const CostRun r = runWithClock(straightScene(30.5556, 0.02), 0.02, 2e-5);
+  core::Scene scene = straightScene(30.5556, 0.02);
+  scene.solver.standalone_max_step = 2e-5;
+  const CostRun r = runWithClock(scene, 0.02);
   // Adams (max step 2e-5 s): right-hand sides, no Jacobian.
   EXPECT_GT(r.clock.calls[core::CostClock::kVehicleRhs], 0);
   EXPECT_GT(r.clock.seconds[core::CostClock::kVehicleRhs], 0.0);
@@ -730,6 +730,27 @@ TEST(VehicleSimulatorCost, BdfJacobianRightHandSidesAreTimedAsJacobianWithoutCha
 
 namespace rail::vehicle {
 namespace {
+
+TEST(VehicleSimulator, TheVehicleAloneTakesTheScenesStandaloneCapAndNotTheCosimulationOne) {
+  // solver.vehicle_max_step caps the vehicle in co-simulation only; alone, solver.standalone_max_step
+  // (0 = none) does, and a cap of T / n makes CVODE take at least n steps to T.
+  core::Scene scene = straightScene(30.5556, 0.02);
+  scene.solver.vehicle_max_step = 1e-5;
+  VehicleSimulator free_run(scene);
+  EXPECT_EQ(free_run.maxStep(), 0.0);
+  EXPECT_EQ(free_run.method(), IntegrationMethod::kBdf);
+  ASSERT_EQ(free_run.advanceTo(0.02), RunStatus::kFinished) << free_run.message();
+  for (const double cap : {1e-4, 2e-5}) {
+    scene.solver.standalone_max_step = cap;
+    VehicleSimulator capped(scene);
+    EXPECT_EQ(capped.maxStep(), cap);
+    // auto: Adams at a cap of 5e-5 s or less, BDF above
+    EXPECT_EQ(capped.method(), cap <= 5e-5 ? IntegrationMethod::kAdams : IntegrationMethod::kBdf);
+    ASSERT_EQ(capped.advanceTo(0.02), RunStatus::kFinished) << capped.message();
+    EXPECT_GE(capped.counters().steps, std::lround(0.02 / cap)) << "cap " << cap;
+    EXPECT_GT(capped.counters().steps, free_run.counters().steps) << "cap " << cap;
+  }
+}
 
 // solver.vehicle_method auto: Adams at the paper's 2e-5 s step cap at speed; BDF at low speed with the
 // built-in contact (stiff viscous creep, see ChooseMethod); Adams again when the wrenches come from the track

@@ -3,9 +3,9 @@
 //                           [start_arc_length] [cost 0|1] [coloured|dq] [klu|dense] [runs] [carry 0|1]
 //                           [accepted|every]
 // Prints, per run, wall time per simulated second, CVODE steps, RHS and Jacobian evaluations, then the
-// median wall time of the runs. max_step is the vehicle-alone cap (SimulatorSettings::standalone_max_step,
-// 0 = none); a negative start_arc_length keeps the scene's. cost 1 passes a cost clock (as the node does)
-// so that the clock's own overhead can be measured against cost 0. coloured|dq: BDF's Jacobian (the
+// median wall time of the runs. max_step is the vehicle-alone cap (it replaces the scene's
+// solver.standalone_max_step; 0 = none); a negative start_arc_length keeps the scene's. cost 1 passes a cost clock (as
+// the node does) so that the clock's own overhead can be measured against cost 0. coloured|dq: BDF's Jacobian (the
 // coloured sparse quotient or CVODE's dense one), klu|dense: the linear solver with the coloured Jacobian.
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/scene_loader.hpp>
@@ -52,7 +52,7 @@ int runBenchmark(int argc, char** argv) {
   const double duration = positionalNumber(argc, argv, 2, 0.0, 1e-6, kUsage);
   const int method = positionalChoice(argc, argv, 3, kMethods, 2, kUsage);
   vehicle::SimulatorSettings settings;
-  settings.standalone_max_step = positionalNumber(argc, argv, 4, 0.0, 0.0, kUsage);
+  const double max_step = positionalNumber(argc, argv, 4, 0.0, 0.0, kUsage);
   const bool flange = positionalChoice(argc, argv, 5, kOffOn, 1, kUsage) == 1;
   const bool spin = positionalChoice(argc, argv, 6, kOffOn, 1, kUsage) == 1;
   const double start_s = positionalNumber(argc, argv, 7, -1.0, -HUGE_VAL, kUsage);
@@ -68,6 +68,7 @@ int runBenchmark(int argc, char** argv) {
   settings.impact_memory_at_accepted_steps = positionalChoice(argc, argv, 13, kMemories, 0, kUsage) == 0;
   settings.warm_starts_at_accepted_steps = settings.impact_memory_at_accepted_steps;
   core::Scene scene = core::loadSceneFile(argv[1]);
+  scene.solver.standalone_max_step = max_step;
   scene.effects.track_model = core::TrackModel::kRigid;
   if (argc > 3) {
     scene.solver.vehicle_method = method == 0   ? core::VehicleMethod::kBdf

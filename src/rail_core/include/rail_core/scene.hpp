@@ -152,7 +152,8 @@ struct Solver {
   double track_step = 2.0e-5;        // Newmark fixed step [s] (the paper's converged value)
   double vehicle_rtol = 1.0e-6;      // CVODE relative tolerance
   double vehicle_atol = 1.0e-8;      // CVODE absolute tolerance
-  double vehicle_max_step = 2.0e-5;  // CVODE maximum step [s]; <= track_step in co-simulation
+  double vehicle_max_step = 2.0e-5;  // CVODE maximum step [s] in co-simulation; <= track_step
+  double standalone_max_step = 0.0;  // CVODE maximum step [s] without a track node; 0 = none (error control)
   VehicleMethod vehicle_method = VehicleMethod::kAuto;
   Transport transport = Transport::kShm;
   double exchange_timeout = 10.0;   // longest wait for the peer during a run [s]

@@ -68,11 +68,6 @@ struct SimulatorSettings {
   // switched off and every right-hand side takes the wheel-centre wrenches from this source instead
   // (contacts() then keeps the settling evaluation). Must outlive the simulator.
   const WheelWrenchSource* wheel_wrench_source = nullptr;
-  // Maximum step of the vehicle's integrator when it runs alone (no wheel_wrench_source) [s]; 0 = none:
-  // CVODE's error control alone chooses the step. The scene's solver.vehicle_max_step is the
-  // co-simulation cap (the vehicle step never above the track step) and applies with a wheel_wrench_source
-  // only; tying the vehicle alone to it made it take ~50 000 steps per simulated second.
-  double standalone_max_step = 0.0;
   // BDF's Jacobian and linear solver (vehicle_integrator.hpp).
   JacobianKind jacobian = JacobianKind::kColoured;
   LinearSolverKind linear_solver = LinearSolverKind::kSparseKlu;
@@ -217,8 +212,8 @@ class VehicleSimulator {
   const std::vector<int>& wheelsetBodies() const { return wheelset_bodies_; }
   IntegratorCounters counters() const { return integrator_->counters(); }
   IntegrationMethod method() const { return method_; }
-  // The integrator's maximum step [s] (0 = none): SimulatorSettings::standalone_max_step when the vehicle
-  // runs alone, the scene's solver.vehicle_max_step in co-simulation.
+  // The integrator's maximum step [s] (0 = none): the scene's solver.standalone_max_step when the vehicle
+  // runs alone, its solver.vehicle_max_step (the track step's cap) in co-simulation.
   double maxStep() const { return max_step_; }
   // Settled lowering of the vehicle onto the rails (static vertical solve) [m], < 0 downward.
   double settleLift() const { return lift_; }

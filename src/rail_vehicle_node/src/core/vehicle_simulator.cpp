@@ -402,7 +402,7 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   is.atol = scene.solver.vehicle_atol;
   // The track step caps the vehicle step in co-simulation only; alone, the physics (error control) decides.
   const bool cosimulation = settings.wheel_wrench_source != nullptr;
-  max_step_ = cosimulation ? scene.solver.vehicle_max_step : settings.standalone_max_step;
+  max_step_ = cosimulation ? scene.solver.vehicle_max_step : scene.solver.standalone_max_step;
   is.max_step = max_step_;
   is.jacobian = settings.jacobian;
   // Where BDF gives up (some flange onsets below rtol 1e-6), Adams at the scene's step cap finishes the
