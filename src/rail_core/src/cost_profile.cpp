@@ -35,6 +35,8 @@ const char* CostClock::name(Part p) {
       return "track_rhs";
     case kTrackSolve:
       return "track_solve";
+    case kTrackSolveWait:
+      return "track_solve_wait";
     case kWindowMoves:
       return "window_moves";
     case kFloorAccelerations:
@@ -82,8 +84,10 @@ int CostProfile::finerLines(const CostClock& k, std::array<FinerLine, kMaxFinerL
       FinerLine{"contact_detection", k.contact.detection_seconds, k.contact.evaluations, contact_parent};
   lines[static_cast<std::size_t>(n++)] =
       FinerLine{"contact_forces", k.contact.forces_seconds, k.contact.evaluations, contact_parent};
-  part(CostClock::kTrackRhs, kTrackStep);
-  part(CostClock::kTrackSolve, kTrackStep);
+  const Component solve_parent = k.track_solve_beside ? kComponentCount : kTrackStep;
+  part(CostClock::kTrackRhs, solve_parent);
+  part(CostClock::kTrackSolve, solve_parent);
+  part(CostClock::kTrackSolveWait, kTrackStep);
   part(CostClock::kWindowMoves, kTrackStep);
   part(CostClock::kFloorAccelerations, kVehicleIntegration);
   part(CostClock::kRailDeflection, kPublish);
@@ -136,7 +140,8 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
     for (int i = 0; i < n; ++i) {
       const FinerLine& l = lines[static_cast<std::size_t>(i)];
       o << "  " << l.name << ": {seconds: " << l.seconds << ", share: " << (loop_wall > 0 ? l.seconds / loop_wall : 0.0)
-        << ", calls: " << l.calls << ", within: " << name(l.parent) << "}\n";
+        << ", calls: " << l.calls << ", within: "
+        << (l.parent == kComponentCount ? "beside_track_step" : name(l.parent)) << "}\n";
     }
     for (int c = 0; c < kComponentCount; ++c) {
       double parts = 0.0;
@@ -201,6 +206,17 @@ std::string CostProfile::toText(const std::string& node, double loop_wall, doubl
       if (l.parent != k || l.calls == 0) continue;
       std::snprintf(line, sizeof line, "    %-18s %9.3f s %6.1f %%  %ld calls\n", l.name, l.seconds,
                     loop_wall > 0 ? 100.0 * l.seconds / loop_wall : 0.0, l.calls);
+      o << line;
+    }
+  }
+  if (clock != nullptr && clock->track_solve_beside) {
+    std::array<FinerLine, kMaxFinerLines> lines;
+    const int n = finerLines(*clock, lines);
+    for (int i = 0; i < n; ++i) {
+      const FinerLine& l = lines[static_cast<std::size_t>(i)];
+      if (l.parent != kComponentCount || l.calls == 0) continue;
+      std::snprintf(line, sizeof line, "  beside: %-12s %9.3f s %6.1f %%  %ld calls (second thread)\n", l.name,
+                    l.seconds, loop_wall > 0 ? 100.0 * l.seconds / loop_wall : 0.0, l.calls);
       o << line;
     }
   }

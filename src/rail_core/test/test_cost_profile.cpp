@@ -95,6 +95,28 @@ TEST(CostClock, TimedOutputOffProducesNothingAndCostsNothing) {
 
 // The finer split nests in the coarse components and the per-component "other" makes the shares add up:
 // track side, track_step 4 s = contact 1 + 0.5, rhs 0.5, solve 1.5, rest 0.5.
+// With the solve on a second thread, track_rhs and track_solve are beside the loop (not subtracted from
+// track_step) and the loop's share is the wait for them.
+TEST(CostClock, ASolveBesideTheLoopIsReportedBesideIt) {
+  CostProfile p;
+  p.add(CostProfile::kTrackStep, 4.0);
+  CostClock k;
+  k.track_solve_beside = true;
+  k.add(CostClock::kTrackRhs, 0.5);
+  k.add(CostClock::kTrackSolve, 1.5);
+  k.add(CostClock::kTrackSolveWait, 0.25);
+  Scene scene;
+  scene.file = "s.yaml";
+  const std::string y = p.toYaml("/t", scene, 10.0, 1.0, &k);
+  EXPECT_NE(y.find("track_solve: {seconds: 1.5, share: 0.15, calls: 1, within: beside_track_step}"), std::string::npos)
+      << y;
+  EXPECT_NE(y.find("track_solve_wait: {seconds: 0.25, share: 0.025, calls: 1, within: track_step}"), std::string::npos)
+      << y;
+  EXPECT_NE(y.find("track_step_other: {seconds: 3.75, share: 0.375}"), std::string::npos) << y;  // 4 - 0.25
+  const std::string text = p.toText("/t", 10.0, 1.0, &k);
+  EXPECT_NE(text.find("beside: track_solve"), std::string::npos) << text;
+}
+
 TEST(CostClock, FinerSplitAddsUpWithinItsComponent) {
   CostProfile p;
   p.add(CostProfile::kTrackStep, 4.0);

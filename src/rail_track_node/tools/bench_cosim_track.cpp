@@ -74,13 +74,68 @@ static void fillFrame(const rail::core::Scene& scene, const rc::TrackGeometry& g
 
 // Windowed semi-implicit run of `steps` steps from s_front0: per-step times split into move steps and the
 // others.
+static bool g_cost = false;      // pass a cost clock to the track (argument 3)
+static bool g_beside = true;     // CosimTrackOptions::solve_beside (argument 4)
+static rt::CholeskyLayout g_layout = rt::CholeskyLayout::kSimplicial;  // argument 5
+
+static void printClock(const rail::core::CostClock& clock, long steps) {
+  using CC = rail::core::CostClock;
+  const double us = 1e6 / static_cast<double>(steps);
+  std::printf("%-22s per step (us): contact_detection %.1f, contact_forces %.1f, track_rhs %.1f, track_solve %.1f%s, "
+              "track_solve_wait %.1f; %.1f creep evaluations\n",
+              "", us * clock.contact.detection_seconds, us * clock.contact.forces_seconds,
+              us * clock.seconds[CC::kTrackRhs], us * clock.seconds[CC::kTrackSolve],
+              clock.track_solve_beside ? " (beside)" : "", us * clock.seconds[CC::kTrackSolveWait],
+              static_cast<double>(clock.contact.creep_evaluations) / static_cast<double>(steps));
+}
+
+// The solves of the window's K_eff alone (warm, median of `repeats`): the step's solve and the influence
+// columns of one rail node, with the simplicial factor (six columns one by one and in one pass) and with
+// CHOLMOD's supernodal solve.
+static void benchWindowSolves(const rt::TrackWindow& w, double h, int repeats) {
+  const rt::LinearSystem& sys = w.model().system;
+  const int n = sys.size();
+  Eigen::VectorXd b = Eigen::VectorXd::Random(n), x(n);
+  Eigen::MatrixXd cols(n, 6);
+  const rt::TrackMesh& mesh = w.mesh();
+  const int node = mesh.rail_nodes[0][mesh.rail_nodes[0].size() / 2];
+  int dofs[6];
+  for (int j = 0; j < 6; ++j) dofs[j] = mesh.dofIndex(node, j);
+  auto median = [&](auto&& f) {
+    std::vector<double> t;
+    for (int r = 0; r < repeats; ++r) {
+      const Clock::time_point a = Clock::now();
+      f();
+      t.push_back(std::chrono::duration<double>(Clock::now() - a).count());
+    }
+    std::sort(t.begin(), t.end());
+    return 1e6 * t[t.size() / 2];
+  };
+  for (rt::CholeskyLayout layout : {rt::CholeskyLayout::kSimplicial, rt::CholeskyLayout::kSupernodal}) {
+    rt::NewmarkIntegrator integ(sys, h, false, nullptr, 0, layout);
+    const double one = median([&] { integ.solveEffective(b, x); });
+    const double six = median([&] {
+      for (int j = 0; j < 6; ++j) integ.solveEffectiveColumns(dofs + j, 1, cols);
+    });
+    const double many = median([&] { integ.solveEffectiveColumns(dofs, 6, cols); });
+    std::printf("%-22s K_eff solves, %s factor (nnz(L) %.0f), median of %d, warm: one right-hand side %.1f us; a rail "
+                "node's 6 influence columns one by one %.1f us, in one pass %.1f us\n",
+                "window", layout == rt::CholeskyLayout::kSimplicial ? "simplicial" : "supernodal",
+                integ.factor().factorNonZeros(), repeats, one, six, many);
+  }
+}
+
 static void runWindow(rail::core::Scene scene, double s_front0, int steps, const char* label) {
   scene.effects.track_model = rail::core::TrackModel::kFlexible;
   scene.solver.track_window.enabled = true;
   scene.vehicle.start_arc_length = s_front0;
   const Clock::time_point t0 = Clock::now();
+  rail::core::CostClock clock;
   rt::CosimTrackOptions options;
   options.window.vehicle_length = kCoachWheelSpan;
+  options.solve_beside = g_beside;
+  options.factor_layout = g_layout;
+  if (g_cost) options.cost = &clock;
   rt::CosimTrack track(scene, options);
   const double build = std::chrono::duration<double>(Clock::now() - t0).count();
   cc::WheelStateFrame frame(8);
@@ -118,9 +173,9 @@ static void runWindow(rail::core::Scene scene, double s_front0, int steps, const
       track.windowMoves() > 0 ? 1e3 * track.windowMoveSeconds() / track.windowMoves() : 0.0,
       static_cast<double>(solves_after_first) / std::max(1, steps - 1),
       static_cast<double>(track.newtonIterations()) / steps, bad);
+  if (g_cost) printClock(clock, steps);
+  if (s_front0 == scene.vehicle.start_arc_length) benchWindowSolves(w, scene.solver.track_step, 1000);
 }
-
-static bool g_cost = false;  // pass a cost clock to the track (argument 3)
 
 static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::CosimCoupling coupling, int steps,
                 bool window = false) {
@@ -130,6 +185,8 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
   rail::core::CostClock clock;
   rt::CosimTrackOptions options;
   options.coupling = coupling;
+  options.solve_beside = g_beside;
+  options.factor_layout = g_layout;
   if (g_cost) options.cost = &clock;
   options.window.vehicle_length = kCoachWheelSpan;
   rt::CosimTrack track(scene, options);
@@ -168,22 +225,28 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
     std::printf("%-22s influence window %d DOFs, %.3f influence solves and %.2f Newton iterations per step\n", "",
                 track.influenceWindow(), static_cast<double>(track.influenceSolves()) / steps,
                 static_cast<double>(track.newtonIterations()) / steps);
+  if (g_cost && track.flexible()) printClock(clock, steps);
 }
 
 namespace {
 const char* const kUsage =
-    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1]\n"
+    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1] [solve_beside 0|1] [supernodal 0|1]\n"
     "Wall time of one co-simulation track step with the paper coach's 8 wheels on the paper scene: rigid_fe,\n"
     "flexible (semi-implicit and explicit coupling), and the moving track window (straight and curve runs\n"
-    "of window_steps each). Defaults: 500, 20000, 0 (cost clock off).\n";
+    "of window_steps each). Defaults: 500, 20000, 0 (cost clock off), 1 (the next step's solve on a second\n"
+    "thread), 0 (the simplicial factor; 1: CHOLMOD's supernodal solve, the reference).\n";
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (rail::tools::startTool(argc, argv, kUsage, 3)) return 0;
+  if (rail::tools::startTool(argc, argv, kUsage, 5)) return 0;
   const int steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 1, 500, 10, kUsage));
   const int window_steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20000, 0, kUsage));
   g_cost = rail::tools::positionalNumber(argc, argv, 3, 0, 0, kUsage) != 0;
-  std::printf("cost clock %s\n", g_cost ? "on" : "off");
+  g_beside = rail::tools::positionalNumber(argc, argv, 4, 1, 0, kUsage) != 0;
+  if (rail::tools::positionalNumber(argc, argv, 5, 0, 0, kUsage) != 0) g_layout = rt::CholeskyLayout::kSupernodal;
+  std::printf("cost clock %s, next solve %s, %s factor\n", g_cost ? "on" : "off",
+              g_beside ? "beside (second thread)" : "in the step",
+              g_layout == rt::CholeskyLayout::kSimplicial ? "simplicial" : "supernodal");
   const rail::core::Scene scene = rail::core::loadSceneFile(configDir() + "/scenes/paper_demo.yaml");
   run(scene, rail::core::TrackModel::kRigidFe, rt::CosimCoupling::kExplicit, steps);
   run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kSemiImplicit, steps);

@@ -20,7 +20,8 @@ namespace rail::core {
 // Nesting in the coarse components of CostProfile (the node prints it):
 //   vehicle_integration > vehicle_rhs, vehicle_jacobian (> contact_detection, contact_forces), floor_accelerations,
 //                         energy_output (vehicle side)
-//   track_step          > contact_detection, contact_forces, track_rhs, track_solve, window_moves
+//   track_step          > contact_detection, contact_forces, track_rhs, track_solve, track_solve_wait,
+//                         window_moves (track_rhs and track_solve beside it when run on a second thread)
 //   publish             > rail_deflection, pad_forces, contact_point_output, markers, energy_output (track side)
 struct CostClock {
   enum Part {
@@ -28,6 +29,7 @@ struct CostClock {
     kVehicleJacobian,     // right-hand sides of CVODE's difference-quotient Jacobians (BDF)
     kTrackRhs,            // Newmark right-hand side M x1 + C x2 + f and the step's completion (vector work)
     kTrackSolve,          // Newmark K_eff solve (CHOLMOD), one per step
+    kTrackSolveWait,      // the step waiting for its right-hand side and solve done beside it (second thread)
     kWindowMoves,         // track window moves (model build or reuse, state carry-over, rail arrays)
     kFloorAccelerations,  // effects.floor_acceleration_output: accelerometer readings
     kPadForces,           // effects.pad_force_output: pad forces under the train
@@ -74,6 +76,9 @@ struct CostClock {
   std::array<double, kPartCount> seconds{};  // [s]
   std::array<long, kPartCount> calls{};
   std::array<long long, kCountCount> counts{};
+  // True when track_rhs and track_solve ran on a second thread beside the loop (not inside its wall time);
+  // the loop's share of them is then track_solve_wait.
+  bool track_solve_beside = false;
   // contact_detection (detection_seconds) and contact_forces (forces_seconds), flange searches, creep
   // evaluations with spin: filled by the per-wheel contact evaluation.
   rail::contact::ContactCost contact;
@@ -144,11 +149,11 @@ class CostProfile {
     const char* name;
     double seconds;
     long calls;
-    Component parent;
+    Component parent;  ///< kComponentCount: beside the loop, on a second thread
   };
   // The finer split of clock in this profile (contact under track_step if the profile has track steps,
   // else under vehicle_integration), fixed order, at most kMaxFinerLines lines.
-  static constexpr int kMaxFinerLines = 13;
+  static constexpr int kMaxFinerLines = 14;
   int finerLines(const CostClock& clock, std::array<FinerLine, kMaxFinerLines>& lines) const;
 
  private:

@@ -12,7 +12,10 @@
 //    are solved together with the step, so that they are the contact law's at the rails' state of t_k and
 //    exactly the loads the rails carry. kExplicit: the contact on the rails of t_{k-1}, loads as computed
 //    (section 5.3 read literally; unstable with contact damping, see doc/cosim_track.md). Step 0
-//    evaluates the contact on the initial state and does not integrate.
+//    evaluates the contact on the initial state and does not integrate. With the semi-implicit coupling
+//    the step's load-free right-hand side and K_eff solve depend on the track's state only: they run on a
+//    second thread from the end of one step (CosimTrackOptions::solve_beside) while the vehicle integrates
+//    and the next frame's contacts are found, and the contact loads enter through the influence columns.
 //  - flexible with solver.track_window.enabled: the FE track is a TrackWindow (track_window.hpp) that
 //    follows the wheels (follow() before each step from the frame's wheel arc lengths); d = d_g + w with
 //    only w integrated; the contact sees d_g + w. A window move renumbers the DOFs: the influence
@@ -29,7 +32,10 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <condition_variable>
 #include <memory>
+#include <mutex>
+#include <thread>
 #include <vector>
 
 #include <rail_contact/profile.hpp>
@@ -71,6 +77,13 @@ struct CosimTrackOptions {
   SceneTrackOptions track;      ///< rail height and gravity of the FE track (flexible only)
   bool include_gravity = true;  ///< track self-weight f_g in every Newmark step and in the initial state
   CosimCoupling coupling = CosimCoupling::kSemiImplicit;  ///< flexible only
+  /// kSemiImplicit: the right-hand side and K_eff solve of the next step, which depend on the track's own
+  /// state only, run on a second thread as soon as a step ends (while the vehicle integrates and the
+  /// contacts of the next frame are evaluated); the contact loads enter through the influence columns. The
+  /// results equal the one-thread path's to rounding. false: the solve runs inside step().
+  bool solve_beside = true;
+  /// How K_eff is factorised and solved (SparseCholesky); the supernodal CHOLMOD solve is the reference.
+  CholeskyLayout factor_layout = CholeskyLayout::kSimplicial;
   /// kSemiImplicit: an influence column K_eff^{-1} e_j is stored over the DOF window where it exceeds this
   /// fraction of its largest entry (the DOFs are numbered plane by plane along the track).
   double influence_tolerance = 1e-12;
@@ -208,8 +221,23 @@ class CosimTrack {
                    rail::core::coupling::WrenchFrame& out) const noexcept;
   void implicitCorrection(const rail::core::coupling::WheelStateFrame& states,
                           rail::core::coupling::WrenchFrame& out) noexcept;
+  // The phases of implicitCorrection: the contacts in contact at the prediction (links), their influence
+  // system G, the Newton solve of their forces, and the step's displacement and contact results.
+  void gatherLinks(const rail::core::coupling::WheelStateFrame& states) noexcept;
+  void buildInfluence() noexcept;
+  void solveLinkForces() noexcept;
+  void applyLinkForces(const rail::core::coupling::WheelStateFrame& states,
+                       rail::core::coupling::WrenchFrame& out) noexcept;
+  // The load-free right-hand side and solve of the next step (stepDisplacement() = K_eff^{-1} rhs_0): on
+  // the second thread (startBaseSolve, then awaitBaseSolve) or here (solveBase).
+  void solveBase() noexcept;
+  void startBaseSolve() noexcept;
+  void awaitBaseSolve() noexcept;
+  void takeWorkerCost() noexcept;
+  void workerLoop() noexcept;
   int ensureNodeColumns(int rail, int node) noexcept;
   void solveColumn(int dof, int& lo, int& len) noexcept;
+  void trimColumn(int dof, const double* x, int& lo, int& len) noexcept;
 
   std::unique_ptr<rail::contact::TrackGeometry> rigid_geometry_;  // rigid_fe: the geometry alone
   std::unique_ptr<SceneTrack> fe_;                                // flexible full-length: geometry + FE model
@@ -241,6 +269,17 @@ class CosimTrack {
   double window_move_s_ = 0.0;
   rail::core::CostClock* cost_ = nullptr;               // CosimTrackOptions::cost
   rail::contact::ContactCost* contact_cost_ = nullptr;  // &cost_->contact, or null
+  // The base solve: its state (none, running beside, done for the current state and window), the second
+  // thread and its own cost clock (added to cost_ by the loop's thread when the result is taken).
+  enum class BaseSolve { kNone, kRunning, kReady };
+  BaseSolve base_ = BaseSolve::kNone;
+  bool solve_beside_ = false;
+  std::thread worker_;
+  std::mutex worker_mutex_;
+  std::condition_variable worker_cv_;
+  bool worker_job_ = false, worker_done_ = false, worker_stop_ = false;
+  rail::core::CostClock worker_cost_;
+  std::unique_ptr<NodalLoads> no_loads_;
 };
 
 }  // namespace track

@@ -65,8 +65,10 @@ class NewmarkIntegrator {
   /// cost (optional, must outlive the integrator): right-hand side build and completion into kTrackRhs,
   /// the K_eff solve of each step into kTrackSolve, C v products into kDampingProducts and, per product,
   /// end_dashpots (countEndDashpots of the mesh) into kEndDashpotForces. solveEffective() is not timed.
+  /// layout: how K_eff is factorised and solved (SparseCholesky).
   NewmarkIntegrator(const LinearSystem& sys, double dt, bool include_gravity = true,
-                    rail::core::CostClock* cost = nullptr, int end_dashpots = 0);
+                    rail::core::CostClock* cost = nullptr, int end_dashpots = 0,
+                    CholeskyLayout layout = CholeskyLayout::kSimplicial);
 
   /// State at rest at displacement d0 (zero velocity); the acceleration is solved from
   /// M a0 = f - C v0 - K d0 with f = gravity (if included) + loads. Allocates: call at set-up.
@@ -87,9 +89,16 @@ class NewmarkIntegrator {
   void completeStep(NewmarkState& state);
   /// x = K_eff^{-1} b (b, x of size n; x preallocated). No allocation.
   void solveEffective(const Eigen::VectorXd& b, Eigen::VectorXd& x) { factor_->solve(b, x); }
+  /// Columns K_eff^{-1} e_dofs[c], c < count <= SparseCholesky::kMaxUnitColumns, into x (n x count at least,
+  /// preallocated) in one pass over the factor. No allocation.
+  void solveEffectiveColumns(const int* dofs, int count, Eigen::MatrixXd& x) {
+    factor_->solveUnitColumns(dofs, count, x);
+  }
 
   double dt() const { return dt_; }
   const SparseCholesky& factor() const { return *factor_; }
+  /// Where the right-hand side and solve are timed from now on (null: not timed).
+  void setCostClock(rail::core::CostClock* cost) { cost_ = cost; }
 
  private:
   const LinearSystem& sys_;
@@ -99,7 +108,10 @@ class NewmarkIntegrator {
   rail::core::CostClock* cost_;
   int end_dashpots_;
   std::unique_ptr<SparseCholesky> factor_;
-  Eigen::VectorXd rhs_, x1_, x2_, d_new_, a_new_;  // per-step work vectors
+  // M and C row by row over the union of their patterns, so that M x1 + C x2 is one pass.
+  std::vector<int> row_start_, col_;
+  std::vector<double> m_, c_;
+  Eigen::VectorXd rhs_, x1_, x2_, d_new_;  // per-step work vectors
 };
 
 /// Static equilibrium d = K^{-1} f (factorises K; call at set-up).

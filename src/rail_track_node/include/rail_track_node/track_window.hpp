@@ -64,6 +64,7 @@ struct TrackWindowSettings {
   SceneTrackOptions track;         ///< rail height and gravity
   /// Optional cost clock of the window's Newmark integrators (NewmarkIntegrator); must outlive the window.
   rail::core::CostClock* cost = nullptr;
+  CholeskyLayout factor_layout = CholeskyLayout::kSimplicial;  ///< how each window's K_eff is solved
 };
 
 /// Figures of the window since construction.
@@ -93,6 +94,10 @@ class TrackWindow {
   /// new window (loads must be built on mesh() after this call). No allocation unless it moves; a move
   /// builds a model and may throw what building throws (std::bad_alloc, a factorisation failure).
   bool follow(double s_rear, double s_front);
+  /// True when follow(s_rear, s_front) would not move the window (nothing changes). No allocation.
+  bool holds(double s_rear, double s_front) const;
+  /// The clock of the Newmark integrators of this window and of the windows built at later moves.
+  void setCostClock(rail::core::CostClock* cost);
 
   /// One Newmark step t -> t + dt of w with the external loads (built on mesh(), at t + dt); then the rail
   /// nodal arrays of railDeformation() hold d_g + w and w' of the new state. No allocation, no exception.

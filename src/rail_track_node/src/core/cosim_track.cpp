@@ -52,6 +52,7 @@ struct CosimTrack::Implicit {
   std::vector<long> slot_used;                // frame of last use
   std::array<std::vector<int>, 2> node_slot;  // per rail node: its slot or -1
   Eigen::VectorXd unit, column;               // solve scratch
+  Eigen::MatrixXd node_columns;               // the 6 columns of one rail node (n x 6), solve scratch
   long solves = 0, clipped = 0;
 
   // One contact of this step in the implicit solve: its geometry (point, frame, Hertz and Kalker data)
@@ -126,6 +127,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     ws.include_gravity = options.include_gravity;
     ws.track = options.track;
     ws.cost = options.cost;
+    ws.factor_layout = options.factor_layout;
     if (!(ws.vehicle_length > 0.0) || !std::isfinite(ws.vehicle_length)) {
       std::ostringstream os;
       os << "CosimTrackOptions::window.vehicle_length: the vehicle's wheel span (m, > 0) is needed for the track "
@@ -165,7 +167,8 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   if (fe_) {
     const TrackModel& model = fe_->model;
     integrator_ = std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity,
-                                                      options.cost, countEndDashpots(model.mesh));
+                                                      options.cost, countEndDashpots(model.mesh),
+                                                      options.factor_layout);
     Eigen::VectorXd d0 =
         options.include_gravity ? staticGravityDeflection(model.system) : Eigen::VectorXd::Zero(model.system.size());
     state_ = integrator_->initialState(d0);
@@ -197,6 +200,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   im.tolerance = options.influence_tolerance;
   im.unit.setZero(im.n);
   im.column.setZero(im.n);
+  im.node_columns.setZero(im.n, kNodeDofs);
   // Window capacity: the widest column of a rail node at mid-track (both rails, 6 DOFs), plus a quarter
   // and two sleeper bays of DOFs for nodes where the track differs.
   int widest = 0;
@@ -231,9 +235,83 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   im.polach = contact_model_->options().polach;
   im.polach.spin = contact_model_->options().spin;
   im.cost = contact_cost_;
+
+  no_loads_ = std::make_unique<NodalLoads>(0);
+  if (options.solve_beside) {
+    // The integrators time their right-hand sides and solves into the worker's clock; the loop's thread
+    // adds it to cost_ when it takes a result.
+    solve_beside_ = true;
+    if (cost_ != nullptr) {
+      cost_->track_solve_beside = true;
+      integ().setCostClock(&worker_cost_);
+      if (window_) window_->setCostClock(&worker_cost_);
+    }
+    worker_ = std::thread([this] { workerLoop(); });
+    startBaseSolve();
+  }
 }
 
-CosimTrack::~CosimTrack() = default;
+CosimTrack::~CosimTrack() {
+  if (worker_.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(worker_mutex_);
+      worker_stop_ = true;
+    }
+    worker_cv_.notify_all();
+    worker_.join();
+  }
+}
+
+void CosimTrack::solveBase() noexcept { integ().solveStep(st(), *no_loads_); }
+
+void CosimTrack::workerLoop() noexcept {
+  std::unique_lock<std::mutex> lock(worker_mutex_);
+  for (;;) {
+    worker_cv_.wait(lock, [this] { return worker_job_ || worker_stop_; });
+    if (worker_stop_) return;
+    worker_job_ = false;
+    lock.unlock();
+    solveBase();
+    lock.lock();
+    worker_done_ = true;
+    worker_cv_.notify_all();
+  }
+}
+
+void CosimTrack::startBaseSolve() noexcept {
+  {
+    std::lock_guard<std::mutex> lock(worker_mutex_);
+    worker_done_ = false;
+    worker_job_ = true;
+  }
+  worker_cv_.notify_all();
+  base_ = BaseSolve::kRunning;
+}
+
+void CosimTrack::awaitBaseSolve() noexcept {
+  if (base_ != BaseSolve::kRunning) return;
+  {
+    rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolveWait);
+    std::unique_lock<std::mutex> lock(worker_mutex_);
+    worker_cv_.wait(lock, [this] { return worker_done_; });
+  }
+  base_ = BaseSolve::kReady;
+}
+
+// Adds the worker's clock to cost_; called while the worker waits for its next job.
+void CosimTrack::takeWorkerCost() noexcept {
+  if (cost_ == nullptr || !solve_beside_) return;
+  for (int p : {rail::core::CostClock::kTrackRhs, rail::core::CostClock::kTrackSolve}) {
+    cost_->seconds[static_cast<std::size_t>(p)] += worker_cost_.seconds[static_cast<std::size_t>(p)];
+    cost_->calls[static_cast<std::size_t>(p)] += worker_cost_.calls[static_cast<std::size_t>(p)];
+    worker_cost_.seconds[static_cast<std::size_t>(p)] = 0.0;
+    worker_cost_.calls[static_cast<std::size_t>(p)] = 0;
+  }
+  for (std::size_t c = 0; c < worker_cost_.counts.size(); ++c) {
+    cost_->counts[c] += worker_cost_.counts[c];
+    worker_cost_.counts[c] = 0;
+  }
+}
 
 // The rails as the contact search sees them: the FE rail beams of feMesh(), nodes equally spaced in s. At a
 // window move the object is kept and its layout rebuilt in place.
@@ -260,6 +338,7 @@ void CosimTrack::onWindowMove() {
       im.n = n;
       im.unit.setZero(n);
       im.column.setZero(n);
+      im.node_columns.setZero(n, kNodeDofs);
       if (im.window > n) im.window = n;
     }
     ++cache_drops_;
@@ -361,7 +440,8 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
     if (fe) {
       contact_model_->evaluate(ws, side, *geometry_, *deformation_, work_[id], res, contact_cost_);
       const int rail = side == rc::RailSide::kLeft ? kLeftRail : kRightRail;
-      for (int c = 0; c < rc::kContactSlots; ++c) {
+      // The semi-implicit coupling loads the rails through the influence columns (applyLinkForces).
+      for (int c = 0; c < rc::kContactSlots && coupling_ == CosimCoupling::kExplicit; ++c) {
         const rc::ContactPointResult& cp = res.contact[c];
         if (!cp.active) continue;
         // Eq. 15 for this contact about its own section centre, then eq. 16 onto the element's nodes.
@@ -397,7 +477,9 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
     }
     try {
       const auto t0 = std::chrono::steady_clock::now();
+      if (!window_->holds(s_min, s_max)) awaitBaseSolve();  // a move changes what the base solve reads
       if (window_->follow(s_min, s_max)) {
+        base_ = BaseSolve::kNone;  // solved on the old window
         onWindowMove();
         const double move_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         window_move_s_ += move_s;
@@ -424,7 +506,9 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
         integ().step(st(), *loads_);
         break;
       case CosimCoupling::kSemiImplicit:
-        integ().solveStep(st(), *loads_);
+        awaitBaseSolve();
+        if (base_ != BaseSolve::kReady) solveBase();
+        base_ = BaseSolve::kNone;
         if (contact_cost_ != nullptr) {
           // The contact forces solved with the step (Newton, influence-column solves included).
           const auto t0 = std::chrono::steady_clock::now();
@@ -434,6 +518,7 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
           implicitCorrection(states, out);
         }
         integ().completeStep(st());
+        takeWorkerCost();  // its solve and this completion, timed on the worker's clock
         break;
     }
     if (window_) window_->finishStep();  // the window's own rail arrays and step count
@@ -441,21 +526,28 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
     fillDeformation();
   }
   ++frames_;
+  if (solve_beside_ && base_ == BaseSolve::kNone) startBaseSolve();
   return CosimStepStatus::kOk;
 }
 
-// x = K_eff^{-1} e_dof into im.column; its window [lo, lo + len) where |x| > tolerance * max |x|, cut to the
-// capacity around dof if wider.
+// x = K_eff^{-1} e_dof into im.column and its window (trimColumn).
 void CosimTrack::solveColumn(int dof, int& lo, int& len) noexcept {
   Implicit& im = *implicit_;
   im.unit(dof) = 1.0;
   integ().solveEffective(im.unit, im.column);
   im.unit(dof) = 0.0;
   ++im.solves;
-  const double cut = im.tolerance * im.column.cwiseAbs().maxCoeff();
+  trimColumn(dof, im.column.data(), lo, len);
+}
+
+// The window [lo, lo + len) of column x of dof where |x| > tolerance * max |x|, cut to the capacity around
+// dof if wider.
+void CosimTrack::trimColumn(int dof, const double* x, int& lo, int& len) noexcept {
+  Implicit& im = *implicit_;
+  const double cut = im.tolerance * Eigen::Map<const Eigen::VectorXd>(x, im.n).cwiseAbs().maxCoeff();
   int first = 0, last = im.n - 1;
-  while (first < dof && std::abs(im.column(first)) <= cut) ++first;
-  while (last > dof && std::abs(im.column(last)) <= cut) --last;
+  while (first < dof && std::abs(x[first]) <= cut) ++first;
+  while (last > dof && std::abs(x[last]) <= cut) --last;
   len = last - first + 1;
   lo = first;
   if (len > im.window) {
@@ -485,16 +577,27 @@ int CosimTrack::ensureNodeColumns(int rail, int node) noexcept {
   cached = slot;
   const TrackMesh& mesh = feMesh();
   const int mesh_node = mesh.rail_nodes[rail][static_cast<std::size_t>(node)];
+  // The node's free DOFs solved together (one pass over the factor).
+  std::array<int, kNodeDofs> dofs{}, which{};
+  int count = 0;
   for (int j = 0; j < kNodeDofs; ++j) {
     const std::size_t col = static_cast<std::size_t>(slot) * kNodeDofs + static_cast<std::size_t>(j);
     const int g = mesh.dofIndex(mesh_node, j);
-    if (g < 0) {
-      im.lo[col] = 0;
-      im.len[col] = 0;
-      continue;
-    }
-    solveColumn(g, im.lo[col], im.len[col]);
-    std::copy(im.column.data() + im.lo[col], im.column.data() + im.lo[col] + im.len[col],
+    im.lo[col] = 0;
+    im.len[col] = 0;
+    if (g < 0) continue;
+    dofs[static_cast<std::size_t>(count)] = g;
+    which[static_cast<std::size_t>(count)] = j;
+    ++count;
+  }
+  if (count == 0) return slot;
+  integ().solveEffectiveColumns(dofs.data(), count, im.node_columns);
+  im.solves += count;
+  for (int c = 0; c < count; ++c) {
+    const std::size_t col = static_cast<std::size_t>(slot) * kNodeDofs + static_cast<std::size_t>(which[c]);
+    const double* x = im.node_columns.col(c).data();
+    trimColumn(dofs[static_cast<std::size_t>(c)], x, im.lo[col], im.len[col]);
+    std::copy(x + im.lo[col], x + im.lo[col] + im.len[col],
               im.values.begin() + static_cast<std::ptrdiff_t>(col * static_cast<std::size_t>(im.window)));
   }
   return slot;
@@ -546,22 +649,34 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
   o.F_wheel = rc::contactForceInWorld(L.R_contact_to_world, o.F_long, o.F_lat, o.N);
 }
 
-// Semi-implicit coupling, after the solve x0 = K_eff^{-1} (rhs + contact loads at the predicted state).
-// Each contact c in contact at the predicted state keeps its geometry and gets its force from the
-// contact law along the rail motion of t_k, to first order in the rail contact point's displacement
+// Semi-implicit coupling, after the load-free solve x_b = K_eff^{-1} rhs (rhs: Newmark's right-hand side and
+// the self-weight, without contact loads). Each contact c in contact at the predicted state keeps its
+// geometry and gets its force from the contact law along the rail motion of t_k, to first order in the
+// rail contact point's displacement
 //   u_c = W_c' d  (W_c: nodal loads of unit world forces at the point, eq. 16),
 //   u_dot_c = W_c' v,  v = (2/h) (d - d_{k-1}) - v_{k-1}  (Newmark).
-// Its rail load W_c f_c makes d = x0 + sum_e K_eff^{-1} W_e (f_e - f_p,e), so
-//   u_c = W_c' x0 + sum_e G_ce (f_e - f_p,e),   G_ce = W_c' K_eff^{-1} W_e  (cached influence columns),
-// and the rail forces f solve f_c + F_wheel,c(u_c(f)) = 0 by Newton (3 unknowns per contact, law
-// Jacobian by differences). d, the contact results and the wheel wrenches take the final forces.
+// Its rail load W_c f_c makes d = x_b + sum_e K_eff^{-1} W_e f_e, so
+//   u_c = u0_c + sum_e G_ce (f_e - f_p,e),  u0_c = W_c' x_b + sum_e G_ce f_p,e,  G_ce = W_c' K_eff^{-1} W_e
+// (cached influence columns; u0 is where the forces of the prediction f_p put the point), and the rail
+// forces f solve f_c + F_wheel,c(u_c(f)) = 0 by Newton (3 unknowns per contact, law Jacobian by
+// differences). d, the contact results and the wheel wrenches take the final forces.
 void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
+  gatherLinks(states);
+  if (implicit_->links.empty()) return;
+  buildInfluence();
+  solveLinkForces();
+  applyLinkForces(states, out);
+}
+
+// The links: every contact in contact at the predicted state, its element, load map W, frozen law data,
+// and W' x_b; the influence columns of its element's nodes cached.
+void CosimTrack::gatherLinks(const cc::WheelStateFrame& states) noexcept {
   Implicit& im = *implicit_;
   const TrackMesh& mesh = feMesh();
   const NewmarkState& state = st();
   const double h = integ().dt();
   const rc::NormalDampingParams& damping = contact_model_->options().damping;
-  Eigen::VectorXd& d_new = integ().stepDisplacement();
+  const Eigen::VectorXd& x_base = integ().stepDisplacement();
   im.links.clear();
   const int n = wheelCount();
   for (int i = 0; i < n; ++i) {
@@ -626,7 +741,7 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
         double d_p = 0.0, v_p = 0.0;
         predictRail(g, d_p, v_p);
         L.u_p += L.W.row(j).transpose() * d_p;
-        L.u0 += L.W.row(j).transpose() * d_new(g);
+        L.u0 += L.W.row(j).transpose() * x_base(g);
         L.base_dot += L.W.row(j).transpose() * ((2.0 / h) * state.d(g) + state.v(g) + v_p);
       }
       L.f_p = -cp.force_on_wheel_in_world;
@@ -636,10 +751,13 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
       im.links.push_back(L);
     }
   }
-  const int m = static_cast<int>(im.links.size());
-  if (m == 0) return;
+}
 
-  // G = W' K_eff^{-1} W from the influence columns (3 x 3 blocks).
+// G = W' K_eff^{-1} W from the influence columns (3 x 3 blocks), and u0 += G f_p: the point's displacement
+// under the prediction's forces.
+void CosimTrack::buildInfluence() noexcept {
+  Implicit& im = *implicit_;
+  const int m = static_cast<int>(im.links.size());
   for (int e = 0; e < m; ++e) {
     const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
     for (int c = 0; c < m; ++c) {
@@ -657,11 +775,20 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
       im.G.block<3, 3>(3 * c, 3 * e) = g;
     }
   }
+  for (int c = 0; c < m; ++c) {
+    Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+    for (int e = 0; e < m; ++e) Lc.u0 += im.G.block<3, 3>(3 * c, 3 * e) * im.links[static_cast<std::size_t>(e)].f_p;
+  }
+}
 
-  // Newton on the rail contact-point displacements u (3 per contact):
-  //   r_c(u) = u_c - u0_c - sum_e G_ce (f_e(u_e) - f_p,e) = 0,  f_e(u_e) = -F_wheel,e(u_e),
-  // Jacobian I + G J (J_e = d F_wheel,e / d u_e by differences), with a backtracking line search on |r|^2:
-  // the creep law saturates within micrometres of slip at low speed, where undamped steps overshoot.
+// Newton on the rail contact-point displacements u (3 per contact):
+//   r_c(u) = u_c - u0_c - sum_e G_ce (f_e(u_e) - f_p,e) = 0,  f_e(u_e) = -F_wheel,e(u_e),
+// Jacobian I + G J (J_e = d F_wheel,e / d u_e by differences), with a backtracking line search on |r|^2:
+// the creep law saturates within micrometres of slip at low speed, where undamped steps overshoot.
+void CosimTrack::solveLinkForces() noexcept {
+  Implicit& im = *implicit_;
+  const double h = integ().dt();
+  const int m = static_cast<int>(im.links.size());
   constexpr int kMaxIterations = 40;
   constexpr double kDu = 1e-11;  // m, difference step of the law Jacobian (rail velocity step 2 kDu / h)
   bool converged = false;
@@ -756,8 +883,16 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
     Lc.f = -Lc.F_wheel;
   }
+}
 
-  // d = x0 + K_eff^{-1} W (f - f_p); contact results and wrenches with the final forces.
+// d = x_b + K_eff^{-1} W f; the contact results with the final forces; the wheel-centre wrenches (eq. 13)
+// and the rail-section resultant (eq. 15) of the wheels concerned.
+void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
+  Implicit& im = *implicit_;
+  const double h = integ().dt();
+  Eigen::VectorXd& d_new = integ().stepDisplacement();
+  const int m = static_cast<int>(im.links.size());
+  Implicit::LawOut lo;
   for (int c = 0; c < m; ++c) {
     Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
     im.law(*contact_model_, h, Lc, Lc.u, lo);
@@ -775,7 +910,7 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     cp.force_on_wheel_in_world = lo.F_wheel;  // = -f, the force the rails carry
     cp.rail_wrench = rc::railSectionWrench(Lc.f, Eigen::Vector3d::Zero(),
                                            cp.p_rail_in_world - cp.p_section_centre_in_world, Eigen::Vector3d::Zero());
-    const Eigen::Matrix<double, 12, 1> df = Lc.W * (Lc.f - Lc.f_p);
+    const Eigen::Matrix<double, 12, 1> df = Lc.W * Lc.f;
     for (int j = 0; j < 12; ++j) {
       if (df(j) == 0.0) continue;
       const int node = Lc.element + j / kNodeDofs;
@@ -786,7 +921,6 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
           df(j) * Eigen::Map<const Eigen::VectorXd>(im.values.data() + col * static_cast<std::size_t>(im.window), len);
     }
   }
-  // Wheel-centre wrenches (eq. 13) and the rail-section resultant (eq. 15) of the wheels concerned.
   for (int e = 0; e < m; ++e) {
     const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
     if (e > 0 && im.links[static_cast<std::size_t>(e - 1)].wheel == Le.wheel) continue;

@@ -2,9 +2,11 @@
 
 #include <suitesparse/cholmod.h>
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace rail {
 namespace track {
@@ -12,26 +14,37 @@ namespace track {
 struct SparseCholesky::Impl {
   cholmod_common common;
   cholmod_factor* L = nullptr;
+  CholeskyLayout layout = CholeskyLayout::kSimplicial;
+  int n = 0;
+  // Supernodal: CHOLMOD's solve with reused buffers.
   cholmod_dense B;             // header over the caller's right-hand side (no copy)
   cholmod_dense* X = nullptr;  // solution buffer, reused
   cholmod_dense* Y = nullptr;  // workspace, reused
   cholmod_dense* E = nullptr;  // workspace, reused
-  int n = 0;
+  // Simplicial: L of P A P' = L L' copied packed, column-major, diagonal first in each column.
+  std::vector<int> perm;        // row k of P A P' is row perm[k] of A
+  std::vector<int> col_start;   // n + 1
+  std::vector<int> row;         // row index of each entry
+  std::vector<double> value;    // entry
+  std::vector<double> y;        // permuted solution, reused
+  std::vector<int> inverse;     // row of P A P' that holds row i of A
+  std::vector<double> y_many;   // solveUnitColumns: rows x kMaxUnitColumns, row-major
+  Eigen::VectorXd unit_b, unit_x;  // supernodal solveUnitColumns: one unit right-hand side and its solution
 };
 
-SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in) : impl_(new Impl) {
+SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, CholeskyLayout layout) : impl_(new Impl) {
   Impl& s = *impl_;
   if (A_in.rows() != A_in.cols())
     throw std::runtime_error("SparseCholesky: matrix is not square (" + std::to_string(A_in.rows()) + " x " +
                              std::to_string(A_in.cols()) + ")");
   s.n = static_cast<int>(A_in.rows());
+  s.layout = layout;
   Eigen::SparseMatrix<double> A = A_in;  // compressed, column-major, int indices
   A.makeCompressed();
 
   cholmod_start(&s.common);
-  // Supernodal L L': its cholmod_solve2 path reuses Y and E with no allocation. (The simplicial solve of
-  // CHOLMOD 3.0 / SuiteSparse 5.12 allocates on every call.)
-  s.common.supernodal = CHOLMOD_SUPERNODAL;
+  s.common.supernodal = layout == CholeskyLayout::kSupernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
+  s.common.final_ll = 1;  // simplicial: L L', not L D L'
 
   cholmod_sparse view;
   std::memset(&view, 0, sizeof(view));
@@ -68,6 +81,44 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in) : impl_(
     throw std::runtime_error("SparseCholesky: cholmod_factorize failed (status " + std::to_string(status) + ")");
   }
 
+  if (layout == CholeskyLayout::kSimplicial) {
+    if (s.L->is_super || !s.L->is_ll || s.L->xtype != CHOLMOD_REAL) {
+      cholmod_free_factor(&s.L, &s.common);
+      cholmod_finish(&s.common);
+      throw std::runtime_error("SparseCholesky: CHOLMOD did not return a simplicial real L L' factor");
+    }
+    const int* Lp = static_cast<const int*>(s.L->p);
+    const int* Li = static_cast<const int*>(s.L->i);
+    const int* Lnz = static_cast<const int*>(s.L->nz);
+    const double* Lx = static_cast<const double*>(s.L->x);
+    const int* P = static_cast<const int*>(s.L->Perm);
+    s.perm.resize(static_cast<std::size_t>(s.n));
+    s.col_start.resize(static_cast<std::size_t>(s.n) + 1);
+    std::size_t nnz = 0;
+    for (int j = 0; j < s.n; ++j) nnz += static_cast<std::size_t>(Lnz[j]);
+    s.row.resize(nnz);
+    s.value.resize(nnz);
+    std::size_t k = 0;
+    for (int j = 0; j < s.n; ++j) {
+      s.perm[static_cast<std::size_t>(j)] = P ? P[j] : j;
+      s.col_start[static_cast<std::size_t>(j)] = static_cast<int>(k);
+      if (Lnz[j] < 1 || Li[Lp[j]] != j)
+        throw std::runtime_error("SparseCholesky: column " + std::to_string(j) + " of L does not start at its diagonal");
+      for (int p = Lp[j]; p < Lp[j] + Lnz[j]; ++p, ++k) {
+        s.row[k] = Li[p];
+        s.value[k] = Lx[p];
+      }
+    }
+    s.col_start[static_cast<std::size_t>(s.n)] = static_cast<int>(k);
+    s.y.assign(static_cast<std::size_t>(s.n), 0.0);
+    s.inverse.assign(static_cast<std::size_t>(s.n), 0);
+    for (int j = 0; j < s.n; ++j) s.inverse[static_cast<std::size_t>(s.perm[static_cast<std::size_t>(j)])] = j;
+    s.y_many.assign(static_cast<std::size_t>(s.n) * kMaxUnitColumns, 0.0);
+    return;
+  }
+  s.unit_b = Eigen::VectorXd::Zero(s.n);
+  s.unit_x = Eigen::VectorXd::Zero(s.n);
+
   std::memset(&s.B, 0, sizeof(s.B));
   s.B.nrow = s.n;
   s.B.ncol = 1;
@@ -92,16 +143,126 @@ SparseCholesky::~SparseCholesky() {
 
 void SparseCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   Impl& s = *impl_;
-  s.B.x = const_cast<double*>(b.data());
-  cholmod_solve2(CHOLMOD_A, s.L, &s.B, nullptr, &s.X, nullptr, &s.Y, &s.E, &s.common);
-  x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(s.X->x), s.n);
+  if (s.layout == CholeskyLayout::kSupernodal) {
+    s.B.x = const_cast<double*>(b.data());
+    cholmod_solve2(CHOLMOD_A, s.L, &s.B, nullptr, &s.X, nullptr, &s.Y, &s.E, &s.common);
+    x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(s.X->x), s.n);
+    return;
+  }
+  const int n = s.n;
+  const int* perm = s.perm.data();
+  const int* start = s.col_start.data();
+  const int* row = s.row.data();
+  const double* value = s.value.data();
+  double* y = s.y.data();
+  for (int k = 0; k < n; ++k) y[k] = b[perm[k]];
+  // L y = P b, column by column.
+  for (int j = 0; j < n; ++j) {
+    const double yj = y[j] / value[start[j]];
+    y[j] = yj;
+    for (int p = start[j] + 1; p < start[j + 1]; ++p) y[row[p]] -= value[p] * yj;
+  }
+  // L' z = y, each unknown a dot product with its column (two partial sums: the loop is bound by the
+  // latency of the additions).
+  for (int j = n - 1; j >= 0; --j) {
+    double sum0 = y[j], sum1 = 0.0;
+    int p = start[j] + 1;
+    const int end = start[j + 1];
+    for (; p + 1 < end; p += 2) {
+      sum0 -= value[p] * y[row[p]];
+      sum1 -= value[p + 1] * y[row[p + 1]];
+    }
+    if (p < end) sum0 -= value[p] * y[row[p]];
+    y[j] = (sum0 + sum1) / value[start[j]];
+  }
+  if (x.size() != n) x.resize(n);
+  for (int k = 0; k < n; ++k) x[perm[k]] = y[k];
+}
+
+// solveUnitColumns on the simplicial factor with K right-hand sides, rows interleaved (y[i * K + c]) so
+// that each factor entry is read once for all of them.
+template <int K>
+void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
+  const int n = s.n;
+  const int* start = s.col_start.data();
+  const int* row = s.row.data();
+  const double* value = s.value.data();
+  double* y = s.y_many.data();
+  std::fill(y, y + static_cast<std::ptrdiff_t>(n) * K, 0.0);
+  for (int c = 0; c < K; ++c) y[static_cast<std::ptrdiff_t>(s.inverse[static_cast<std::size_t>(unit[c])]) * K + c] = 1.0;
+  for (int j = 0; j < n; ++j) {
+    double* yj = y + static_cast<std::ptrdiff_t>(j) * K;
+    const double d = value[start[j]];
+    for (int c = 0; c < K; ++c) yj[c] /= d;
+    for (int p = start[j] + 1; p < start[j + 1]; ++p) {
+      double* yi = y + static_cast<std::ptrdiff_t>(row[p]) * K;
+      const double l = value[p];
+      for (int c = 0; c < K; ++c) yi[c] -= l * yj[c];
+    }
+  }
+  for (int j = n - 1; j >= 0; --j) {
+    double* yj = y + static_cast<std::ptrdiff_t>(j) * K;
+    double sum0[K], sum1[K];
+    for (int c = 0; c < K; ++c) {
+      sum0[c] = yj[c];
+      sum1[c] = 0.0;
+    }
+    int p = start[j] + 1;
+    const int end = start[j + 1];
+    for (; p + 1 < end; p += 2) {
+      const double* y0 = y + static_cast<std::ptrdiff_t>(row[p]) * K;
+      const double* y1 = y + static_cast<std::ptrdiff_t>(row[p + 1]) * K;
+      const double l0 = value[p], l1 = value[p + 1];
+      for (int c = 0; c < K; ++c) {
+        sum0[c] -= l0 * y0[c];
+        sum1[c] -= l1 * y1[c];
+      }
+    }
+    if (p < end) {
+      const double* y0 = y + static_cast<std::ptrdiff_t>(row[p]) * K;
+      for (int c = 0; c < K; ++c) sum0[c] -= value[p] * y0[c];
+    }
+    const double d = value[start[j]];
+    for (int c = 0; c < K; ++c) yj[c] = (sum0[c] + sum1[c]) / d;
+  }
+  for (int i = 0; i < n; ++i) {
+    const double* yi = y + static_cast<std::ptrdiff_t>(i) * K;
+    const int r = s.perm[static_cast<std::size_t>(i)];
+    for (int c = 0; c < K; ++c) x(r, c) = yi[c];
+  }
+}
+
+void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixXd& x) {
+  Impl& s = *impl_;
+  const int n = s.n;
+  if (s.layout == CholeskyLayout::kSupernodal) {
+    for (int c = 0; c < count; ++c) {
+      s.unit_b(unit[c]) = 1.0;
+      solve(s.unit_b, s.unit_x);
+      s.unit_b(unit[c]) = 0.0;
+      x.col(c) = s.unit_x;
+    }
+    return;
+  }
+  switch (count) {
+    case 1: return unitColumns<1>(s, unit, x);
+    case 2: return unitColumns<2>(s, unit, x);
+    case 3: return unitColumns<3>(s, unit, x);
+    case 4: return unitColumns<4>(s, unit, x);
+    case 5: return unitColumns<5>(s, unit, x);
+    default: return unitColumns<6>(s, unit, x);
+  }
 }
 
 int SparseCholesky::rows() const { return impl_->n; }
 
 bool SparseCholesky::isSupernodal() const { return impl_->L->is_super != 0; }
 
-double SparseCholesky::factorNonZeros() const { return impl_->common.lnz; }
+CholeskyLayout SparseCholesky::layout() const { return impl_->layout; }
+
+double SparseCholesky::factorNonZeros() const {
+  return impl_->layout == CholeskyLayout::kSimplicial ? static_cast<double>(impl_->value.size()) : impl_->common.lnz;
+}
 
 }  // namespace track
 }  // namespace rail

@@ -220,8 +220,8 @@ std::unique_ptr<TrackWindow::Window> TrackWindow::buildWindow(int first_sleeper)
     if (rear_cut) addCondensedEnd(*w, false);
     if (front_cut) addCondensedEnd(*w, true);
   }
-  w->integrator =
-      std::make_unique<NewmarkIntegrator>(w->model.system, track_step_, false, settings_.cost, countEndDashpots(mesh));
+  w->integrator = std::make_unique<NewmarkIntegrator>(w->model.system, track_step_, false, settings_.cost,
+                                                      countEndDashpots(mesh), settings_.factor_layout);
   w->d_static = settings_.include_gravity ? staticGravityDeflection(w->model.system)
                                           : Eigen::VectorXd::Zero(w->model.system.size());
   return w;
@@ -449,6 +449,15 @@ void TrackWindow::extrapolateEntering(const std::vector<char>& carried, NewmarkS
     for (int i = 0; i < n; ++i)
       if (pos[static_cast<std::size_t>(i)] >= 0) (*x)(i) = x_e(pos[static_cast<std::size_t>(i)]);
   }
+}
+
+bool TrackWindow::holds(double s_rear, double s_front) const {
+  return s_rear - settings_.behind >= sBegin() - kSlack && s_front + settings_.ahead <= sEnd() + kSlack;
+}
+
+void TrackWindow::setCostClock(rail::core::CostClock* cost) {
+  settings_.cost = cost;
+  window_->integrator->setCostClock(cost);
 }
 
 bool TrackWindow::follow(double s_rear, double s_front) {

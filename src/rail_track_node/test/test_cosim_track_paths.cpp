@@ -1,0 +1,212 @@
+// The track step's fast path against its reference path: the next step's right-hand side and solve on a
+// second thread (solve_beside) with the simplicial factor and its own triangular solves, against the solve
+// inside the step on CHOLMOD's supernodal factor (the path of the earlier releases). 8 rigid wheels of the
+// paper's coach roll at 30 m/s on a moving track window through a transition into a canted curve and are
+// pushed toward the outer rail until their flanges touch; the window moves and refactorises on the way.
+// The wheel forces agree within 1e-6 of the static wheel load at every step and the rail displacements
+// within 1e-9 of their largest value. Why that tolerance: the two paths differ in rounding only, and the
+// contact forces are solved by Newton to contact points within 1e-12 m; at the contact's stiffness
+// (about 1e9 N/m per contact) that leaves up to ~1e-3 N between two paths, 1e-8 of the wheel load, and the
+// linear track carries such differences without growing them. A change of the physics (a lost load, a
+// stale base solve after a window move) differs by orders of magnitude more.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <rail_contact/profile.hpp>
+#include <rail_core/testing/fixtures.hpp>
+
+#include "rail_track_node/cosim_track.hpp"
+#include "rail_track_node/sparse_cholesky.hpp"
+
+namespace rt = rail::track;
+namespace rc = rail::contact;
+namespace cc = rail::core::coupling;
+using rail::core::Scene;
+
+namespace {
+
+// The paper's data on a 100 m line: 20 m straight, a 40 m transition to R = 500 m left with 160 mm cant,
+// 40 m of the curve; a window 5 m beyond the end wheels, moved 0.6 m (one bay) at a time.
+Scene curveScene() {
+  const std::string text =
+      "name: p\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n  data: ../track/paper_track.yaml\n"
+      "  segments:\n"
+      "    - {type: straight, length: 20.0}\n"
+      "    - {type: transition, length: 40.0, direction: left, radius_start: 0, radius_end: 500.0,"
+      " cant_start: 0.0, cant_end: 0.160}\n"
+      "    - {type: circular, length: 40.0, direction: left, radius: 500.0, cant: 0.160}\n"
+      "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 55.0\n  speed: 30.0\n"
+      "  back_to_back: 1.592\n  nominal_radius: 0.445\n  wheelsets: 4\n"
+      "effects:\n  track_model: flexible\n"
+      "solver:\n  track_step: 2e-5\n  vehicle_max_step: 2e-5\n  end: {time: 1.0}\n"
+      "  track_window: {enabled: true, behind: 5.0, ahead: 5.0, shift: 0.6}\n";
+  return rail::core::fixtures::sceneFromText(text, "p.yaml");
+}
+
+constexpr double kOffsets[4] = {0.0, 2.7, 19.0, 21.7};  // behind the leading wheelset, m (paper coach)
+constexpr double kQ = 72900.0;                          // the coach's static wheel load, N (order of)
+
+// Wheelset w at s_front - kOffsets[w] on the design track, lowered by 0.7 mm over the first 10 ms, shifted
+// toward the outer (right) rail by up to 7 mm over the run, yawed a little, rolling at V.
+void fillFrame(const rc::TrackGeometry& geo, double s_front, double V, long k, long steps, double h,
+               cc::WheelStateFrame& f) {
+  const double r0 = 0.445, t = k * h;
+  const double taping_y = 0.5 * 1.592 + rc::flangeBackY(rc::makeS1002());
+  const double z = r0 - 0.7e-3 * std::min(1.0, t / 0.01);
+  const double y = -7e-3 * std::min(1.0, static_cast<double>(k) / (0.6 * static_cast<double>(steps)));
+  f.count = 8;
+  f.step = static_cast<std::uint64_t>(k);
+  f.time = t;
+  rc::TrackPoint tp;
+  for (int ws = 0; ws < 4; ++ws) {
+    const double s = s_front - kOffsets[ws];
+    geo.centre(s, tp);
+    const Eigen::Matrix3d R =
+        tp.R_track_to_world * Eigen::AngleAxisd(2e-3 * (ws - 1.5), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d v = V * tp.R_track_to_world.col(0);
+    const Eigen::Vector3d omega = R.col(1) * (V / r0) + tp.R_track_to_world.col(2) * (V * tp.curvature);
+    for (int side = 0; side < 2; ++side) {
+      cc::WheelState& w = f.wheels[static_cast<std::size_t>(2 * ws + side)];
+      w.id = static_cast<std::uint32_t>(2 * ws + side);
+      const Eigen::Vector3d arm = R * Eigen::Vector3d(0.0, side == 0 ? taping_y : -taping_y, 0.0);
+      w.p_wheel_in_world = tp.p_center_in_world + tp.R_track_to_world * Eigen::Vector3d(0.0, y, z) + arm;
+      w.arc_length = s;
+      w.R_wheelset_to_world = R;
+      w.v_wheel_in_world = v + omega.cross(arm);
+      w.omega_wheelset_in_world = omega;
+    }
+  }
+}
+
+struct PathRun {
+  std::vector<double> force;       // per step and wheel: x, y, z of the wheel-centre force, N
+  std::vector<double> deflection;  // per step: left and right rail at the section, x, y, z, m
+  int moves = 0, rebuilds = 0, flange_steps = 0, refused = 0;
+};
+
+PathRun runPath(bool beside, rt::CholeskyLayout layout, long steps) {
+  const Scene sc = curveScene();
+  rt::CosimTrackOptions o;
+  o.window.vehicle_length = 21.7;
+  o.solve_beside = beside;
+  o.factor_layout = layout;
+  rt::CosimTrack track(sc, o);
+  const int section = track.addSection(50.0);
+  const double V = 30.0, h = sc.solver.track_step;
+  cc::WheelStateFrame frame(8);
+  cc::WrenchFrame out(8);
+  rt::RailSectionDeflection def;
+  PathRun r;
+  for (long k = 0; k < steps; ++k) {
+    fillFrame(track.geometry(), 55.0 + V * k * h, V, k, steps, h, frame);
+    if (track.step(frame, out) != rt::CosimStepStatus::kOk) {
+      ++r.refused;
+      continue;
+    }
+    bool flange = false;
+    for (int i = 0; i < 8; ++i) {
+      for (int j = 0; j < 3; ++j) r.force.push_back(out.wheels[static_cast<std::size_t>(i)].f_wheel_in_world(j));
+      for (const rc::ContactPointResult& cp : track.contact(i).contact)
+        flange = flange || (cp.active && cp.N > 0.0 && cp.surface == rc::kFlange);
+    }
+    r.flange_steps += flange ? 1 : 0;
+    track.sectionDeflection(section, def);
+    for (int j = 0; j < 3; ++j) {
+      r.deflection.push_back(def.displacement[0](j));
+      r.deflection.push_back(def.displacement[1](j));
+    }
+  }
+  r.moves = track.windowMoves();
+  r.rebuilds = track.windowRebuilds();
+  return r;
+}
+
+double largestDifference(const std::vector<double>& a, const std::vector<double>& b) {
+  double d = 0.0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) d = std::max(d, std::abs(a[i] - b[i]));
+  return a.size() == b.size() ? d : HUGE_VAL;
+}
+
+double largestMagnitude(const std::vector<double>& a) {
+  double m = 0.0;
+  for (double x : a) m = std::max(m, std::abs(x));
+  return m;
+}
+
+}  // namespace
+
+TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
+  const long steps = 2500;  // 50 ms, 1.5 m: two window moves
+  const PathRun ref = runPath(false, rt::CholeskyLayout::kSupernodal, steps);
+  const PathRun fast = runPath(true, rt::CholeskyLayout::kSimplicial, steps);
+  const PathRun serial = runPath(false, rt::CholeskyLayout::kSimplicial, steps);
+  ASSERT_EQ(ref.refused, 0);
+  ASSERT_EQ(fast.refused, 0);
+  EXPECT_GE(ref.moves, 2);
+  EXPECT_GE(ref.rebuilds, 1) << "a move onto new matrices (the curve) must be part of the run";
+  EXPECT_GT(ref.flange_steps, steps / 10) << "the run must include flange contact";
+  EXPECT_EQ(fast.moves, ref.moves);
+  EXPECT_EQ(fast.flange_steps, ref.flange_steps);
+  const double df = largestDifference(fast.force, ref.force), ds = largestDifference(serial.force, ref.force);
+  const double dd = largestDifference(fast.deflection, ref.deflection), peak = largestMagnitude(ref.deflection);
+  EXPECT_LT(df, 1e-6 * kQ);
+  EXPECT_LT(ds, 1e-6 * kQ);
+  EXPECT_LT(dd, 1e-9 * peak);
+  std::printf("[ figures  ] %ld steps, %d moves (%d rebuilt), %d steps with flange contact, largest wheel force "
+              "%.0f N: forces differ by %.3g N (fast) and %.3g N (simplicial in the step), rail displacement by "
+              "%.3g m of %.3g m\n",
+              steps, ref.moves, ref.rebuilds, ref.flange_steps, largestMagnitude(ref.force), df, ds, dd, peak);
+}
+
+// The simplicial factor's solves against CHOLMOD's supernodal solve on a track's K_eff; the influence
+// columns of a rail node in one pass against one solve each.
+TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleSolves) {
+  const Scene sc = curveScene();
+  rt::CosimTrackOptions o;
+  o.window.vehicle_length = 21.7;
+  o.solve_beside = false;
+  rt::CosimTrack track(sc, o);
+  const rt::LinearSystem& sys = track.trackWindow()->model().system;
+  const Eigen::SparseMatrix<double> K_eff = sys.K + (4.0 / 4e-10) * sys.M + (2.0 / 2e-5) * sys.C;
+  rt::SparseCholesky simplicial(K_eff, rt::CholeskyLayout::kSimplicial);
+  rt::SparseCholesky supernodal(K_eff, rt::CholeskyLayout::kSupernodal);
+  EXPECT_EQ(simplicial.layout(), rt::CholeskyLayout::kSimplicial);
+  EXPECT_FALSE(simplicial.isSupernodal());
+  EXPECT_TRUE(supernodal.isSupernodal());
+  const int n = K_eff.rows();
+  const Eigen::VectorXd b = Eigen::VectorXd::Random(n) * 1e5;
+  Eigen::VectorXd x1(n), x2(n);
+  simplicial.solve(b, x1);
+  supernodal.solve(b, x2);
+  // Both solve a system of condition ~1e8 to rounding: residuals at 1e-12 of |b|, solutions within 1e-9.
+  EXPECT_LT((K_eff.selfadjointView<Eigen::Upper>() * x1 - b).norm(), 1e-12 * b.norm() * 1e3);
+  EXPECT_LT((x1 - x2).norm(), 1e-9 * x2.norm());
+  // Aliased: x may be b.
+  Eigen::VectorXd x3 = b;
+  simplicial.solve(x3, x3);
+  EXPECT_EQ((x3 - x1).cwiseAbs().maxCoeff(), 0.0);
+
+  const rt::TrackMesh& mesh = track.trackWindow()->mesh();
+  const int node = mesh.rail_nodes[1][mesh.rail_nodes[1].size() / 3];
+  int dofs[6];
+  for (int j = 0; j < 6; ++j) dofs[j] = mesh.dofIndex(node, j);
+  Eigen::MatrixXd many(n, 6), one(n, 1), ref(n, 6);
+  simplicial.solveUnitColumns(dofs, 6, many);
+  supernodal.solveUnitColumns(dofs, 6, ref);
+  for (int c = 0; c < 6; ++c) {
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(n), x(n);
+    e(dofs[c]) = 1.0;
+    simplicial.solve(e, x);
+    simplicial.solveUnitColumns(dofs + c, 1, one);
+    EXPECT_LT((many.col(c) - x).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << "column " << c;
+    EXPECT_LT((one.col(0) - x).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << "column " << c;
+    EXPECT_LT((ref.col(c) - x).cwiseAbs().maxCoeff(), 1e-9 * x.cwiseAbs().maxCoeff()) << "column " << c;
+  }
+}
