@@ -79,9 +79,12 @@ struct CosimTrack::Implicit {
     double N = 0.0, F_long = 0.0, F_lat = 0.0, a = 0.0, b = 0.0, delta = 0.0, delta_dot = 0.0;
     double nu_x = 0.0, nu_y = 0.0, phi = 0.0;
   };
-  std::vector<Link> links;              // capacity 2 per wheel
+  std::vector<Link> links;              // capacity kContactSlots per wheel
+  std::vector<double> column_load;      // per cached column: the nodal load on its DOF this step, N
+  std::vector<unsigned char> column_used;
+  std::vector<int> used_columns;        // columns with a load this step (capacity all of them)
   std::vector<Eigen::Vector3d> memory;  // per (wheel, contact): K, a_coeff, b_coeff last seen with N > 0
-  Eigen::MatrixXd G, S;                 // W_c' K_eff^{-1} W_e (3 x 3 blocks) and the Newton matrix, 6 per wheel
+  Eigen::MatrixXd G, S;                 // W_c' K_eff^{-1} W_e (3 x 3 blocks) and the Newton matrix, 3 per link
   Eigen::VectorXd rhs;
   std::vector<int> pivot;
   rail::contact::PolachOptions polach;
@@ -226,12 +229,17 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   im.slot_node.assign(static_cast<std::size_t>(im.slots), -1);
   im.slot_used.assign(static_cast<std::size_t>(im.slots), -1);
   for (int r = 0; r < 2; ++r) im.node_slot[r].assign(mesh.rail_nodes[r].size(), -1);
-  im.links.reserve(static_cast<std::size_t>(2 * n_wheels));
+  // Up to kContactSlots links per wheel, 3 unknowns each.
+  const int max_links = rc::kContactSlots * n_wheels;
+  im.links.reserve(static_cast<std::size_t>(max_links));
+  im.column_load.assign(static_cast<std::size_t>(im.slots) * kNodeDofs, 0.0);
+  im.column_used.assign(static_cast<std::size_t>(im.slots) * kNodeDofs, 0);
+  im.used_columns.reserve(static_cast<std::size_t>(im.slots) * kNodeDofs);
   im.memory.assign(static_cast<std::size_t>(rc::kContactSlots * n_wheels), Eigen::Vector3d::Zero());
-  im.G.setZero(6 * n_wheels, 6 * n_wheels);
-  im.S.setZero(6 * n_wheels, 6 * n_wheels);
-  im.rhs.setZero(6 * n_wheels);
-  im.pivot.assign(static_cast<std::size_t>(6 * n_wheels), 0);
+  im.G.setZero(3 * max_links, 3 * max_links);
+  im.S.setZero(3 * max_links, 3 * max_links);
+  im.rhs.setZero(3 * max_links);
+  im.pivot.assign(static_cast<std::size_t>(3 * max_links), 0);
   im.polach = contact_model_->options().polach;
   im.polach.spin = contact_model_->options().spin;
   im.cost = contact_cost_;
@@ -910,17 +918,28 @@ void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFr
     cp.force_on_wheel_in_world = lo.F_wheel;  // = -f, the force the rails carry
     cp.rail_wrench = rc::railSectionWrench(Lc.f, Eigen::Vector3d::Zero(),
                                            cp.p_rail_in_world - cp.p_section_centre_in_world, Eigen::Vector3d::Zero());
+    // The nodal loads W f, summed per influence column (contacts on one element share its columns).
     const Eigen::Matrix<double, 12, 1> df = Lc.W * Lc.f;
     for (int j = 0; j < 12; ++j) {
       if (df(j) == 0.0) continue;
       const int node = Lc.element + j / kNodeDofs;
-      const std::size_t col =
-          static_cast<std::size_t>(im.node_slot[Lc.rail][static_cast<std::size_t>(node)] * kNodeDofs + j % kNodeDofs);
-      const int lo_i = im.lo[col], len = im.len[col];
-      d_new.segment(lo_i, len) +=
-          df(j) * Eigen::Map<const Eigen::VectorXd>(im.values.data() + col * static_cast<std::size_t>(im.window), len);
+      const int col = im.node_slot[Lc.rail][static_cast<std::size_t>(node)] * kNodeDofs + j % kNodeDofs;
+      if (!im.column_used[static_cast<std::size_t>(col)]) {
+        im.column_used[static_cast<std::size_t>(col)] = 1;
+        im.used_columns.push_back(col);
+      }
+      im.column_load[static_cast<std::size_t>(col)] += df(j);
     }
   }
+  for (const int col : im.used_columns) {
+    const std::size_t c = static_cast<std::size_t>(col);
+    const int lo_i = im.lo[c], len = im.len[c];
+    d_new.segment(lo_i, len) +=
+        im.column_load[c] * Eigen::Map<const Eigen::VectorXd>(im.values.data() + c * static_cast<std::size_t>(im.window), len);
+    im.column_load[c] = 0.0;
+    im.column_used[c] = 0;
+  }
+  im.used_columns.clear();
   for (int e = 0; e < m; ++e) {
     const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
     if (e > 0 && im.links[static_cast<std::size_t>(e - 1)].wheel == Le.wheel) continue;
