@@ -140,8 +140,8 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
     for (int i = 0; i < n; ++i) {
       const FinerLine& l = lines[static_cast<std::size_t>(i)];
       o << "  " << l.name << ": {seconds: " << l.seconds << ", share: " << (loop_wall > 0 ? l.seconds / loop_wall : 0.0)
-        << ", calls: " << l.calls << ", within: "
-        << (l.parent == kComponentCount ? "beside_track_step" : name(l.parent)) << "}\n";
+        << ", calls: " << l.calls
+        << ", within: " << (l.parent == kComponentCount ? "beside_track_step" : name(l.parent)) << "}\n";
     }
     for (int c = 0; c < kComponentCount; ++c) {
       double parts = 0.0;

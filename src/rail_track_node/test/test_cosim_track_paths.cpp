@@ -159,10 +159,11 @@ TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
   EXPECT_LT(df, 1e-6 * kQ);
   EXPECT_LT(ds, 1e-6 * kQ);
   EXPECT_LT(dd, 1e-9 * peak);
-  std::printf("[ figures  ] %ld steps, %d moves (%d rebuilt), %d steps with flange contact, largest wheel force "
-              "%.0f N: forces differ by %.3g N (fast) and %.3g N (simplicial in the step), rail displacement by "
-              "%.3g m of %.3g m\n",
-              steps, ref.moves, ref.rebuilds, ref.flange_steps, largestMagnitude(ref.force), df, ds, dd, peak);
+  std::printf(
+      "[ figures  ] %ld steps, %d moves (%d rebuilt), %d steps with flange contact, largest wheel force "
+      "%.0f N: forces differ by %.3g N (fast) and %.3g N (simplicial in the step), rail displacement by "
+      "%.3g m of %.3g m\n",
+      steps, ref.moves, ref.rebuilds, ref.flange_steps, largestMagnitude(ref.force), df, ds, dd, peak);
 }
 
 // The simplicial factor's solves against CHOLMOD's supernodal solve on a track's K_eff; the influence

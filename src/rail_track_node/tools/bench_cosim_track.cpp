@@ -74,19 +74,20 @@ static void fillFrame(const rail::core::Scene& scene, const rc::TrackGeometry& g
 
 // Windowed semi-implicit run of `steps` steps from s_front0: per-step times split into move steps and the
 // others.
-static bool g_cost = false;      // pass a cost clock to the track (argument 3)
-static bool g_beside = true;     // CosimTrackOptions::solve_beside (argument 4)
+static bool g_cost = false;                                            // pass a cost clock to the track (argument 3)
+static bool g_beside = true;                                           // CosimTrackOptions::solve_beside (argument 4)
 static rt::CholeskyLayout g_layout = rt::CholeskyLayout::kSimplicial;  // argument 5
 
 static void printClock(const rail::core::CostClock& clock, long steps) {
   using CC = rail::core::CostClock;
   const double us = 1e6 / static_cast<double>(steps);
-  std::printf("%-22s per step (us): contact_detection %.1f, contact_forces %.1f, track_rhs %.1f, track_solve %.1f%s, "
-              "track_solve_wait %.1f; %.1f creep evaluations\n",
-              "", us * clock.contact.detection_seconds, us * clock.contact.forces_seconds,
-              us * clock.seconds[CC::kTrackRhs], us * clock.seconds[CC::kTrackSolve],
-              clock.track_solve_beside ? " (beside)" : "", us * clock.seconds[CC::kTrackSolveWait],
-              static_cast<double>(clock.contact.creep_evaluations) / static_cast<double>(steps));
+  std::printf(
+      "%-22s per step (us): contact_detection %.1f, contact_forces %.1f, track_rhs %.1f, track_solve %.1f%s, "
+      "track_solve_wait %.1f; %.1f creep evaluations\n",
+      "", us * clock.contact.detection_seconds, us * clock.contact.forces_seconds, us * clock.seconds[CC::kTrackRhs],
+      us * clock.seconds[CC::kTrackSolve], clock.track_solve_beside ? " (beside)" : "",
+      us * clock.seconds[CC::kTrackSolveWait],
+      static_cast<double>(clock.contact.creep_evaluations) / static_cast<double>(steps));
 }
 
 // The solves of the window's K_eff alone (warm, median of `repeats`): the step's solve and the influence
@@ -118,10 +119,11 @@ static void benchWindowSolves(const rt::TrackWindow& w, double h, int repeats) {
       for (int j = 0; j < 6; ++j) integ.solveEffectiveColumns(dofs + j, 1, cols);
     });
     const double many = median([&] { integ.solveEffectiveColumns(dofs, 6, cols); });
-    std::printf("%-22s K_eff solves, %s factor (nnz(L) %.0f), median of %d, warm: one right-hand side %.1f us; a rail "
-                "node's 6 influence columns one by one %.1f us, in one pass %.1f us\n",
-                "window", layout == rt::CholeskyLayout::kSimplicial ? "simplicial" : "supernodal",
-                integ.factor().factorNonZeros(), repeats, one, six, many);
+    std::printf(
+        "%-22s K_eff solves, %s factor (nnz(L) %.0f), median of %d, warm: one right-hand side %.1f us; a rail "
+        "node's 6 influence columns one by one %.1f us, in one pass %.1f us\n",
+        "window", layout == rt::CholeskyLayout::kSimplicial ? "simplicial" : "supernodal",
+        integ.factor().factorNonZeros(), repeats, one, six, many);
   }
 }
 

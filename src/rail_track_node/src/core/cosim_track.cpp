@@ -79,8 +79,8 @@ struct CosimTrack::Implicit {
     double N = 0.0, F_long = 0.0, F_lat = 0.0, a = 0.0, b = 0.0, delta = 0.0, delta_dot = 0.0;
     double nu_x = 0.0, nu_y = 0.0, phi = 0.0;
   };
-  std::vector<Link> links;              // capacity kContactSlots per wheel
-  std::vector<double> column_load;      // per cached column: the nodal load on its DOF this step, N
+  std::vector<Link> links;          // capacity kContactSlots per wheel
+  std::vector<double> column_load;  // per cached column: the nodal load on its DOF this step, N
   std::vector<unsigned char> column_used;
   std::vector<int> used_columns;        // columns with a load this step (capacity all of them)
   std::vector<Eigen::Vector3d> memory;  // per (wheel, contact): K, a_coeff, b_coeff last seen with N > 0
@@ -169,9 +169,9 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   // on its self-weight state d_g, the same start).
   if (fe_) {
     const TrackModel& model = fe_->model;
-    integrator_ = std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity,
-                                                      options.cost, countEndDashpots(model.mesh),
-                                                      options.factor_layout);
+    integrator_ =
+        std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity,
+                                            options.cost, countEndDashpots(model.mesh), options.factor_layout);
     Eigen::VectorXd d0 =
         options.include_gravity ? staticGravityDeflection(model.system) : Eigen::VectorXd::Zero(model.system.size());
     state_ = integrator_->initialState(d0);
@@ -935,7 +935,8 @@ void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFr
     const std::size_t c = static_cast<std::size_t>(col);
     const int lo_i = im.lo[c], len = im.len[c];
     d_new.segment(lo_i, len) +=
-        im.column_load[c] * Eigen::Map<const Eigen::VectorXd>(im.values.data() + c * static_cast<std::size_t>(im.window), len);
+        im.column_load[c] *
+        Eigen::Map<const Eigen::VectorXd>(im.values.data() + c * static_cast<std::size_t>(im.window), len);
     im.column_load[c] = 0.0;
     im.column_used[c] = 0;
   }

@@ -22,13 +22,13 @@ struct SparseCholesky::Impl {
   cholmod_dense* Y = nullptr;  // workspace, reused
   cholmod_dense* E = nullptr;  // workspace, reused
   // Simplicial: L of P A P' = L L' copied packed, column-major, diagonal first in each column.
-  std::vector<int> perm;        // row k of P A P' is row perm[k] of A
-  std::vector<int> col_start;   // n + 1
-  std::vector<int> row;         // row index of each entry
-  std::vector<double> value;    // entry
-  std::vector<double> y;        // permuted solution, reused
-  std::vector<int> inverse;     // row of P A P' that holds row i of A
-  std::vector<double> y_many;   // solveUnitColumns: rows x kMaxUnitColumns, row-major
+  std::vector<int> perm;           // row k of P A P' is row perm[k] of A
+  std::vector<int> col_start;      // n + 1
+  std::vector<int> row;            // row index of each entry
+  std::vector<double> value;       // entry
+  std::vector<double> y;           // permuted solution, reused
+  std::vector<int> inverse;        // row of P A P' that holds row i of A
+  std::vector<double> y_many;      // solveUnitColumns: rows x kMaxUnitColumns, row-major
   Eigen::VectorXd unit_b, unit_x;  // supernodal solveUnitColumns: one unit right-hand side and its solution
 };
 
@@ -103,7 +103,8 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
       s.perm[static_cast<std::size_t>(j)] = P ? P[j] : j;
       s.col_start[static_cast<std::size_t>(j)] = static_cast<int>(k);
       if (Lnz[j] < 1 || Li[Lp[j]] != j)
-        throw std::runtime_error("SparseCholesky: column " + std::to_string(j) + " of L does not start at its diagonal");
+        throw std::runtime_error("SparseCholesky: column " + std::to_string(j) +
+                                 " of L does not start at its diagonal");
       for (int p = Lp[j]; p < Lp[j] + Lnz[j]; ++p, ++k) {
         s.row[k] = Li[p];
         s.value[k] = Lx[p];
@@ -189,7 +190,8 @@ void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
   const double* value = s.value.data();
   double* y = s.y_many.data();
   std::fill(y, y + static_cast<std::ptrdiff_t>(n) * K, 0.0);
-  for (int c = 0; c < K; ++c) y[static_cast<std::ptrdiff_t>(s.inverse[static_cast<std::size_t>(unit[c])]) * K + c] = 1.0;
+  for (int c = 0; c < K; ++c)
+    y[static_cast<std::ptrdiff_t>(s.inverse[static_cast<std::size_t>(unit[c])]) * K + c] = 1.0;
   for (int j = 0; j < n; ++j) {
     double* yj = y + static_cast<std::ptrdiff_t>(j) * K;
     const double d = value[start[j]];
@@ -245,12 +247,18 @@ void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixX
     return;
   }
   switch (count) {
-    case 1: return unitColumns<1>(s, unit, x);
-    case 2: return unitColumns<2>(s, unit, x);
-    case 3: return unitColumns<3>(s, unit, x);
-    case 4: return unitColumns<4>(s, unit, x);
-    case 5: return unitColumns<5>(s, unit, x);
-    default: return unitColumns<6>(s, unit, x);
+    case 1:
+      return unitColumns<1>(s, unit, x);
+    case 2:
+      return unitColumns<2>(s, unit, x);
+    case 3:
+      return unitColumns<3>(s, unit, x);
+    case 4:
+      return unitColumns<4>(s, unit, x);
+    case 5:
+      return unitColumns<5>(s, unit, x);
+    default:
+      return unitColumns<6>(s, unit, x);
   }
 }
 
