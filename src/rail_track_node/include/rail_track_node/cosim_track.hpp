@@ -279,7 +279,7 @@ class CosimTrack {
   std::condition_variable worker_cv_;
   bool worker_job_ = false, worker_done_ = false, worker_stop_ = false;
   rail::core::CostClock worker_cost_;
-  std::unique_ptr<NodalLoads> no_loads_;
+  NodalLoads no_loads_{0};  // the base solve's (none)
 };
 
 }  // namespace track

@@ -244,7 +244,6 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   im.polach.spin = contact_model_->options().spin;
   im.cost = contact_cost_;
 
-  no_loads_ = std::make_unique<NodalLoads>(0);
   if (options.solve_beside) {
     // The integrators time their right-hand sides and solves into the worker's clock; the loop's thread
     // adds it to cost_ when it takes a result.
@@ -270,7 +269,7 @@ CosimTrack::~CosimTrack() {
   }
 }
 
-void CosimTrack::solveBase() noexcept { integ().solveStep(st(), *no_loads_); }
+void CosimTrack::solveBase() noexcept { integ().solveStep(st(), no_loads_); }
 
 void CosimTrack::workerLoop() noexcept {
   std::unique_lock<std::mutex> lock(worker_mutex_);
