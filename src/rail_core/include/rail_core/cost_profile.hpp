@@ -113,6 +113,8 @@ class CostProfile {
     seconds_[c] += seconds;
     ++calls_[c];
   }
+  // More time for a call already counted (a part of it done later, e.g. a step finished after the send).
+  void addSeconds(Component c, double seconds) { seconds_[c] += seconds; }
   double seconds(Component c) const { return seconds_[c]; }
   long calls(Component c) const { return calls_[c]; }
 

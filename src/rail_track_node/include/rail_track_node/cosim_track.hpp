@@ -128,6 +128,14 @@ class CosimTrack {
   /// No allocation, no exception, no logging.
   CosimStepStatus step(const rail::core::coupling::WheelStateFrame& states,
                        rail::core::coupling::WrenchFrame& out) noexcept;
+  /// step() in two parts, so that a caller can hand the wrenches on before the track finishes its step:
+  /// stepForces writes `out` exactly as step() does; finishStep then loads the rails with the step's
+  /// forces, completes the Newmark step and starts the next base solve. Until finishStep, state(),
+  /// railDeformation(), sectionDeflection(), padForces() and energy() still describe t_{k-1}; the next
+  /// stepForces finishes a pending step first. Same results as step(). No allocation, no exception.
+  CosimStepStatus stepForces(const rail::core::coupling::WheelStateFrame& states,
+                             rail::core::coupling::WrenchFrame& out) noexcept;
+  void finishStep() noexcept;
 
   /// FE track integrated (flexible; full-length or windowed).
   bool flexible() const { return fe_ != nullptr || window_ != nullptr; }
@@ -225,9 +233,11 @@ class CosimTrack {
   // system G, the Newton solve of their forces, and the step's displacement and contact results.
   void gatherLinks(const rail::core::coupling::WheelStateFrame& states) noexcept;
   void buildInfluence() noexcept;
+  void baseDisplacement() noexcept;
   void solveLinkForces() noexcept;
   void applyLinkForces(const rail::core::coupling::WheelStateFrame& states,
                        rail::core::coupling::WrenchFrame& out) noexcept;
+  void addColumnLoads() noexcept;  // finishStep: d = x_b + K_eff^{-1} W f
   // The load-free right-hand side and solve of the next step (stepDisplacement() = K_eff^{-1} rhs_0): on
   // the second thread (startBaseSolve, then awaitBaseSolve) or here (solveBase).
   void solveBase() noexcept;
@@ -264,6 +274,10 @@ class CosimTrack {
   std::unique_ptr<Implicit> implicit_;
   long newmark_steps_ = 0;
   long frames_ = 0;
+  // What finishStep still has to do for the last accepted frame: nothing, the frame's count only (no
+  // integration: rigid_fe, step 0), or the Newmark step too.
+  enum class Finish { kNone, kFrameOnly, kIntegrate };
+  Finish finish_ = Finish::kNone;
   int seen_rebuilds_ = 0;  // window rebuilds already handled by onWindowMove
   int cache_drops_ = 0;
   double window_move_s_ = 0.0;
@@ -274,6 +288,7 @@ class CosimTrack {
   enum class BaseSolve { kNone, kRunning, kReady };
   BaseSolve base_ = BaseSolve::kNone;
   bool solve_beside_ = false;
+  bool columns_beside_ = false;  // influence columns may be solved while the base solve runs (own scratch)
   std::thread worker_;
   std::mutex worker_mutex_;
   std::condition_variable worker_cv_;

@@ -29,6 +29,25 @@ using rail::core::Scene;
 using rail::core::SceneError;
 
 namespace {
+
+// The contact forces' share of a step (Newton, influence columns and their loads): added to the contact
+// clock, when there is one, at the end of the scope.
+class ForcesTime {
+ public:
+  explicit ForcesTime(rc::ContactCost* cost) : cost_(cost) {
+    if (cost_ != nullptr) t0_ = std::chrono::steady_clock::now();
+  }
+  ~ForcesTime() {
+    if (cost_ != nullptr)
+      cost_->forces_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+  ForcesTime(const ForcesTime&) = delete;
+  ForcesTime& operator=(const ForcesTime&) = delete;
+
+ private:
+  rc::ContactCost* cost_;
+  std::chrono::steady_clock::time_point t0_;
+};
 constexpr int kNodeDofs = 6;
 using Vector12d = rc::Vector12d;
 
@@ -248,6 +267,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     // The integrators time their right-hand sides and solves into the worker's clock; the loop's thread
     // adds it to cost_ when it takes a result.
     solve_beside_ = true;
+    columns_beside_ = options.factor_layout == CholeskyLayout::kSimplicial;
     if (cost_ != nullptr) {
       cost_->track_solve_beside = true;
       integ().setCostClock(&worker_cost_);
@@ -464,6 +484,13 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
 }
 
 CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
+  const CosimStepStatus status = stepForces(states, out);
+  if (status == CosimStepStatus::kOk) finishStep();
+  return status;
+}
+
+CosimStepStatus CosimTrack::stepForces(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
+  finishStep();  // the previous step's, if its caller did not
   const int n = wheelCount();
   if (static_cast<int>(states.count) != n || states.capacity() < n || out.capacity() < n)
     return CosimStepStatus::kWrongWheelCount;
@@ -507,23 +534,27 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
   if (integrate && coupling_ != CosimCoupling::kExplicit) fillPredictedDeformation();
   evaluateContacts(states, out);
 
+  if (integrate && coupling_ == CosimCoupling::kSemiImplicit) {
+    implicitCorrection(states, out);
+  }
+  ++frames_;
+  finish_ = integrate ? Finish::kIntegrate : Finish::kFrameOnly;
+  return CosimStepStatus::kOk;
+}
+
+void CosimTrack::finishStep() noexcept {
+  if (finish_ == Finish::kNone) return;
+  const bool integrate = finish_ == Finish::kIntegrate;
+  finish_ = Finish::kNone;
   if (integrate) {
     switch (coupling_) {
       case CosimCoupling::kExplicit:
         integ().step(st(), *loads_);
         break;
-      case CosimCoupling::kSemiImplicit:
-        awaitBaseSolve();
-        if (base_ != BaseSolve::kReady) solveBase();
-        base_ = BaseSolve::kNone;
-        if (contact_cost_ != nullptr) {
-          // The contact forces solved with the step (Newton, influence-column solves included).
-          const auto t0 = std::chrono::steady_clock::now();
-          implicitCorrection(states, out);
-          contact_cost_->forces_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        } else {
-          implicitCorrection(states, out);
-        }
+      case CosimCoupling::kSemiImplicit: {
+        ForcesTime timing(contact_cost_);
+        addColumnLoads();
+      }
         integ().completeStep(st());
         takeWorkerCost();  // its solve and this completion, timed on the worker's clock
         break;
@@ -532,9 +563,7 @@ CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFr
     ++newmark_steps_;
     fillDeformation();
   }
-  ++frames_;
   if (solve_beside_ && base_ == BaseSolve::kNone) startBaseSolve();
-  return CosimStepStatus::kOk;
 }
 
 // x = K_eff^{-1} e_dof into im.column and its window (trimColumn).
@@ -668,9 +697,24 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
 // forces f solve f_c + F_wheel,c(u_c(f)) = 0 by Newton (3 unknowns per contact, law Jacobian by
 // differences). d, the contact results and the wheel wrenches take the final forces.
 void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
-  gatherLinks(states);
+  // The links and G do not read the base solve: with the simplicial factor (its own scratch for the
+  // columns) they are built while the base solve may still run beside.
+  const bool early = columns_beside_;
+  if (early) {
+    ForcesTime timing(contact_cost_);
+    gatherLinks(states);
+    buildInfluence();
+  }
+  awaitBaseSolve();
+  if (base_ != BaseSolve::kReady) solveBase();
+  base_ = BaseSolve::kNone;
+  ForcesTime timing(contact_cost_);
+  if (!early) {
+    gatherLinks(states);
+    buildInfluence();
+  }
   if (implicit_->links.empty()) return;
-  buildInfluence();
+  baseDisplacement();
   solveLinkForces();
   applyLinkForces(states, out);
 }
@@ -683,7 +727,6 @@ void CosimTrack::gatherLinks(const cc::WheelStateFrame& states) noexcept {
   const NewmarkState& state = st();
   const double h = integ().dt();
   const rc::NormalDampingParams& damping = contact_model_->options().damping;
-  const Eigen::VectorXd& x_base = integ().stepDisplacement();
   im.links.clear();
   const int n = wheelCount();
   for (int i = 0; i < n; ++i) {
@@ -748,7 +791,6 @@ void CosimTrack::gatherLinks(const cc::WheelStateFrame& states) noexcept {
         double d_p = 0.0, v_p = 0.0;
         predictRail(g, d_p, v_p);
         L.u_p += L.W.row(j).transpose() * d_p;
-        L.u0 += L.W.row(j).transpose() * x_base(g);
         L.base_dot += L.W.row(j).transpose() * ((2.0 / h) * state.d(g) + state.v(g) + v_p);
       }
       L.f_p = -cp.force_on_wheel_in_world;
@@ -760,8 +802,7 @@ void CosimTrack::gatherLinks(const cc::WheelStateFrame& states) noexcept {
   }
 }
 
-// G = W' K_eff^{-1} W from the influence columns (3 x 3 blocks), and u0 += G f_p: the point's displacement
-// under the prediction's forces.
+// G = W' K_eff^{-1} W from the influence columns (3 x 3 blocks).
 void CosimTrack::buildInfluence() noexcept {
   Implicit& im = *implicit_;
   const int m = static_cast<int>(im.links.size());
@@ -782,8 +823,20 @@ void CosimTrack::buildInfluence() noexcept {
       im.G.block<3, 3>(3 * c, 3 * e) = g;
     }
   }
+}
+
+// u0 = W' x_b + G f_p: each contact point's displacement under the base solve and the prediction's forces.
+void CosimTrack::baseDisplacement() noexcept {
+  Implicit& im = *implicit_;
+  const Eigen::VectorXd& x_base = integ().stepDisplacement();
+  const int m = static_cast<int>(im.links.size());
   for (int c = 0; c < m; ++c) {
     Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+    Lc.u0.setZero();
+    for (int j = 0; j < 12; ++j) {
+      const int g = Lc.dofs[static_cast<std::size_t>(j)];
+      if (g >= 0) Lc.u0 += Lc.W.row(j).transpose() * x_base(g);
+    }
     for (int e = 0; e < m; ++e) Lc.u0 += im.G.block<3, 3>(3 * c, 3 * e) * im.links[static_cast<std::size_t>(e)].f_p;
   }
 }
@@ -892,12 +945,12 @@ void CosimTrack::solveLinkForces() noexcept {
   }
 }
 
-// d = x_b + K_eff^{-1} W f; the contact results with the final forces; the wheel-centre wrenches (eq. 13)
-// and the rail-section resultant (eq. 15) of the wheels concerned.
+// The contact results with the final forces, the wheel-centre wrenches (eq. 13) and the rail-section
+// resultant (eq. 15) of the wheels concerned; the nodal loads W f summed per influence column for
+// addColumnLoads (finishStep).
 void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
   Implicit& im = *implicit_;
   const double h = integ().dt();
-  Eigen::VectorXd& d_new = integ().stepDisplacement();
   const int m = static_cast<int>(im.links.size());
   Implicit::LawOut lo;
   for (int c = 0; c < m; ++c) {
@@ -930,6 +983,21 @@ void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFr
       im.column_load[static_cast<std::size_t>(col)] += df(j);
     }
   }
+  for (int e = 0; e < m; ++e) {
+    const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
+    if (e > 0 && im.links[static_cast<std::size_t>(e - 1)].wheel == Le.wheel) continue;
+    const rc::WheelState& ws = states.wheels[static_cast<std::size_t>(Le.frame_index)];
+    rc::WheelContactResult& res = result_[static_cast<std::size_t>(Le.wheel)];
+    rc::sumContactWrenches(ws.p_wheel_in_world, ws.R_wheelset_to_world, res);
+    writeWrench(Le.frame_index, ws, res, out);
+  }
+}
+
+// d = x_b + K_eff^{-1} W f: the step's nodal loads, summed per influence column by applyLinkForces.
+void CosimTrack::addColumnLoads() noexcept {
+  if (!implicit_) return;
+  Implicit& im = *implicit_;
+  Eigen::VectorXd& d_new = integ().stepDisplacement();
   for (const int col : im.used_columns) {
     const std::size_t c = static_cast<std::size_t>(col);
     const int lo_i = im.lo[c], len = im.len[c];
@@ -940,14 +1008,6 @@ void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFr
     im.column_used[c] = 0;
   }
   im.used_columns.clear();
-  for (int e = 0; e < m; ++e) {
-    const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
-    if (e > 0 && im.links[static_cast<std::size_t>(e - 1)].wheel == Le.wheel) continue;
-    const rc::WheelState& ws = states.wheels[static_cast<std::size_t>(Le.frame_index)];
-    rc::WheelContactResult& res = result_[static_cast<std::size_t>(Le.wheel)];
-    rc::sumContactWrenches(ws.p_wheel_in_world, ws.R_wheelset_to_world, res);
-    writeWrench(Le.frame_index, ws, res, out);
-  }
 }
 
 int CosimTrack::sectionCount() const { return window_ ? window_->sectionCount() : static_cast<int>(sections_.size()); }

@@ -84,9 +84,9 @@ TrackRunStatus CosimTrackRun::step() {
   CosimStepStatus status;
   if (options_.cost != nullptr) {
     core::CostProfile::Scope timing(*options_.cost, core::CostProfile::kTrackStep);
-    status = track_.step(coupling_.states(), coupling_.wrenches());
+    status = track_.stepForces(coupling_.states(), coupling_.wrenches());
   } else {
-    status = track_.step(coupling_.states(), coupling_.wrenches());
+    status = track_.stepForces(coupling_.states(), coupling_.wrenches());
   }
   const auto step = static_cast<unsigned long long>(coupling_.states().step);
   if (status != CosimStepStatus::kOk) {
@@ -97,6 +97,15 @@ TrackRunStatus CosimTrackRun::step() {
   if (!w) {
     std::snprintf(text, sizeof(text), "sending the wrenches of step %llu to the vehicle node ", step);
     return fail(cc::exitCode(w.status), text + options_.peer + " failed: " + w.message);
+  }
+  // The rest of the track's step while the vehicle integrates its next one.
+  if (options_.cost != nullptr) {
+    const auto t0 = std::chrono::steady_clock::now();
+    track_.finishStep();
+    options_.cost->addSeconds(core::CostProfile::kTrackStep,
+                              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  } else {
+    track_.finishStep();
   }
   return TrackRunStatus::kRunning;
 }
