@@ -105,7 +105,11 @@ struct CosimTrack::Implicit {
   std::vector<Eigen::Vector3d> memory;  // per (wheel, contact): K, a_coeff, b_coeff last seen with N > 0
   Eigen::MatrixXd G, S;                 // W_c' K_eff^{-1} W_e (3 x 3 blocks) and the Newton matrix, 3 per link
   Eigen::VectorXd rhs;
-  std::vector<int> pivot;
+  // Links that load each other (a nonzero G block, directly or through others) form a group; the links of
+  // group q are order[group_start[q]] .. order[group_start[q + 1] - 1], ascending. Far-apart bogies do
+  // not see each other through the truncated columns, so the Newton matrix is solved group by group.
+  std::vector<int> group_of, order, group_start;
+  int groups = 0;
   rail::contact::PolachOptions polach;
   long newton_iterations = 0, unconverged = 0;
   rail::contact::ContactCost* cost = nullptr;  // creep evaluations of law() (CosimTrackOptions::cost)
@@ -258,7 +262,9 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   im.G.setZero(3 * max_links, 3 * max_links);
   im.S.setZero(3 * max_links, 3 * max_links);
   im.rhs.setZero(3 * max_links);
-  im.pivot.assign(static_cast<std::size_t>(3 * max_links), 0);
+  im.group_of.assign(static_cast<std::size_t>(max_links), 0);
+  im.order.assign(static_cast<std::size_t>(max_links), 0);
+  im.group_start.assign(static_cast<std::size_t>(max_links) + 1, 0);
   im.polach = contact_model_->options().polach;
   im.polach.spin = contact_model_->options().spin;
   im.cost = contact_cost_;
@@ -806,10 +812,35 @@ void CosimTrack::gatherLinks(const cc::WheelStateFrame& states) noexcept {
 void CosimTrack::buildInfluence() noexcept {
   Implicit& im = *implicit_;
   const int m = static_cast<int>(im.links.size());
+  for (int c = 0; c < m; ++c) im.group_of[static_cast<std::size_t>(c)] = c;
+  auto root = [&im](int c) {
+    while (im.group_of[static_cast<std::size_t>(c)] != c) c = im.group_of[static_cast<std::size_t>(c)];
+    return c;
+  };
   for (int e = 0; e < m; ++e) {
     const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
+    // The DOF range Le's columns reach (their entries beyond it are zero).
+    int reach_lo = im.n, reach_hi = 0;
+    for (int j = 0; j < 12; ++j) {
+      const int col =
+          im.node_slot[Le.rail][static_cast<std::size_t>(Le.element + j / kNodeDofs)] * kNodeDofs + j % kNodeDofs;
+      if (im.len[static_cast<std::size_t>(col)] == 0) continue;
+      reach_lo = std::min(reach_lo, im.lo[static_cast<std::size_t>(col)]);
+      reach_hi = std::max(reach_hi, im.lo[static_cast<std::size_t>(col)] + im.len[static_cast<std::size_t>(col)]);
+    }
     for (int c = 0; c < m; ++c) {
       const Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
+      bool reached = false;
+      for (int i = 0; i < 12 && !reached; ++i) {
+        const int g = Lc.dofs[static_cast<std::size_t>(i)];
+        reached = g >= reach_lo && g < reach_hi;
+      }
+      if (!reached) {
+        im.G.block<3, 3>(3 * c, 3 * e).setZero();
+        continue;
+      }
+      const int root_c = root(c), root_e = root(e);
+      if (root_c != root_e) im.group_of[static_cast<std::size_t>(std::max(root_c, root_e))] = std::min(root_c, root_e);
       Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
       for (int j = 0; j < 12; ++j) {
         const int node = Le.element + j / kNodeDofs;
@@ -823,6 +854,17 @@ void CosimTrack::buildInfluence() noexcept {
       im.G.block<3, 3>(3 * c, 3 * e) = g;
     }
   }
+  // Groups in order of their first link, links ascending within each.
+  int groups = 0, placed = 0;
+  for (int c = 0; c < m; ++c) im.group_of[static_cast<std::size_t>(c)] = root(c);
+  for (int c = 0; c < m; ++c) {
+    if (im.group_of[static_cast<std::size_t>(c)] != c) continue;
+    im.group_start[static_cast<std::size_t>(groups++)] = placed;
+    for (int d = c; d < m; ++d)
+      if (im.group_of[static_cast<std::size_t>(d)] == c) im.order[static_cast<std::size_t>(placed++)] = d;
+  }
+  im.group_start[static_cast<std::size_t>(groups)] = placed;
+  im.groups = groups;
 }
 
 // u0 = W' x_b + G f_p: each contact point's displacement under the base solve and the prediction's forces.
@@ -853,7 +895,6 @@ void CosimTrack::solveLinkForces() noexcept {
   constexpr double kDu = 1e-11;  // m, difference step of the law Jacobian (rail velocity step 2 kDu / h)
   bool converged = false;
   Implicit::LawOut lo, lp;
-  const int N3 = 3 * m;
   auto residuals = [&](bool jacobian) {
     double merit = 0.0;
     for (int c = 0; c < m; ++c) {
@@ -892,39 +933,45 @@ void CosimTrack::solveLinkForces() noexcept {
       converged = true;
       break;
     }
-    // (I + G J) du = -r, dense LU with partial pivoting.
-    for (int c = 0; c < m; ++c) {
-      for (int e = 0; e < m; ++e)
-        im.S.block<3, 3>(3 * c, 3 * e).noalias() =
-            im.G.block<3, 3>(3 * c, 3 * e) * im.links[static_cast<std::size_t>(e)].J;
-      im.S.block<3, 3>(3 * c, 3 * c) += Eigen::Matrix3d::Identity();
-      im.rhs.segment<3>(3 * c) = -im.links[static_cast<std::size_t>(c)].R;
-    }
-    for (int k = 0; k < N3; ++k) {
-      int p = k;
-      for (int i = k + 1; i < N3; ++i)
-        if (std::abs(im.S(i, k)) > std::abs(im.S(p, k))) p = i;
-      if (p != k) {
-        for (int j = 0; j < N3; ++j) std::swap(im.S(k, j), im.S(p, j));
-        std::swap(im.rhs(k), im.rhs(p));
+    // (I + G J) du = -r, dense LU with partial pivoting, group by group (the blocks between groups are
+    // zero: the same arithmetic as on the whole matrix).
+    for (int q = 0; q < im.groups; ++q) {
+      const int* idx = im.order.data() + im.group_start[static_cast<std::size_t>(q)];
+      const int mq = im.group_start[static_cast<std::size_t>(q) + 1] - im.group_start[static_cast<std::size_t>(q)];
+      const int N3 = 3 * mq;
+      for (int a = 0; a < mq; ++a) {
+        for (int b = 0; b < mq; ++b)
+          im.S.block<3, 3>(3 * a, 3 * b).noalias() =
+              im.G.block<3, 3>(3 * idx[a], 3 * idx[b]) * im.links[static_cast<std::size_t>(idx[b])].J;
+        im.S.block<3, 3>(3 * a, 3 * a) += Eigen::Matrix3d::Identity();
+        im.rhs.segment<3>(3 * a) = -im.links[static_cast<std::size_t>(idx[a])].R;
       }
-      const double piv = im.S(k, k);
-      for (int i = k + 1; i < N3; ++i) {
-        const double l = im.S(i, k) / piv;
-        if (l == 0.0) continue;
-        for (int j = k + 1; j < N3; ++j) im.S(i, j) -= l * im.S(k, j);
-        im.rhs(i) -= l * im.rhs(k);
+      for (int k = 0; k < N3; ++k) {
+        int p = k;
+        for (int i = k + 1; i < N3; ++i)
+          if (std::abs(im.S(i, k)) > std::abs(im.S(p, k))) p = i;
+        if (p != k) {
+          for (int j = 0; j < N3; ++j) std::swap(im.S(k, j), im.S(p, j));
+          std::swap(im.rhs(k), im.rhs(p));
+        }
+        const double piv = im.S(k, k);
+        for (int i = k + 1; i < N3; ++i) {
+          const double l = im.S(i, k) / piv;
+          if (l == 0.0) continue;
+          for (int j = k + 1; j < N3; ++j) im.S(i, j) -= l * im.S(k, j);
+          im.rhs(i) -= l * im.rhs(k);
+        }
       }
-    }
-    for (int k = N3 - 1; k >= 0; --k) {
-      double v = im.rhs(k);
-      for (int j = k + 1; j < N3; ++j) v -= im.S(k, j) * im.rhs(j);
-      im.rhs(k) = v / im.S(k, k);
+      for (int k = N3 - 1; k >= 0; --k) {
+        double v = im.rhs(k);
+        for (int j = k + 1; j < N3; ++j) v -= im.S(k, j) * im.rhs(j);
+        im.rhs(k) = v / im.S(k, k);
+      }
+      for (int a = 0; a < mq; ++a) im.links[static_cast<std::size_t>(idx[a])].du = im.rhs.segment<3>(3 * a);
     }
     for (int c = 0; c < m; ++c) {
       Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
       Lc.u_start = Lc.u;
-      Lc.du = im.rhs.segment<3>(3 * c);
     }
     double alpha = 1.0, trial = 0.0;
     for (int halving = 0; halving < 40; ++halving) {
