@@ -5,7 +5,8 @@ and on the flexible track (the latter at the track steps the accuracy-cost map s
 on the 5 km version of the scene, and the vehicle alone over the whole scene (15.5 s; target: real-time
 factor >= 1). Each case runs --repeat times, one at a time (run nothing else meanwhile); the figure is the
 median of the slower node's loop wall time (set-up excluded, from the cost profiles), per simulated second,
-and its ratio to the run alone. Then the vehicle alone's accuracy against a reference run of the whole
+and its ratio to the run alone; for the flexible runs also the track node's cost per track step by part
+(median over the runs, from the track's cost profile). Then the vehicle alone's accuracy against a reference run of the whole
 scene (Adams capped at 5e-6 s, 0.1 ms samples, cached in --out as accuracy_reference_0.1ms.csv; its first run
 takes ~10 min; a cached one from another scene or an older build is refused, exit 2: delete it):
 bench_vehicle_accuracy's table for the default run and for Adams at the former 2e-5 s cap.
@@ -28,6 +29,7 @@ from rail_analysis import costmap, runner  # noqa: E402
 
 PAPER = os.path.join(REPO, "config", "scenes", "paper_demo.yaml")
 PAPER_5KM = os.path.join(REPO, "test", "scenes", "paper_demo_5km.yaml")
+PAPER_TRAIN = os.path.join(REPO, "config", "scenes", "paper_train.yaml")
 TOPICS = ["wheelset_kinematics"]
 CASES = [  # name, scene, overrides
     ("standalone", PAPER, {"effects.track_model": "rigid", "effects.rail_deflection_output": False}),
@@ -36,10 +38,28 @@ CASES = [  # name, scene, overrides
     ("flexible, track step 4e-5 s", PAPER, {"solver.track_step": 4e-5, "solver.vehicle_max_step": 4e-5}),
     ("flexible, track step 8e-5 s", PAPER, {"solver.track_step": 8e-5, "solver.vehicle_max_step": 8e-5}),
     ("flexible, 5 km line, 2e-5 s", PAPER_5KM, {}),
+    ("flexible, two-coach train, 2e-5 s", PAPER_TRAIN, {}),
     # The scene's own end (the leading wheelset at 499 m, 15.5 s): no solver.end override.
     ("standalone, whole scene", PAPER, {"effects.track_model": "rigid", "effects.rail_deflection_output": False,
                                         "solver.end": None}),
 ]
+
+
+# The track node's cost per Newmark step: its components, then the finer parts of track_step
+# (track_rhs and track_solve run beside the step on a second thread; track_solve_wait is what remains of them
+# on the step).
+STEP_PARTS = ["track_step", "transport_wait", "contact_detection", "contact_forces", "track_rhs", "track_solve",
+              "track_solve_wait", "track_step_other"]
+
+
+def step_parts(track):
+    """{part: us per Newmark step} of a track cost profile (runner.read_cost)."""
+    n = float(track["count_newmark_steps"])
+    out = {}
+    for k in STEP_PARTS:
+        v = track.get(k, track.get("finer_" + k))
+        out[k] = 1e6 * (v or 0.0) / n
+    return out
 
 
 def main(argv=None):
@@ -51,7 +71,7 @@ def main(argv=None):
     ap.add_argument("--only", action="append", default=[], metavar="TEXT")
     ap.add_argument("--no-accuracy", action="store_true", help="skip the accuracy comparison")
     a = ap.parse_args(argv)
-    rows = []
+    rows, steps = [], []
     for name, scene, ov in CASES:
         if a.only and name != "standalone" and not any(t in name for t in a.only):
             continue
@@ -60,7 +80,7 @@ def main(argv=None):
         if overrides["solver.end"] is None:
             del overrides["solver.end"]
         overrides.update({"output.topics": TOPICS, "output.bag": "run.bag"})
-        loops, walls, simulated = [], [], []
+        loops, walls, simulated, per_step = [], [], [], []
         for i in range(a.repeat):
             case_dir = os.path.join(a.out, name.replace(" ", "_").replace(",", ""), str(i))
             spec = {"case_dir": case_dir, "name": name, "case_id": name, "settings_hash": "", "scene": scene,
@@ -74,8 +94,12 @@ def main(argv=None):
             loops.append(max(p["loop_wall_time"] for p in cost.values()))
             simulated.append(min(p["simulated_time"] for p in cost.values()))
             walls.append(rec["wall_time"])
+            if "track" in cost and cost["track"].get("count_newmark_steps"):
+                per_step.append(step_parts(cost["track"]))
             print("%-30s run %d: loop %.2f s, launch to exit %.2f s" % (name, i, loops[-1], walls[-1]), flush=True)
         rows.append((name, statistics.median(loops), statistics.median(walls), statistics.median(simulated)))
+        if per_step:
+            steps.append((name, {k: statistics.median(r[k] for r in per_step) for k in per_step[0]}))
     base = rows[0][1] / rows[0][3]
     print("\n| run (%.2f s simulated unless said, median of %d) | simulated [s] | loop wall [s] | per simulated s | "
           "real-time factor | x standalone | launch to exit [s] |" % (a.end, a.repeat))
@@ -83,6 +107,11 @@ def main(argv=None):
     for name, loop, wall, sim in rows:
         print("| %s | %.2f | %.2f | %.3f | %.2f | %.2f | %.1f |" % (name, sim, loop, loop / sim, sim / loop,
                                                               loop / sim / base, wall))
+    if steps:
+        print("\n| track node, us per track step (median of %d) | %s |" % (a.repeat, " | ".join(STEP_PARTS)))
+        print("|---|%s" % ("---|" * len(STEP_PARTS)))
+        for name, parts in steps:
+            print("| %s | %s |" % (name, " | ".join("%.0f" % parts[k] for k in STEP_PARTS)))
     flex = [r for r in rows if r[0] == "flexible, track step 2e-5 s"]
     five = [r for r in rows if r[0].startswith("flexible, 5 km")]
     if flex and five:

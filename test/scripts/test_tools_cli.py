@@ -42,6 +42,7 @@ TOOLS = [
     ([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "manchester_a22.py")], "usage"),
     ([PY, os.path.join(REPO, "src", "rail_contact", "scripts", "make_worn_profiles.py")], "Makes"),
     ([PY, os.path.join(REPO, "scripts", "count_tests.py")], "Counts"),
+    ([PY, os.path.join(REPO, "scripts", "make_train.py")], "usage"),
     (["/bin/bash", os.path.join(REPO, "scripts", "rviz_screenshot.sh")], "Screenshot"),
     (["/bin/bash", os.path.join(REPO, "scripts", "check_naming")], "check_naming:"),
     (["/bin/bash", os.path.join(REPO, "scripts", "check_format")], "check_format:"),
@@ -76,12 +77,46 @@ class ToolsAnswerHelp(unittest.TestCase):
                 # A script whose required arguments argparse checks first gets them, so that the unknown
                 # option is what it refuses.
                 needs = ["scene.yaml", "--out-dir", self_dir()] if cmd[-1].endswith("contact_geometry_for_scene.py") else []
+                needs = ["coach.yaml", "2"] if cmd[-1].endswith("make_train.py") else needs
                 p = run(cmd + needs + ["--no-such-option"])
                 self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
                 self.assertIn("--no-such-option", p.stderr)
         p = run([PY, os.path.join(REPO, "scripts", "count_tests.py")])
         self.assertEqual(p.returncode, 2)
         self.assertIn("usage: count_tests.py", p.stderr)
+
+
+class TrainMaker(unittest.TestCase):
+    """scripts/make_train.py: the shipped train is what it writes from the shipped coach; bad input exits 2
+    naming the file, option or field, and writes nothing."""
+
+    TOOL = [PY, os.path.join(REPO, "scripts", "make_train.py")]
+    COACH = os.path.join(REPO, "config", "vehicle", "paper_coach.yaml")
+
+    def test_the_shipped_train_is_the_coach_twice(self):
+        p = run(self.TOOL + [self.COACH, "2"])
+        self.assertEqual(p.returncode, 0, p.stderr)
+        with open(os.path.join(REPO, "config", "vehicle", "paper_coach_x2.yaml")) as f:
+            shipped = f.read()
+        # The header names the coach file by its base name only, so the text does not depend on the path.
+        self.assertEqual(p.stdout, shipped)
+
+    def test_bad_input_is_named_and_nothing_written(self):
+        d = self_dir()
+        out = os.path.join(d, "train.yaml")
+        cases = [
+            ([self.COACH, "0"], "N: at least 1 coach, got 0"),
+            ([os.path.join(d, "missing.yaml"), "2"], "missing.yaml: No such file or directory"),
+            ([self.COACH, "2", "--carbody", "body"], "no body named 'body' (--carbody)"),
+            ([self.COACH, "2", "--coupler-stiffness", "1,2"], "--coupler-stiffness: three values >= 0"),
+            ([self.COACH, "2", "--length", "-1"], "--length: must be > 0 m, got -1.0"),
+        ]
+        for args, message in cases:
+            with self.subTest(args=args):
+                p = run(self.TOOL + args + ["--out", out])
+                self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+                self.assertIn(message, p.stderr)
+                self.assertFalse(os.path.exists(out))
 
 
 class NamingCheck(unittest.TestCase):

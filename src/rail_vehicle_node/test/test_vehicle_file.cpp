@@ -65,6 +65,28 @@ TEST(PaperCoach, ReferenceConfigurationSatisfiesJointsAndSuspensionBalancesGravi
   EXPECT_LT(y_dot.tail(model.nVelocities()).lpNorm<Eigen::Infinity>(), 1e-9);
 }
 
+// The shipped two-coach train (scripts/make_train.py from the coach): two coaches' bodies and wheels, the
+// second 24.5 m behind the first, and a coupler that carries nothing at the reference configuration, so
+// that the coach's preloads still balance gravity with W/8 on every wheel.
+TEST(PaperTrain, TwoCoachesInEquilibriumWithTheCouplerUnloaded) {
+  const VehicleModel model = loadVehicleModel(std::string(RAIL_VEHICLE_CONFIG_DIR) + "/paper_coach_x2.yaml");
+  EXPECT_EQ(model.nBodies(), 30);
+  EXPECT_EQ(model.nConstraints(), 16 * 5);
+  EXPECT_NEAR(model.totalMass(), 2 * 59480.0, 1e-9);
+  ASSERT_EQ(model.loadPoints().size(), 16u);
+  EXPECT_NEAR(model.wheelSpan(), 22.35 - (0.65 - 24.5), 1e-12);
+  EXPECT_DOUBLE_EQ(model.bodies()[static_cast<std::size_t>(model.bodyIndex("ws5"))].r_reference.x(), 22.35 - 24.5);
+  EXPECT_GE(model.bodyIndex("carbody_c2"), 0);
+  VehicleData data(model);
+  const Eigen::VectorXd y = model.referenceState();
+  for (auto& w : data.external) w.force_in_world = Vector3(0.0, 0.0, 59480.0 * 9.81 / 8.0);
+  Eigen::VectorXd y_dot(model.stateSize());
+  computeDerivatives(model, 0.0, y, y_dot, data);
+  EXPECT_LT(data.phi.lpNorm<Eigen::Infinity>(), 1e-15);
+  // As for the coach: residual forces of the exact preloads over the masses, 1e-9 m/s^2.
+  EXPECT_LT(y_dot.tail(model.nVelocities()).lpNorm<Eigen::Infinity>(), 1e-9);
+}
+
 TEST(PaperCoach, AugmentedLuAndRangeSpaceSolvesAgree) {
   // Both solvers of [M Phi_v^T; Phi_v 0][v_dot; lambda] = [g; c] must give the same solution on a general
   // state (moving, bump stops engaged, anti-roll bars twisted, constraints slightly violated). The system is

@@ -280,7 +280,8 @@ def _rmtree(path):
 
 
 def read_cost(case_dir):
-    """{'vehicle': profile, 'track': profile} of the cost profiles beside the bag (missing ones left out)."""
+    """{'vehicle': profile, 'track': profile} of the cost profiles beside the bag (missing ones left out):
+    loop_wall_time, simulated_time, each component's seconds, count_<name>, finer_<part> seconds."""
     out = {}
     for who, fname in (("vehicle", "run.cost.yaml"), ("track", "run.track.cost.yaml")):
         try:
@@ -294,5 +295,7 @@ def read_cost(case_dir):
                 prof[comp] = v.get("seconds") if isinstance(v, dict) else None
             for k, v in (d.get("counts") or {}).items():
                 prof["count_" + k] = v
+            for part, v in (d.get("finer") or {}).items():  # nested parts (e.g. track_solve in track_step)
+                prof["finer_" + part] = v.get("seconds") if isinstance(v, dict) else None
             out[who] = prof
     return out
