@@ -557,10 +557,8 @@ void CosimTrack::finishStep() noexcept {
       case CosimCoupling::kExplicit:
         integ().step(st(), *loads_);
         break;
-      case CosimCoupling::kSemiImplicit: {
-        ForcesTime timing(contact_cost_);
+      case CosimCoupling::kSemiImplicit:
         addColumnLoads();
-      }
         integ().completeStep(st());
         takeWorkerCost();  // its solve and this completion, timed on the worker's clock
         break;
@@ -1043,6 +1041,7 @@ void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFr
 // d = x_b + K_eff^{-1} W f: the step's nodal loads, summed per influence column by applyLinkForces.
 void CosimTrack::addColumnLoads() noexcept {
   if (!implicit_) return;
+  ForcesTime timing(contact_cost_);  // part of the contact forces' cost, as in the step
   Implicit& im = *implicit_;
   Eigen::VectorXd& d_new = integ().stepDisplacement();
   for (const int col : im.used_columns) {
