@@ -380,7 +380,9 @@ class ContactGeometryIsHonest(unittest.TestCase):
 
 def main():
     loader = unittest.TestLoader()
-    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in (ToolsAnswerHelp, ScriptsOnBadInput, NodesStartedByHand, ContactGeometryIsHonest, NamingCheck, FormatCheck)])
+    cases = (ToolsAnswerHelp, ScriptsOnBadInput, NodesStartedByHand, ContactGeometryIsHonest, TrainMaker, NamingCheck,
+             FormatCheck)
+    suite = unittest.TestSuite([loader.loadTestsFromTestCase(c) for c in cases])
     return rosunit_main.run(suite, "test_tools_cli")
 
 
