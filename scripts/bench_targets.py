@@ -79,7 +79,10 @@ def main(argv=None):
         overrides.update(ov)
         if overrides["solver.end"] is None:
             del overrides["solver.end"]
-        overrides.update({"output.topics": TOPICS, "output.bag": "run.bag"})
+        # A flexible run records one track topic too: the track node writes its bag, and its cost profile
+        # beside it (the per-step table below); two deflection sections at the output rate cost ~0.01 %.
+        topics = TOPICS + (["rail_deflection"] if name.startswith("flexible") else [])
+        overrides.update({"output.topics": topics, "output.bag": "run.bag"})
         loops, walls, simulated, per_step = [], [], [], []
         for i in range(a.repeat):
             case_dir = os.path.join(a.out, name.replace(" ", "_").replace(",", ""), str(i))
