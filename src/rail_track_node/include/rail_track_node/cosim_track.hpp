@@ -230,7 +230,8 @@ class CosimTrack {
   void implicitCorrection(const rail::core::coupling::WheelStateFrame& states,
                           rail::core::coupling::WrenchFrame& out) noexcept;
   // The phases of implicitCorrection: the contacts in contact at the prediction (links), their influence
-  // system G, the Newton solve of their forces, and the step's displacement and contact results.
+  // system G, the points' displacement under the base solve, the Newton solve of their forces, and the
+  // contact results; the step's displacement follows in finishStep (addColumnLoads).
   void gatherLinks(const rail::core::coupling::WheelStateFrame& states) noexcept;
   void buildInfluence() noexcept;
   void baseDisplacement() noexcept;
@@ -274,8 +275,8 @@ class CosimTrack {
   std::unique_ptr<Implicit> implicit_;
   long newmark_steps_ = 0;
   long frames_ = 0;
-  // What finishStep still has to do for the last accepted frame: nothing, the frame's count only (no
-  // integration: rigid_fe, step 0), or the Newmark step too.
+  // What finishStep still has to do for the last accepted frame: nothing, only start the next base solve
+  // (no integration: rigid_fe, step 0), or the Newmark step too.
   enum class Finish { kNone, kFrameOnly, kIntegrate };
   Finish finish_ = Finish::kNone;
   int seen_rebuilds_ = 0;  // window rebuilds already handled by onWindowMove

@@ -699,12 +699,12 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
 //   u_c = u0_c + sum_e G_ce (f_e - f_p,e),  u0_c = W_c' x_b + sum_e G_ce f_p,e,  G_ce = W_c' K_eff^{-1} W_e
 // (cached influence columns; u0 is where the forces of the prediction f_p put the point), and the rail
 // forces f solve f_c + F_wheel,c(u_c(f)) = 0 by Newton (3 unknowns per contact, law Jacobian by
-// differences). d, the contact results and the wheel wrenches take the final forces.
+// differences). The contact results and the wheel wrenches take the final forces; d takes them in
+// finishStep.
 void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
   // The links and G do not read the base solve: with the simplicial factor (its own scratch for the
   // columns) they are built while the base solve may still run beside.
-  const bool early = columns_beside_;
-  if (early) {
+  if (columns_beside_) {
     ForcesTime timing(contact_cost_);
     gatherLinks(states);
     buildInfluence();
@@ -713,7 +713,7 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
   if (base_ != BaseSolve::kReady) solveBase();
   base_ = BaseSolve::kNone;
   ForcesTime timing(contact_cost_);
-  if (!early) {
+  if (!columns_beside_) {
     gatherLinks(states);
     buildInfluence();
   }
