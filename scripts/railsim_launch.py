@@ -10,7 +10,8 @@ under scripts/railsim_node_guard, which writes each node's exit code to DIR/<nod
 It also leaves nothing behind: it is the subreaper of the launch, so whatever roslaunch leaves when it dies
 (master, rosout, nodes) becomes its child and is stopped (SIGINT, then SIGTERM, then SIGKILL); when this
 runner's own parent dies, roslaunch gets SIGINT. A bag of --bag that was not closed (its node was killed)
-is reindexed so that it opens, and said so. --summary writes what happened as YAML (nodes, exit_code,
+is reindexed so that it opens, and said so; one that still does not open is removed, and said so. A log or
+summary that cannot be written (disk full) is said in one line and makes the exit code 9. --summary writes what happened as YAML (nodes, exit_code,
 reason, bags) for run.yaml.
 """
 import argparse
@@ -35,6 +36,7 @@ MEANING = {
     6: "internal error",
     7: "the vehicle derailed or reached the track's end",
     8: "the vehicle's integration failed",
+    9: "could not write an output (disk full or unwritable)",
 }
 # Time the leftovers of a launch get after SIGINT (a node closes its bag), then after SIGTERM (s).
 LEFTOVER_SIGINT_GRACE = 25.0
@@ -149,6 +151,20 @@ def stop_leftovers(launch_pid):
     return names
 
 
+def close_quietly(f):
+    try:
+        f.close()
+    except OSError:
+        pass
+
+
+def remove_quietly(path):
+    try:
+        os.remove(path)
+    except OSError:
+        pass
+
+
 def check_bag(path, killed):
     """'ok', 'reindexed' or 'unreadable: <why>' for a bag that exists."""
     import rosbag
@@ -166,7 +182,7 @@ def check_bag(path, killed):
         b.close()
         n = rosbag.Bag(path).get_message_count()
     except Exception as e:  # noqa: BLE001
-        return "unreadable: reindexing failed: %s" % e
+        return "unreadable: reindexing failed: %s" % (e.strerror if isinstance(e, OSError) and e.strerror else e)
     log("%s was left unindexed (%s); reindexed: it opens now (%d messages)" % (path, killed or "not closed", n))
     return "reindexed"
 
@@ -211,16 +227,28 @@ def main():
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
     show = re.compile(a.show) if a.show else None
-    logf = open(a.log, "w") if a.log else None
+    write_errors = []  # "cannot write <file>: <reason>" of the runner's own files
+    logf = None
+    if a.log:
+        try:
+            logf = open(a.log, "w")
+        except OSError as e:
+            write_errors.append("cannot write %s: %s" % (a.log, e.strerror))
     text = []
 
     def pump():
+        nonlocal logf
         for raw in iter(proc.stdout.readline, b""):
             line = raw.decode(errors="replace")
             text.append(line)
             if logf:
-                logf.write(line)
-                logf.flush()
+                try:
+                    logf.write(line)
+                    logf.flush()
+                except OSError as e:
+                    write_errors.append("cannot write %s: %s" % (a.log, e.strerror))
+                    close_quietly(logf)
+                    logf = None
             if show is None or show.search(line):
                 sys.stdout.write(line)
                 sys.stdout.flush()
@@ -238,7 +266,7 @@ def main():
     left = stop_leftovers(proc.pid)
     reader.join(timeout=5.0)
     if logf:
-        logf.close()
+        close_quietly(logf)
     full = "".join(text)
 
     # Each node's exit code: the guard's record, else what roslaunch reported.
@@ -276,16 +304,30 @@ def main():
         if os.path.isfile(b):
             bags[b] = check_bag(b, killed)
             if bags[b].startswith("unreadable"):
+                try:
+                    os.remove(b)
+                    bags[b] += "; removed"
+                except OSError as e:
+                    bags[b] += "; cannot remove it: %s" % e.strerror
                 log("%s is %s" % (b, bags[b]))
                 reasons.append("%s is %s" % (os.path.basename(b), bags[b]))
                 worst = worst or 6
     for n, c in nodes.items():
         (log if c != 0 else lambda m: None)("%s exited %d: %s" % (n, c, meaning(c)))
+    for e in write_errors[:1]:
+        log(e)
+        reasons.append(e)
+        worst = worst or 9
     if a.summary:
         import yaml
-        with open(a.summary, "w") as f:
-            yaml.safe_dump({"exit_code": worst, "nodes": nodes, "incomplete": "; ".join(reasons) or None,
-                            "bags": bags or None}, f, sort_keys=False, width=10000)
+        try:
+            with open(a.summary, "w") as f:
+                yaml.safe_dump({"exit_code": worst, "nodes": nodes, "incomplete": "; ".join(reasons) or None,
+                                "bags": bags or None}, f, sort_keys=False, width=10000)
+        except OSError as e:
+            log("cannot write %s: %s" % (a.summary, e.strerror))
+            remove_quietly(a.summary)
+            worst = worst or 9
     return min(worst, 255)
 
 

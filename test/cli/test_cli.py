@@ -487,6 +487,45 @@ class TestCli(unittest.TestCase):
         left = subprocess.run(["ip", "netns", "list"], capture_output=True, text=True).stdout
         self.assertNotRegex(left, r"railsim_[ab]_\d+", "network namespaces left behind")
 
+    @unittest.skipUnless(os.geteuid() == 0, "needs root (mount a small tmpfs), as CI has")
+    def test_disk_full_stops_cleanly(self):
+        # The output directory on a 400 kB tmpfs fills up during a co-simulation: each node stops with one line
+        # naming its file and the system's reason, exit 9; no abort, no traceback; no unreadable bag and no
+        # partial cost file left; the runner says it in one line.
+        mnt = tempfile.mkdtemp(prefix="railsim_full_")
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=400k", "tmpfs", mnt], check=True)
+        try:
+            out = os.path.join(mnt, "out")
+            rc, text = self.railsim("run", COSIM, "--set", "effects.track_model=rigid_fe", "--set",
+                                    "solver.end={time: 1.0}", "--out", out)
+            self.assertEqual(rc, 9, text)
+            self.assertRegex(text, r"\[FATAL\] \[[\d.]+\]: /rail_(track|vehicle): cannot write %s/paper_demo_60m"
+                                   r"(\.track)?\.bag: No space left on device \(.*\); stopped at t = [\d.]+ s"
+                             % re.escape(out))
+            self.assertRegex(text, r"\[railsim\] rail_(track|vehicle) exited 9: could not write an output")
+            self.assertRegex(text, r"\[railsim\] run of .*paper_demo_60m.yaml could not write its outputs \(exit 9\)")
+            for bad in ("Traceback", "terminate called", "SIGABRT", "internal error", "counted as 6"):
+                self.assertNotIn(bad, text)
+            left = sorted(os.listdir(out))
+            for f in left:
+                path = os.path.join(out, f)
+                if f.endswith(".bag"):
+                    p = subprocess.run(["/usr/bin/python3", "-c", "import rosbag, sys; rosbag.Bag(sys.argv[1]).close()",
+                                        path], capture_output=True, text=True, env=self.env)
+                    self.assertEqual(p.returncode, 0, "%s unreadable: %s" % (f, p.stderr))
+                if f.endswith(".yaml"):
+                    import yaml
+                    with open(path) as fh:
+                        self.assertIsInstance(yaml.safe_load(fh), dict, "%s is empty or partial" % f)
+            import yaml
+            with open(os.path.join(out, "paper_demo_60m.run.yaml")) as fh:
+                info = yaml.safe_load(fh)
+            self.assertEqual(info["exit_code"], 9)
+            self.assertIn("could not write an output", info["incomplete"])
+        finally:
+            subprocess.run(["umount", "-l", mnt])
+            os.rmdir(mnt)
+
     def test_rviz_inside_the_isolated_run(self):
         # ./railsim run --rviz: rviz runs inside the run's network namespace (it reaches the run's master on
         # loopback and the X display by its socket file), subscribes to the markers, and ends with the run.

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 
 #include <rail_core/exit_codes.hpp>
@@ -60,7 +61,12 @@ bool records(const core::Scene& scene, const std::string& topic) {
 }
 
 OutputBag::~OutputBag() {
-  if (bag_.isOpen()) bag_.close();
+  if (!isOpen()) return;
+  try {
+    bag_->close();
+  } catch (const std::exception&) {
+    static_cast<void>(bag_.release());  // see bag_: its destructor would retry the close and end the process
+  }
 }
 
 bool OutputBag::open(const std::string& node, const core::Scene& scene, const std::string& path) {
@@ -71,8 +77,9 @@ bool OutputBag::open(const std::string& node, const core::Scene& scene, const st
     return false;
   }
   try {
-    bag_.open(path, rosbag::bagmode::Write);
+    bag_ = std::make_unique<rosbag::Bag>(path, rosbag::bagmode::Write);
   } catch (const std::exception& e) {
+    bag_.reset();
     ROS_FATAL("%s: %s: output.bag: cannot write %s: %s", node.c_str(), scene.file.c_str(), path.c_str(), e.what());
     return false;
   }
@@ -80,22 +87,60 @@ bool OutputBag::open(const std::string& node, const core::Scene& scene, const st
   return true;
 }
 
-void OutputBag::close(const std::string& node) {
-  if (!bag_.isOpen()) return;
-  bag_.close();
-  ROS_INFO("%s: bag closed: %s", node.c_str(), path_.c_str());
+void OutputBag::fail(const std::string& file, int err, const char* what) {
+  if (failed()) return;
+  error_ = "cannot write " + file + ": " + (err != 0 ? std::string(std::strerror(err)) + " (" + what + ")" : what);
 }
 
-void OutputBag::writeBeside(const std::string& node, const std::string& suffix, const std::string& text) const {
-  if (path_.empty()) return;
-  const std::string path = besideBag(path_, suffix);
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (f == nullptr) {
-    ROS_WARN("%s: cannot write %s", node.c_str(), path.c_str());
+void OutputBag::close(const std::string& node) {
+  if (!isOpen()) return;
+  errno = 0;
+  try {
+    bag_->close();
+  } catch (const std::exception& e) {
+    fail(path_, errno, e.what());
+    static_cast<void>(bag_.release());  // see bag_
+  }
+  if (!failed()) {
+    ROS_INFO("%s: bag closed: %s", node.c_str(), path_.c_str());
     return;
   }
-  std::fputs(text.c_str(), f);
-  std::fclose(f);
+  bool readable = bag_ != nullptr;
+  if (readable) {
+    try {
+      rosbag::Bag check(path_, rosbag::bagmode::Read);
+    } catch (const std::exception&) {
+      readable = false;
+    }
+  }
+  if (readable) {
+    ROS_WARN("%s: bag closed: %s (it holds what was written before the failed write)", node.c_str(), path_.c_str());
+  } else {
+    std::remove(path_.c_str());
+    ROS_ERROR("%s: removed the incomplete bag %s (it could not be closed after the failed write)", node.c_str(),
+              path_.c_str());
+  }
+}
+
+void OutputBag::writeBeside(const std::string& node, const std::string& suffix, const std::string& text) {
+  if (path_.empty()) return;
+  const std::string path = besideBag(path_, suffix);
+  errno = 0;
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  int err = errno;
+  bool written = f != nullptr && std::fputs(text.c_str(), f) >= 0 && std::fflush(f) == 0;
+  if (f != nullptr) {
+    if (!written) err = errno;
+    if (std::fclose(f) != 0 && written) {
+      err = errno;
+      written = false;
+    }
+  }
+  if (written) return;
+  if (f != nullptr) std::remove(path.c_str());
+  ROS_ERROR("%s: cannot write %s: %s%s", node.c_str(), path.c_str(), std::strerror(err),
+            f != nullptr ? "; removed the partial file" : "");
+  fail(path, err, "write error");
 }
 
 ProgressLine::ProgressLine(std::string node, double t_end_estimate, double period_s)

@@ -12,6 +12,7 @@ enum ExitCode : int {
   kExitInternal = 6,     // an unexpected error inside the program (a bug): please report it
   kExitDerailed = 7,     // the vehicle derailed (or a wheel reached the track's end): the message names wheel, s, t
   kExitNumerical = 8,    // the integration failed or the state became non-finite: the message names where, when
+  kExitWriteFailed = 9,  // an output could not be written (disk full, unwritable): the message names the file and why
 };
 
 }  // namespace rail::core

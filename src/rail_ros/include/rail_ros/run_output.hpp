@@ -7,7 +7,9 @@
 #include <ros/time.h>
 #include <rosbag/bag.h>
 
+#include <cerrno>
 #include <chrono>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -32,7 +34,8 @@ std::string besideBag(const std::string& bag_path, const std::string& suffix);
 bool records(const core::Scene& scene, const std::string& topic);
 
 // The bag a node records to. open() creates its directory; close() (or the destructor) closes it, so that
-// a stopped run leaves a readable bag.
+// a stopped run leaves a readable bag. A write that fails (disk full, file gone or unwritable) makes
+// failed() true and skips the later writes: the caller stops the run, close() keeps what is readable.
 class OutputBag {
  public:
   OutputBag() = default;
@@ -43,24 +46,43 @@ class OutputBag {
   // Opens `path` for writing, creating its directory. False after one FATAL line naming the node, the scene
   // file and output.bag, with the reason.
   bool open(const std::string& node, const core::Scene& scene, const std::string& path);
-  bool isOpen() const { return bag_.isOpen(); }
+  bool isOpen() const { return bag_ && bag_->isOpen(); }
   const std::string& path() const { return path_; }
 
   // A bag refuses time 0: a message at t = 0 is filed at the smallest time it takes.
   template <class Message>
   void write(const std::string& topic, const ros::Time& stamp, const Message& message) {
-    bag_.write(topic, stamp < ros::TIME_MIN ? ros::TIME_MIN : stamp, message);
+    if (failed() || !bag_) return;
+    errno = 0;
+    try {
+      bag_->write(topic, stamp < ros::TIME_MIN ? ros::TIME_MIN : stamp, message);
+    } catch (const std::exception& e) {
+      fail(path_, errno, e.what());
+    }
   }
 
-  // Closes the bag and says so ("<node>: bag closed: <path>"); nothing when it is not open.
+  // A write of this bag or of a file beside it failed; error() says "cannot write <file>: <reason>".
+  bool failed() const { return !error_.empty(); }
+  const std::string& error() const { return error_; }
+
+  // Closes the bag and says so ("<node>: bag closed: <path>"); nothing when it is not open. After a failed
+  // write, a bag that cannot be completed (its index not written) or that does not open again is removed,
+  // and an ERROR line says so.
   void close(const std::string& node);
 
-  // Writes `text` to besideBag(path(), suffix); a WARN line when it cannot. Nothing without a bag path.
-  void writeBeside(const std::string& node, const std::string& suffix, const std::string& text) const;
+  // Writes `text` to besideBag(path(), suffix). When it cannot: an ERROR line naming the file and the
+  // system's reason, no partial file left, failed() true. Nothing without a bag path.
+  void writeBeside(const std::string& node, const std::string& suffix, const std::string& text);
 
  private:
-  rosbag::Bag bag_;
+  // Records the first failure: the system's reason (errno `err`) and what the library said, or `what` alone.
+  void fail(const std::string& file, int err, const char* what);
+
+  // A rosbag::Bag whose close() threw retries it in its destructor, which then ends the process: such a
+  // bag is released instead (abandoned, its file removed), so it is held by pointer.
+  std::unique_ptr<rosbag::Bag> bag_;
   std::string path_;
+  std::string error_;
 };
 
 // The console's progress line of a long run, at most once per `period_s` of wall time: simulated time, per

@@ -43,6 +43,9 @@ class CosimTrackOutputs {
   // Newmark steps, wall time) and how the contact was found. wall: the run loop's wall time [s].
   void close(const std::string& node, const CosimTrackRun& run, int exit_code, double wall);
 
+  // The bag and the files beside it: failed() once a write failed (the run then stops), error() says which.
+  const rail::ros_glue::OutputBag& bag() const { return bag_; }
+
  private:
   void publishMarkers(const ros::Time& stamp);
 

@@ -143,6 +143,12 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
       marker_pub.publish(ma);
       if (bag_markers) bag.write("/markers", stamp, ma);
     }
+    if (bag.failed()) {
+      ROS_FATAL("%s: %s; stopped at t = %.4f s", me.c_str(), bag.error().c_str(), sim.time());
+      stop_logged = true;
+      exit_code = kExitWriteFailed;
+      break;
+    }
     if (sim.finished()) break;
   }
   exit_code = ros_glue::reportStop(me, master_watch, sim.time(), stop_logged, exit_code);

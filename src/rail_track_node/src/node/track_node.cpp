@@ -104,7 +104,15 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       exit_code = run.exitCode();
       break;
     }
-    if (run.outputDue()) outputs.publish(ros::Time(std::max(run.time(), 1e-9)), run.states());
+    if (run.outputDue()) {
+      outputs.publish(ros::Time(std::max(run.time(), 1e-9)), run.states());
+      if (outputs.bag().failed()) {
+        ROS_FATAL("%s: %s; stopped at t = %.4f s", me.c_str(), outputs.bag().error().c_str(), run.time());
+        stop_logged = true;
+        exit_code = kExitWriteFailed;
+        break;
+      }
+    }
     if (stop.requested || !ros::ok()) {
       ROS_WARN("%s: stopped at t = %.4f s (%s)", me.c_str(), run.time(), stop.reason());
       stop_logged = true;
@@ -119,7 +127,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   clock.counts[CostClock::kIrregularityEvaluations] =
       rail::contact::Irregularities::stationsEvaluated() - irregularity_stations0;
   outputs.close(me, run, exit_code, wall);
-  return exit_code;
+  return exit_code == kExitOk && outputs.bag().failed() ? kExitWriteFailed : exit_code;
 }
 
 }  // namespace

@@ -98,9 +98,15 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   const long long irregularity_stations0 = rail::contact::Irregularities::stationsEvaluated();
   ros_glue::ProgressLine progress(node, sim.endTimeEstimate());
   char where[64];
+  bool write_failed = false;
   try {
     while (run.next() == rv::VehicleRun::Event::kOutput) {
       outputs.publish(run.outputIndex());
+      if (outputs.bag().failed()) {
+        ROS_FATAL("%s: %s; stopped at t = %.4f s", node.c_str(), outputs.bag().error().c_str(), sim.time());
+        write_failed = true;
+        break;
+      }
       if (progress.due()) {
         std::snprintf(where, sizeof(where), "leading wheelset at s = %.2f m", sim.leadingArcLength());
         progress.print(sim.time(), where);
@@ -112,7 +118,7 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     if (cosim_vehicle) cosim_vehicle->close();
     return kExitInternal;  // the outputs close their bag
   }
-  switch (run.end()) {
+  switch (write_failed ? rv::VehicleRun::End::kFinished : run.end()) {
     case rv::VehicleRun::End::kFinished:
       break;
     case rv::VehicleRun::End::kStopped:
@@ -134,9 +140,9 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   clock.counts[CostClock::kIrregularityEvaluations] =
       rail::contact::Irregularities::stationsEvaluated() - irregularity_stations0;
   const int rc = ros_glue::reportStop(node, master_watch, sim.time(), run.end() == rv::VehicleRun::End::kStopped,
-                                      run.exitCode(), "; closing the bag");
+                                      write_failed ? kExitWriteFailed : run.exitCode(), "; closing the bag");
   outputs.close(node, cosim_vehicle.get(), wall, rc);
-  return rc;
+  return rc == kExitOk && outputs.bag().failed() ? kExitWriteFailed : rc;
 }
 
 }  // namespace

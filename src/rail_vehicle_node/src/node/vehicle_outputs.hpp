@@ -51,6 +51,9 @@ class VehicleOutputs {
   // co-simulated vehicle or null; wall: the run loop's wall time [s].
   void close(const std::string& node, const CosimVehicle* cosim, double wall, int exit_code);
 
+  // The bag and the files beside it: failed() once a write failed (the run then stops), error() says which.
+  const rail::ros_glue::OutputBag& bag() const { return bag_; }
+
  private:
   const core::Scene& scene_;
   const VehicleSimulator& sim_;
