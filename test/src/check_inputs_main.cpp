@@ -5,7 +5,7 @@
 //
 // What is built (the nodes' ROS-free part, src/rail_vehicle_node/src/node/vehicle_node.cpp and
 // src/rail_track_node/src/node/track_node.cpp):
-//  - always: the track geometry (rail_core build_track_geometry: segments, irregularities, rail profile)
+//  - always: the track geometry (rail_core buildTrackGeometry: segments, irregularities, rail profile)
 //    and the rail profile curve; sampled along the track and the profile;
 //  - a vehicle: the VehicleSimulator (vehicle data file, wheel profile, contact, settling on the rigid track),
 //    advanced on the rigid track for T seconds of simulated time (default 2 ms, --vehicle-time);

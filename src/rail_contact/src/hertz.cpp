@@ -298,7 +298,7 @@ HertzGeometry limitLateralWidth(const HertzGeometry& hz, double delta, double ma
   if (!(max_b > 0.0) || !(delta > 0.0) || !(width(hz) > max_b) || !(hz.B > 0.0)) return hz;
   // b at a given approach falls as B grows (A fixed), smoothly in log B: find g(x) = ln b(e^x) - ln max_b = 0
   // by bracketing in steps of x4 and the Illinois method (modified regula falsi) to 1e-4 in ln b. Typically
-  // 2-3 bracket steps and 4-6 Illinois steps: the run pays about ten compute_hertz per clamped contact.
+  // 2-3 bracket steps and 4-6 Illinois steps: the run pays about ten computeHertz per clamped contact.
   const double target = std::log(max_b);
   double x_lo = std::log(hz.B), g_lo = std::log(width(hz)) - target;  // g_lo > 0
   double x_hi = x_lo, g_hi = g_lo;

@@ -358,7 +358,7 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
       c.F_lat = pr.Fy;
       if (cost != nullptr) {
         ++cost->creep_evaluations;
-        if (polach_.spin) ++cost->spin_evaluations;  // polach_forces evaluated its spin terms (nu_C, F_yS)
+        if (polach_.spin) ++cost->spin_evaluations;  // polachForces evaluated its spin terms (nu_C, F_yS)
       }
     }
     c.force_on_wheel_in_world = contactForceInWorld(c.R_contact_to_world, c.F_long, c.F_lat, c.N);

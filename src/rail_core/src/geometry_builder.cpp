@@ -124,7 +124,7 @@ rc::GeometrySpec geometrySpec(const Scene& scene) {
   if (irregularitiesOn(scene)) {
     const Irregularities& irr = t.irregularities;
     if (irr.source == IrregularitySource::kPsd) spec.table_step = std::min(spec.table_step, irr.wavelength_min / 8.0);
-    // A table's shortest wavelength is only known once it is read: build_track_geometry refines then.
+    // A table's shortest wavelength is only known once it is read: buildTrackGeometry refines then.
   }
   return spec;
 }

@@ -238,7 +238,7 @@ class ShmTest : public ::testing::Test {
   std::vector<pid_t> children;
 };
 
-// A child track that answers `steps` steps with fill_wrenches and checks the states it receives bit for
+// A child track that answers `steps` steps with fillWrenches and checks the states it receives bit for
 // bit (exit 0 if all matched, 10 + reason otherwise).
 int echoTrack(const ShmOptions& o, int steps, bool close_at_end = true) {
   ShmTransport t(o);

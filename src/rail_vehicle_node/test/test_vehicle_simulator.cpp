@@ -548,7 +548,7 @@ TEST(VehicleSimulator, FloorAccelerationsNeedMeasurementPointsInTheDataFile) {
 // About 10 s of wall time (1 s simulated with flange contact, see doc/simulator.md).
 TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
   // config/scenes/tight_curve.yaml: R 150 m left, 50 km/h, cant 150 mm (77 mm deficiency). The coach starts
-  // inside the circular curve (s 110-230 m) on the chord placement of PlaceOnTrack and runs 1 s; the
+  // inside the circular curve (s 110-230 m) on the chord placement of placeOnTrack and runs 1 s; the
   // leading wheelset of each bogie is pushed to the outer (right) rail and flanges there, measured over the
   // last 0.3 s (the rear bogie's leading wheelset settles on its flange only after ~0.5 s).
   core::Scene scene = core::fixtures::loadConfigScene("tight_curve.yaml");
@@ -719,8 +719,8 @@ TEST(VehicleSimulatorCost, BdfJacobianRightHandSidesAreTimedAsJacobianWithoutCha
   EXPECT_EQ(ca.jacobian_evals, cb.jacobian_evals);
   EXPECT_EQ((a.state() - b.state()).cwiseAbs().maxCoeff(), 0.0);
   ASSERT_GT(ca.jacobian_evals, 0);
-  // Every Jacobian right-hand side is timed as Jacobian work, the others (plus one per UpdateOutputs,
-  // i.e. one per AdvanceTo here) as right-hand sides.
+  // Every Jacobian right-hand side is timed as Jacobian work, the others (plus one per updateOutputs,
+  // i.e. one per advanceTo here) as right-hand sides.
   EXPECT_EQ(clock.calls[core::CostClock::kVehicleJacobian], ca.rhs_evals_jacobian);
   EXPECT_EQ(clock.calls[core::CostClock::kVehicleRhs], ca.rhs_evals + 1);
   EXPECT_GT(clock.seconds[core::CostClock::kVehicleJacobian], 0.0);

@@ -50,7 +50,7 @@ struct HertzOptions {
   double min_curvature = 1.0e-3;
 };
 
-/// Flags raised by compute_hertz (bitwise OR).
+/// Flags raised by computeHertz (bitwise OR).
 enum HertzFlag : std::uint32_t {
   kHertzOk = 0u,
   kHertzCircular = 1u << 0,              ///< A ~ B, treated as circular contact

@@ -40,7 +40,7 @@ struct WheelContactOptions {
   CreepageOptions creepage;        ///< speed regularisation at standstill
   HertzOptions hertz;              ///< degenerate-geometry clamps
   DetectionOptions detection;      ///< Newton and search settings
-  /// Largest lateral semi-axis b of a contact ellipse [m] (limit_lateral_width, hertz.hpp); 0 = no limit.
+  /// Largest lateral semi-axis b of a contact ellipse [m] (limitLateralWidth, hertz.hpp); 0 = no limit.
   /// Hertz's theory needs the patch small against the profile arcs around it; at the flange root those
   /// are the UIC60 gauge-corner arc (R 13 mm, EN 13674-1) and the S1002 throat, so a near-conformal patch
   /// spans at most about half that arc's width. 10 mm is also above every non-conformal patch of these

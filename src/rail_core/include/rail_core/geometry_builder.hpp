@@ -49,7 +49,7 @@ rail::contact::GeometrySpec geometrySpec(const Scene& scene);
 // not repeat within the track. Throws SceneError.
 rail::contact::Irregularities buildIrregularities(const Scene& scene);
 
-// The track geometry of the scene (geometry_spec + build_irregularities). Throws SceneError.
+// The track geometry of the scene (geometrySpec + buildIrregularities). Throws SceneError.
 rail::contact::TrackGeometry buildTrackGeometry(const Scene& scene);
 
 }  // namespace rail::core

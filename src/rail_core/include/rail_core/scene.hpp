@@ -1,6 +1,6 @@
 // The scene: one YAML file that describes a simulation completely, resolved into plain structs.
 //
-// A scene is loaded and validated once (load_scene_file / load_scene_text), with every default filled
+// A scene is loaded and validated once (loadSceneFile / loadSceneText), with every default filled
 // in, and is constant afterwards. Builders read it and build, or do not build, each component; the
 // effects below are the single place where a scene says what is simulated. Defaults are the member
 // initialisers of these structs and nowhere else. SI units throughout; radians inside.

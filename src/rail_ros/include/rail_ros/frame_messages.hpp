@@ -1,7 +1,7 @@
-// ROS glue (library rail_core_ros): conversions between the coupling frames (rail_core/coupling/frames.hpp)
+// ROS glue (library rail_ros): conversions between the coupling frames (rail_core/coupling/frames.hpp)
 // and the rail_msgs messages the ROS transports carry. World frame, SI units, field by field.
 //
-// The messages are reused: once a message's array has held `capacity` wheels (reserve_message), a
+// The messages are reused: once a message's array has held `capacity` wheels (reserveMessage), a
 // conversion copies without allocating. The header stamp carries the simulated time t_k rounded to the
 // nanosecond (ros::Time); the receiving side rebuilds t_k = k h exactly from the step index and checks the
 // stamp against it, so the frames' times stay bit for bit those of the sender.

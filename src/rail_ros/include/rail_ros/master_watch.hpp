@@ -38,7 +38,7 @@ class MasterWatch {
 std::string exitedPeer(const std::string& me);
 
 // Before a node's first NodeHandle (whose registration roscpp retries for ever, deaf to the node's own
-// signal handler): waits for the master with a deadline. Returns 0 when it answers; kExitNoPeer-like 4
+// signal handler): waits for the master with a deadline. Returns 0 when it answers; 4 (kExitPeerTimeout)
 // after timeout_s with an error naming the master's URI; 5 when `signal` becomes non-zero (SIGINT,
 // SIGTERM) meanwhile. node: the node's name for the message.
 int waitForMaster(const std::string& node, const std::atomic<int>& signal, double timeout_s = 30.0);

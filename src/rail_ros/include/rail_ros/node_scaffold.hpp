@@ -26,7 +26,7 @@ struct NodeStop {
 // The one NodeStop of this process.
 NodeStop& nodeStop();
 
-// SIGINT and SIGTERM set node_stop() (the run loop then closes the bags and exits 5).
+// SIGINT and SIGTERM set nodeStop() (the run loop then closes the bags and exits 5).
 void installStopSignals();
 
 // The start both nodes share: answers -h/--help; ros::init without roscpp's SIGINT handler (the stop flag

@@ -1,4 +1,4 @@
-// ROS glue (library rail_core_ros): the settings shared by the ROS service and topic transports.
+// ROS glue (library rail_ros): the settings shared by the ROS service and topic transports.
 #pragma once
 
 #include <atomic>

@@ -1,4 +1,4 @@
-// ROS glue (library rail_core_ros, not the ROS-free core): reads the scene a launch file put on the
+// ROS glue (library rail_ros, not the ROS-free core): reads the scene a launch file put on the
 // parameter server.
 #pragma once
 

@@ -1,4 +1,4 @@
-// ROS service transport (library rail_core_ros): one rail_msgs/Lockstep call per track step, states in,
+// ROS service transport (library rail_ros): one rail_msgs/Lockstep call per track step, states in,
 // wrenches out (paper section 5, the exchange of Figure 14 as a remote call).
 //
 // Vehicle end: a persistent service client; send_states() hands the request to a caller thread owned by

@@ -1,4 +1,4 @@
-// ROS topic transport (library rail_core_ros): the vehicle publishes its wheel states on the states topic,
+// ROS topic transport (library rail_ros): the vehicle publishes its wheel states on the states topic,
 // the track its wrenches on the wrenches topic, each frame stamped with its step index. Suited to runs that
 // are recorded (rosbag record of the two exchange topics) and replayed (a bag of the states topic can
 // drive a track node on its own: options.wait_for_subscriber = false).

@@ -58,7 +58,7 @@ struct SceneTrack {
   double rail_height = 0.0;               ///< m, foot to head top
 };
 
-/// Builds the scene's track: geometry (rail_core::build_track_geometry), data (sceneTrackData), mesh over
+/// Builds the scene's track: geometry (rail_core::buildTrackGeometry), data (sceneTrackData), mesh over
 /// [track.start_arc_length, track end] on seatPlaneFrames, model. Throws rail::core::SceneError.
 SceneTrack buildSceneTrack(const rail::core::Scene& scene, const SceneTrackOptions& options = {});
 

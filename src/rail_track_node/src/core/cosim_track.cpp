@@ -683,7 +683,7 @@ void CosimTrack::Implicit::law(const rc::WheelContactModel& model, double h, con
     o.F_lat = pr.Fy;
     if (cost != nullptr) {
       ++cost->creep_evaluations;
-      if (polach.spin) ++cost->spin_evaluations;  // polach_forces evaluated its spin terms
+      if (polach.spin) ++cost->spin_evaluations;  // polachForces evaluated its spin terms
     }
   }
   o.F_wheel = rc::contactForceInWorld(L.R_contact_to_world, o.F_long, o.F_lat, o.N);

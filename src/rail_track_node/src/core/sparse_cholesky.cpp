@@ -236,7 +236,6 @@ void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
 
 void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixXd& x) {
   Impl& s = *impl_;
-  const int n = s.n;
   if (s.layout == CholeskyLayout::kSupernodal) {
     for (int c = 0; c < count; ++c) {
       s.unit_b(unit[c]) = 1.0;

@@ -8,7 +8,7 @@
 //   while (v.Step() == RunStatus::kRunning) {}   // integrate to t_{k+1}, interpolate, exchange
 //   v.Close();
 // Inside every right-hand side the wrench of each wheel is the coupling's linear extrapolation of the last
-// two received frames at the right-hand side's time (VehicleCoupling::wrench_at). CVODE's step is capped
+// two received frames at the right-hand side's time (VehicleCoupling::wrenchAt). CVODE's step is capped
 // at solver.vehicle_max_step <= solver.track_step = h. World frame, SI units.
 #pragma once
 
@@ -54,7 +54,7 @@ class CosimVehicle {
   // One track step: integrates to t_{k} = k h (the next exchange), interpolates the wheel states there
   // (dense output), exchanges them for the wrenches of step k. Returns kRunning, kFinished once
   // solver.end is reached (that step is still exchanged), or why the run stopped (message()); an
-  // exchange failure gives kIntegratorFailed and exchange_status() says which. No exception, no
+  // exchange failure gives kIntegratorFailed and exchangeStatus() says which. No exception, no
   // allocation on the normal path.
   RunStatus step();
   // Tells the track the run is over (its next receive() returns kPeerClosed).
@@ -65,7 +65,7 @@ class CosimVehicle {
   double time() const { return sim_->time(); }
   std::uint64_t stepsExchanged() const { return coupling_ ? coupling_->nextStep() : 0; }  // exchanges done so far
   double trackStep() const { return track_step_; }                                        // h [s]
-  // Largest internal CVODE step seen after any AdvanceTo (last step of each call) [s].
+  // Largest internal CVODE step seen after any advanceTo (last step of each call) [s].
   double maxInternalStep() const { return max_internal_step_; }
 
   // The wheel states sent last (stamped by the coupling).

@@ -37,7 +37,7 @@ void computeDerivatives(const VehicleModel& model, double t, const Eigen::Ref<co
 // elements) per element (for the Jacobian's partial evaluations, vehicle_jacobian.hpp).
 void computeElementForces(const VehicleModel& model, VehicleData& data, Eigen::Ref<Eigen::MatrixXd> element_g);
 
-// ComputeDerivatives with the force elements whose live[e] is 0 taken from element_g's column e instead of
+// computeDerivatives with the force elements whose live[e] is 0 taken from element_g's column e instead of
 // evaluated (the others are evaluated at y as usual).
 void computeDerivativesPartial(const VehicleModel& model, double t, const Eigen::Ref<const Eigen::VectorXd>& y,
                                Eigen::Ref<Eigen::VectorXd> y_dot, VehicleData& data, const std::vector<char>& live,
@@ -60,13 +60,13 @@ ConstraintViolation evaluateViolation(const VehicleModel& model, const Eigen::Re
 int projectState(const VehicleModel& model, Eigen::Ref<Eigen::VectorXd> y, VehicleData& data, double tolerance,
                  int max_iterations);
 
-// Energies and momenta (after ComputeKinematics).
+// Energies and momenta (after computeKinematics).
 double kineticEnergy(const VehicleModel& model, const VehicleData& data);     // [J]
 double potentialEnergy(const VehicleModel& model, const VehicleData& data);   // gravity + elements [J]
 Vector3 linearMomentum(const VehicleModel& model, const VehicleData& data);   // world [kg m/s]
 Vector3 angularMomentum(const VehicleModel& model, const VehicleData& data);  // about the world origin
 
-// World position and velocity of load point k (after ComputeKinematics), e.g. a wheel centre.
+// World position and velocity of load point k (after computeKinematics), e.g. a wheel centre.
 void loadPointState(const VehicleModel& model, const VehicleData& data, int k, Vector3& p_in_world,
                     Vector3& v_in_world);
 

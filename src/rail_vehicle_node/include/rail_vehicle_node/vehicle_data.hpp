@@ -30,7 +30,7 @@ struct ExternalWrench {
   Vector3 moment_in_world = Vector3::Zero();  // [N m], about the load point
 };
 
-// Range-space scratch of one constraint cluster K (VehicleModel::constraint_clusters): its rows of Phi_v
+// Range-space scratch of one constraint cluster K (VehicleModel::constraintClusters): its rows of Phi_v
 // restricted to its bodies' columns (Phi_K), Phi_K M_K^-1, the Schur complement S_K = Phi_K M_K^-1 Phi_K^T
 // and its factorisation.
 struct ClusterWork {

@@ -2,11 +2,11 @@
 // Newton iterations on a coloured sparse difference-quotient Jacobian and KLU (JacobianKind below), or
 // Adams-Moulton with fixed-point iteration.
 //
-// The caller owns the loop: AdvanceTo(t) integrates to t (CV_NORMAL), InterpolateAt(t) gives the state
+// The caller owns the loop: advanceTo(t) integrates to t (CV_NORMAL), interpolateAt(t) gives the state
 // anywhere inside the last internal step (for the co-simulation), Counters() reports the work done.
-// Constraint drift: the Baumgarte terms act inside the right-hand side; when after AdvanceTo the position
+// Constraint drift: the Baumgarte terms act inside the right-hand side; when after advanceTo the position
 // or velocity violation (or the Euler-parameter norm error) exceeds its threshold, the state is projected
-// back onto the constraint manifold (ProjectState), CVODE is re-initialised there and the projection counted.
+// back onto the constraint manifold (projectState), CVODE is re-initialised there and the projection counted.
 // The model and the caller's VehicleData must outlive the integrator.
 #pragma once
 
@@ -51,13 +51,13 @@ struct IntegratorSettings {
   std::vector<int> spin_bodies;
   int jacobian_max_age = 50;      // [steps]; CVODE's own limit is 51
   int linear_setup_interval = 5;  // [steps]; 3 to 7 measured, 5 fastest on the paper scene (doc/simulator.md)
-  // BDF only: when CVODE gives up within an AdvanceTo (repeated error-test or convergence failures, as at
+  // BDF only: when CVODE gives up within an advanceTo (repeated error-test or convergence failures, as at
   // some flange onsets with tolerances below 1e-6), Adams integrates the rest of that interval from the
   // last successful step and BDF restarts after it (counted in IntegratorCounters::adams_fallbacks).
   bool adams_fallback = true;
   double fallback_max_step = 0.0;    // the fallback's step cap [s]; 0 = max_step
   int max_order = 5;                 // BDF <= 5, Adams <= 12
-  long max_steps_per_call = 100000;  // internal steps allowed within one AdvanceTo
+  long max_steps_per_call = 100000;  // internal steps allowed within one advanceTo
   // Take CVODE's steps one at a time (CV_ONE_STEP) and tell the force elements after each accepted one
   // (ForceElement::acceptStep), so that memories of the contacts hold accepted states only; false: CV_NORMAL,
   // and no element hears of the steps.
@@ -103,13 +103,13 @@ class VehicleIntegrator {
 
   // State at t within the last internal step [t_n - h_u, t_n] (CVodeGetDky, order 0). Also valid at time().
   void interpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const;
-  // Interval over which InterpolateAt is valid; after a projection it shrinks to [time(), time()].
+  // Interval over which interpolateAt is valid; after a projection it shrinks to [time(), time()].
   void lastStepInterval(double& t_begin, double& t_end) const;
 
   // Restarts from a state set by the caller (e.g. after changing the external wrenches abruptly).
   void reset(const Eigen::VectorXd& y, double t);
 
-  double time() const;                              // time reached by the last AdvanceTo [s]
+  double time() const;                              // time reached by the last advanceTo [s]
   Eigen::Map<const Eigen::VectorXd> state() const;  // state at time()
   IntegratorCounters counters() const;
   ConstraintViolation violation();  // of state()

@@ -2,8 +2,8 @@
 // difference quotient over the sparsity that the model's topology implies.
 //
 // Sparsity, body by body: the velocity rows of body r depend on the state of body b when b's joint
-// cluster (VehicleModel::constraint_clusters; the range-space solve couples a cluster's bodies) contains r,
-// or when a force element couples b with a body of r's cluster (ForceElement::CouplingGroups; the contact
+// cluster (VehicleModel::constraintClusters; the range-space solve couples a cluster's bodies) contains r,
+// or when a force element couples b with a body of r's cluster (ForceElement::couplingGroups; the contact
 // couples each wheelset with itself only). Position rows: r_dot from v, p_dot from p and omega'. Every
 // diagonal entry is kept (CVODE forms I - gamma J in place).
 // Colouring: bodies whose row sets are disjoint share a colour (greedy); column l of every body of one
@@ -14,7 +14,7 @@
 // saved before and restored after, so a Jacobian leaves the run unchanged.
 //
 // Model/Data split: JacobianPattern is built once from a finalised model; JacobianWork is the caller's
-// preallocated scratch. No allocation in EvaluateJacobian.
+// preallocated scratch. No allocation in evaluateJacobian.
 #pragma once
 
 #include <Eigen/Core>

@@ -118,7 +118,7 @@ class VehicleModel {
   double totalMass() const;
 
   // Index lookups by name (building/setup time only; throw std::runtime_error naming the missing name).
-  // BodyIndex("ground") is kGround unless a body has that name.
+  // bodyIndex("ground") is kGround unless a body has that name.
   int bodyIndex(const std::string& name) const;
   int loadPointIndex(const std::string& name) const;
 

@@ -6,7 +6,7 @@
 //   while (run.next() == VehicleRun::Event::kOutput) publish(run.outputIndex());
 //   switch (run.end()) ...   // exitCode(), message()
 //
-// Alone, every output instant is an AdvanceTo (a time end stops exactly there, an arc-length end when the
+// Alone, every output instant is an advanceTo (a time end stops exactly there, an arc-length end when the
 // leading wheelset passes it); the state where the run stopped (finished, derailed, ...) is still output.
 // Co-simulated, every step is one track step h (one exchange); the output is at the exchange that reaches
 // each output instant, and at the last one.

@@ -2,11 +2,11 @@
 //
 // Built once from a resolved Scene: the vehicle data file (VehicleModel), the rigid track geometry, the
 // wheel and rail profiles and the wheel-rail contact of every wheel evaluated inside each right-hand side
-// (WheelRailContactElement). The vehicle is placed on the track (PlaceOnTrack below), lowered onto the
+// (WheelRailContactElement). The vehicle is placed on the track (placeOnTrack below), lowered onto the
 // rails until the contact carries its weight (static vertical solve), and handed to a VehicleIntegrator
-// (CVODE) that the caller advances with AdvanceTo. Outputs (wheel states, contact points, wheel-centre
+// (CVODE) that the caller advances with advanceTo. Outputs (wheel states, contact points, wheel-centre
 // wrenches, wheelset kinematics relative to the track, body poses) are computed on demand by
-// UpdateOutputs into preallocated buffers.
+// updateOutputs into preallocated buffers.
 //
 // Frames: world x forward at the track start, y left, z up (rail_contact/track_geometry.hpp); the vehicle
 // data file's reference pose is on straight level track, x forward, y left, z up from the rail top.
@@ -89,7 +89,7 @@ struct SimulatorSettings {
   // so the run depend on where the integrator had evaluated; false: from the last evaluation (the former rule).
   bool warm_starts_at_accepted_steps = true;
   // Optional cost clock (must outlive the simulator): from the end of the build on, right-hand sides
-  // (vehicle_rhs / vehicle_jacobian, including the one of each UpdateOutputs), the contact evaluations in
+  // (vehicle_rhs / vehicle_jacobian, including the one of each updateOutputs), the contact evaluations in
   // them (contact_detection / contact_forces, flange searches, spin evaluations) and floor accelerations.
   // null = no timing.
   core::CostClock* cost = nullptr;
@@ -177,7 +177,7 @@ class VehicleSimulator {
 
   double time() const;
   double startTime() const { return 0.0; }
-  // Leading wheelset's arc length [m] (from the last UpdateOutputs or AdvanceTo).
+  // Leading wheelset's arc length [m] (from the last updateOutputs or advanceTo).
   double leadingArcLength() const { return leading_s_; }
   // Simulated time at which the run ends: solver.end.time, or an estimate from the arc length at speed.
   double endTimeEstimate() const;
@@ -198,7 +198,7 @@ class VehicleSimulator {
   // Replaces the state (e.g. a test's initial lateral offset); re-initialises the integrator.
   void resetState(const Eigen::VectorXd& y);
   Eigen::Map<const Eigen::VectorXd> state() const { return integrator_->state(); }
-  // Dense output of the last internal step (VehicleIntegrator::InterpolateAt / LastStepInterval).
+  // Dense output of the last internal step (VehicleIntegrator::interpolateAt / lastStepInterval).
   void interpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_out) const { integrator_->interpolateAt(t, y_out); }
   void lastStepInterval(double& t_begin, double& t_end) const { integrator_->lastStepInterval(t_begin, t_end); }
   // Whether the wheel wrenches come from SimulatorSettings::wheel_wrench_source.
@@ -263,17 +263,12 @@ class VehicleSimulator {
   core::CostClock* cost_ = nullptr;  // settings.cost once built
 };
 
-// "bdf" / "adams" choice for solver.vehicle_method auto, given the step cap the run uses (solver.vehicle_max_step:
-// the simulator passes its max_step(), 0 for the vehicle alone): Adams (fixed-point, no Jacobian) when the step
-// is capped at max_step <= 5e-5 s (the contact's fastest modes are then resolved explicitly), BDF otherwise. See
-// doc/simulator.md for the measurements. Below kStiffCreepSpeed with the built-in contact (not external wrenches) BDF:
-// there the creep forces act as a viscous law in the slip velocity whose time constant m V_ref / (G a b C11) (wheelset
-// 900 kg, G a b C11 ~ 1e7 N, V_ref >= v_eps = 0.1 m/s) falls to ~1e-5 s, stiff for Adams at the 2e-5 s cap (at
-// standstill: 98 183 Adams steps against 1728 BDF steps for 0.02 s, 18.2 s against 3.9 s wall). With external wrenches
-// (co-simulation) always Adams: the contact is the track node's, the vehicle's own right-hand side holds the suspension
-// only, which is not stiff at any cap the track step allows. The paper scene on the flexible track at an 8e-5 s track
-// step, 1.5 s: BDF (the former choice above a 5e-5 s cap) 32.3 s of loop wall, its difference-quotient Jacobians 121
-// 875 right-hand sides; Adams 20.8 s.
+// "bdf" / "adams" choice for solver.vehicle_method auto, given the step cap the run uses (the simulator passes its
+// maxStep(), 0 for none): Adams (fixed-point, no Jacobian) at a cap of 5e-5 s or less, where the contact's fastest
+// modes are resolved explicitly; BDF otherwise. Below kStiffCreepSpeed with the built-in contact BDF: the creep
+// forces then act as a viscous law in the slip velocity with a time constant near 1e-5 s, stiff for Adams. With
+// external wrenches (co-simulation) always Adams: the right-hand side holds the suspension only, not stiff at any
+// cap the track step allows. doc/simulator.md, "Choosing the method", has the measurements behind each rule.
 constexpr double kStiffCreepSpeed = 2.0;  // [m/s]
 IntegrationMethod chooseMethod(const core::Solver& solver, double speed = 1e9, bool external_wrenches = false);
 

@@ -61,7 +61,7 @@ struct WheelRailContactData {
   std::vector<double> s_hint;                       // track arc length near each wheel [m]
   std::vector<Vector3> force_in_world;              // on the wheel, at its load point [N]
   std::vector<Vector3> moment_in_world;             // about the load point [N m]
-  // Copies of the above taken by WheelRailContactElement::SaveWorkState (sized once).
+  // Copies of the above taken by WheelRailContactElement::saveWorkState (sized once).
   std::vector<contact::WheelContactWork> saved_work;
   std::vector<contact::WheelContactResult> saved_result;
   std::vector<double> saved_s_hint;
@@ -89,7 +89,7 @@ struct WheelRailContactData {
 void evaluateWheel(const WheelRailContactModel& model, const VehicleData& data, int k,
                    WheelRailContactData& contact_data) noexcept;
 
-// The contact of all wheels as a force element of the vehicle model: AddForces evaluates every wheel and
+// The contact of all wheels as a force element of the vehicle model: addForces evaluates every wheel and
 // applies its wrench at the load point (nothing when contact_data.enabled is false).
 class WheelRailContactElement : public ForceElement {
  public:

@@ -125,7 +125,7 @@ struct VehicleIntegrator::Impl {
     try {
       computeDerivatives(self->model, t, y_map, y_dot_map, self->data);
     } catch (...) {
-      return -1;  // unrecoverable: CVODE stops and AdvanceTo reports it
+      return -1;  // unrecoverable: CVODE stops and advanceTo reports it
     }
     return y_dot_map.allFinite() ? 0 : 1;  // non-finite: recoverable, CVODE retries with a smaller step
   }
@@ -451,7 +451,7 @@ void VehicleIntegrator::advanceTo(double t) {
   Impl& s = *impl_;
   if (!(t > s.t)) {
     std::ostringstream os;
-    os << "vehicle integrator: AdvanceTo(" << t << ") must go beyond the current time " << s.t;
+    os << "vehicle integrator: advanceTo(" << t << ") must go beyond the current time " << s.t;
     throw std::runtime_error(os.str());
   }
   s.last_error[0] = '\0';
@@ -476,7 +476,7 @@ void VehicleIntegrator::interpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_ou
   if (!s.stepped_since_init) {
     if (std::abs(t - s.t) > 1e-12 * std::max(1.0, std::abs(s.t))) {
       std::ostringstream os;
-      os << "vehicle integrator: InterpolateAt(" << t << "): no step since (re)initialisation at " << s.t;
+      os << "vehicle integrator: interpolateAt(" << t << "): no step since (re)initialisation at " << s.t;
       throw std::runtime_error(os.str());
     }
     y_out = s.stateMap();
@@ -487,7 +487,7 @@ void VehicleIntegrator::interpolateAt(double t, Eigen::Ref<Eigen::VectorXd> y_ou
     double t0 = 0.0, t1 = 0.0;
     lastStepInterval(t0, t1);
     std::ostringstream os;
-    os << "vehicle integrator: InterpolateAt(" << t << ") outside the last step [" << t0 << ", " << t1 << "]";
+    os << "vehicle integrator: interpolateAt(" << t << ") outside the last step [" << t0 << ", " << t1 << "]";
     throw std::runtime_error(os.str());
   }
   y_out = Eigen::Map<const Eigen::VectorXd>(N_VGetArrayPointer(s.dky), s.model.stateSize());

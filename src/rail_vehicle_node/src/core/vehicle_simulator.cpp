@@ -442,7 +442,7 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
     contact_data_->enabled = false;
     external_active_ = true;
   }
-  is.cost = settings.cost;  // no right-hand side is evaluated before the first AdvanceTo
+  is.cost = settings.cost;  // no right-hand side is evaluated before the first advanceTo
   integrator_ = std::make_unique<VehicleIntegrator>(model_, *data_, y, 0.0, is);
 
   // Output buffers.

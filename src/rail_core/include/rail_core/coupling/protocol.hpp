@@ -47,7 +47,7 @@ class VehicleCoupling {
   bool exchangeDue(double t) const;
 
   // The outgoing frame: fill wheels[0 .. wheel_count) with the states interpolated at
-  // next_exchange_time(); exchange() stamps step, time, scene hash and count.
+  // nextExchangeTime(); exchange() stamps step, time, scene hash and count.
   WheelStateFrame& states() { return states_; }
   // Send the states of step k and wait (up to exchange_timeout, or `deadline`) for the wrenches of step
   // k. On failure the message names this side, the peer and the step; the coupling then stays failed.

@@ -30,7 +30,7 @@ struct ShmHeader {
   std::atomic<std::uint64_t> magic;              // kShmMagic, stored last (release) once the header is complete
   std::uint32_t layout_version;                  // kShmLayoutVersion
   std::uint32_t header_size;                     // kShmPayloadOffset
-  std::uint64_t payload_size;                    // bytes of the frame area (shm_payload_size)
+  std::uint64_t payload_size;                    // bytes of the frame area (shmPayloadSize)
   std::uint32_t wheel_capacity;                  // wheels the frame area holds
   std::uint32_t frame_kind;                      // FrameKind
   std::uint64_t scene_hash;                      // hash of the resolved scene of the creating node

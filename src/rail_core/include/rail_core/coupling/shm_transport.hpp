@@ -103,7 +103,7 @@ class ShmTransport : public FrameTransport {
   const std::string& writeRegionName() const { return write_.name(); }
   const std::string& readRegionName() const { return read_.name(); }
   std::int64_t peerPid() const { return peer_pid_; }
-  // This side's region replaced a stale one of a crashed run: ShmRegion::replaced_stale(), else "".
+  // This side's region replaced a stale one of a crashed run: ShmRegion::replacedStale(), else "".
   const std::string& replacedStale() const { return write_.replacedStale(); }
 
  private:
