@@ -228,5 +228,12 @@ double movingLoadsLength(const rail::core::MovingLoads& loads);
 void buildRailLayout(const TrackMesh& mesh, std::array<std::vector<int>, 2>& rail_dofs,
                      std::unique_ptr<rail::contact::BeamRailDeformation>& deformation);
 
+/// The rails' nodal arrays from a state (d, v) laid out by buildRailLayout: displacements d + dt v (plus
+/// d_static when not null: a window's self-weight state), velocities v; a node without a free DOF stays at
+/// 0. dt = 0 gives the state itself, dt = h the prediction of the next step's contact geometry. No allocation.
+void fillRailArrays(const std::array<std::vector<int>, 2>& rail_dofs, const Eigen::VectorXd& d,
+                    const Eigen::VectorXd& v, const Eigen::VectorXd* d_static, double dt,
+                    rail::contact::BeamRailDeformation& deformation) noexcept;
+
 }  // namespace track
 }  // namespace rail

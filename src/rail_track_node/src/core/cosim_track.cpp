@@ -407,21 +407,9 @@ int CosimTrack::influenceWindow() const { return implicit_ ? implicit_->window :
 long CosimTrack::newtonIterations() const { return implicit_ ? implicit_->newton_iterations : 0; }
 long CosimTrack::newtonUnconverged() const { return implicit_ ? implicit_->unconverged : 0; }
 
+// Window: the rails carry d = d_g + w (self-weight static state + integrated part).
 void CosimTrack::fillDeformation() noexcept {
-  const NewmarkState& state = st();
-  // Window: the rails carry d = d_g + w (self-weight static state + integrated part).
-  const Eigen::VectorXd* d_g = window_ ? &window_->staticState() : nullptr;
-  for (int r = 0; r < 2; ++r) {
-    const rc::RailSide side = r == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight;
-    double* q = deformation_->nodalDisplacements(side);
-    double* qd = deformation_->nodalVelocities(side);
-    const std::vector<int>& dofs = rail_dofs_[r];
-    for (std::size_t i = 0; i < dofs.size(); ++i) {
-      const int g = dofs[i];
-      q[i] = g >= 0 ? state.d(g) + (d_g ? (*d_g)(g) : 0.0) : 0.0;
-      qd[i] = g >= 0 ? state.v(g) : 0.0;
-    }
-  }
+  fillRailArrays(rail_dofs_, st().d, st().v, window_ ? &window_->staticState() : nullptr, 0.0, *deformation_);
 }
 
 // Rails predicted at t_k = t_{k-1} + h for the contact geometry: d_p = d + h v, v_p = v. (Holding the
@@ -434,22 +422,8 @@ void CosimTrack::predictRail(int g, double& d_p, double& v_p) const noexcept {
 }
 
 void CosimTrack::fillPredictedDeformation() noexcept {
-  const Eigen::VectorXd* d_g = window_ ? &window_->staticState() : nullptr;
-  for (int r = 0; r < 2; ++r) {
-    const rc::RailSide side = r == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight;
-    double* q = deformation_->nodalDisplacements(side);
-    double* qd = deformation_->nodalVelocities(side);
-    const std::vector<int>& dofs = rail_dofs_[r];
-    for (std::size_t i = 0; i < dofs.size(); ++i) {
-      const int g = dofs[i];
-      if (g >= 0) {
-        predictRail(g, q[i], qd[i]);
-        if (d_g) q[i] += (*d_g)(g);
-      } else {
-        q[i] = qd[i] = 0.0;
-      }
-    }
-  }
+  fillRailArrays(rail_dofs_, st().d, st().v, window_ ? &window_->staticState() : nullptr,
+                 window_ ? window_->trackStep() : integrator_->dt(), *deformation_);
 }
 
 void CosimTrack::writeWrench(int i, const rc::WheelState& ws, const rc::WheelContactResult& res,

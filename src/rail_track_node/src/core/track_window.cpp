@@ -548,22 +548,30 @@ void buildRailLayout(const TrackMesh& mesh, std::array<std::vector<int>, 2>& rai
 
 void TrackWindow::setRails() { buildRailLayout(window_->model.mesh, rail_dofs_, deformation_); }
 
-void TrackWindow::fillRails() noexcept {
-  const Eigen::VectorXd& d_g = window_->d_static;
+void fillRailArrays(const std::array<std::vector<int>, 2>& rail_dofs, const Eigen::VectorXd& d,
+                    const Eigen::VectorXd& v, const Eigen::VectorXd* d_static, double dt,
+                    rc::BeamRailDeformation& deformation) noexcept {
   for (int r = 0; r < 2; ++r) {
     const rc::RailSide side = r == 0 ? rc::RailSide::kLeft : rc::RailSide::kRight;
-    double* q = deformation_->nodalDisplacements(side);
-    double* qd = deformation_->nodalVelocities(side);
-    const std::vector<int>& dofs = rail_dofs_[r];
+    double* q = deformation.nodalDisplacements(side);
+    double* qd = deformation.nodalVelocities(side);
+    const std::vector<int>& dofs = rail_dofs[static_cast<std::size_t>(r)];
     for (std::size_t i = 0; i < dofs.size(); ++i) {
       const int g = dofs[i];
-      q[i] = g >= 0 ? d_g(g) + state_.d(g) : 0.0;
-      qd[i] = g >= 0 ? state_.v(g) : 0.0;
+      if (g < 0) {
+        q[i] = qd[i] = 0.0;
+        continue;
+      }
+      q[i] = d(g) + dt * v(g);
+      if (d_static != nullptr) q[i] += (*d_static)(g);
+      qd[i] = v(g);
     }
   }
 }
 
-namespace {}  // namespace
+void TrackWindow::fillRails() noexcept {
+  fillRailArrays(rail_dofs_, state_.d, state_.v, &window_->d_static, 0.0, *deformation_);
+}
 
 void TrackWindow::placeSection(Section& sec) const {
   rc::TrackPoint tp;
