@@ -15,23 +15,8 @@ import sys
 import xml.etree.ElementTree as ET
 
 
-def main(argv):
-    if any(a in ("-h", "--help") for a in argv[1:]):
-        print(__doc__)
-        return 0
-    if len(argv) < 3:
-        print("usage: count_tests.py <dir> <log> [--extra NAME 0|1 ...] (--help for more)", file=sys.stderr)
-        return 2
-    results_dir, log = argv[1], argv[2]
-    extras = []
-    rest = argv[3:]
-    while rest:
-        if rest[0] != "--extra" or len(rest) < 3:
-            print("usage: count_tests.py <dir> <log> [--extra NAME 0|1 ...]", file=sys.stderr)
-            return 2
-        extras.append((rest[1], rest[2] == "1"))
-        rest = rest[3:]
-
+def count(results_dir):
+    """(passed, failed labels) of the XML files under results_dir, as the module's comment says."""
     passed, failed = 0, []
     files = sorted(glob.glob(os.path.join(results_dir, "**", "*.xml"), recursive=True))
     for path in files:
@@ -59,6 +44,28 @@ def main(argv):
             # A suite with no case at all: rostest writes this when its test node never ran.
             errors = int(root.get("errors", "0") or 0) + int(root.get("failures", "0") or 0)
             failed.append(name + (": %d errors and no test case" % errors if errors else ": no test case ran"))
+
+    return passed, failed
+
+
+def main(argv):
+    if any(a in ("-h", "--help") for a in argv[1:]):
+        print(__doc__)
+        return 0
+    if len(argv) < 3:
+        print("usage: count_tests.py <dir> <log> [--extra NAME 0|1 ...] (--help for more)", file=sys.stderr)
+        return 2
+    results_dir, log = argv[1], argv[2]
+    extras = []
+    rest = argv[3:]
+    while rest:
+        if rest[0] != "--extra" or len(rest) < 3:
+            print("usage: count_tests.py <dir> <log> [--extra NAME 0|1 ...]", file=sys.stderr)
+            return 2
+        extras.append((rest[1], rest[2] == "1"))
+        rest = rest[3:]
+
+    passed, failed = count(results_dir)
 
     for label, ok in extras:
         if ok:

@@ -193,12 +193,14 @@ class Exposure(RunTestCase):
     def test_5_railsim_keeps_its_master_on_loopback(self):
         # ./railsim itself: loopback_master() sets ROS_IP=127.0.0.1 and drops ROS_HOSTNAME, and launch_scene
         # has roslaunch start the master on that URI's port (what this test reproduces below).
-        with open(RAILSIM) as f:
+        cli = os.path.join(os.path.dirname(RAILSIM), "scripts", "railsim_cli")
+        with open(os.path.join(cli, "common.py")) as f:
             text = f.read()
-        self.assertIn("export ROS_IP=127.0.0.1", text)
-        self.assertIn("unset ROS_HOSTNAME", text)
-        self.assertIn('export ROS_MASTER_URI="http://127.0.0.1:', text)
-        self.assertRegex(text, r'roslaunch [^\n]*-p "\$\{ROS_MASTER_URI##\*:\}"')
+        self.assertIn('env["ROS_IP"] = "127.0.0.1"', text)
+        self.assertIn('env.pop("ROS_HOSTNAME", None)', text)
+        self.assertIn('env["ROS_MASTER_URI"] = "http://127.0.0.1:%s" % port', text)
+        with open(os.path.join(cli, "run.py")) as f:
+            self.assertIn('"roslaunch", "--disable-title", "-p", env["ROS_MASTER_URI"].rsplit(":", 1)[1]', f.read())
         r = self.railsim_run()
         log = r["log"]
         self.assertTrue(r["sockets"], "the run's sockets were never seen" + log)

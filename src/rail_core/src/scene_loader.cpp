@@ -35,6 +35,36 @@ const std::vector<std::string> kKnownTopics = {
     "wheel_states", "contact_wrenches",    "contact_points", "rail_deflection", "wheelset_kinematics", "markers", "tf",
     "clock",        "floor_accelerations", "pad_forces",     "vehicle_energy",  "track_energy"};
 
+std::string topicNeeds(const Scene& s, const std::string& t) {
+  const char* needs = nullptr;
+  if (t == "rail_deflection" && !s.effects.rail_deflection_output) needs = "effects.rail_deflection_output: true";
+  if (t == "contact_points" && !s.effects.contact_point_output) needs = "effects.contact_point_output: true";
+  if (t == "markers" && !s.effects.rviz_markers) needs = "effects.rviz_markers: true";
+  if (t == "floor_accelerations" && !s.effects.floor_acceleration_output)
+    needs = "effects.floor_acceleration_output: true";
+  if (t == "pad_forces" && !s.effects.pad_force_output) needs = "effects.pad_force_output: true";
+  if ((t == "vehicle_energy" || t == "track_energy") && !s.effects.energy_output) needs = "effects.energy_output: true";
+  if (needs) return "'" + t + "' is recorded only with " + needs;
+  if (t == "rail_deflection" && s.effects.track_model == TrackModel::kRigid)
+    return "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not move: "
+           "zeros)";
+  if (t == "track_energy" && s.effects.track_model != TrackModel::kFlexible)
+    return "'track_energy' needs the integrated FE track: effects.track_model flexible";
+  if (t == "pad_forces" && s.effects.track_model != TrackModel::kFlexible)
+    return "'pad_forces' needs the integrated FE track: effects.track_model flexible";
+  if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches" || t == "floor_accelerations") &&
+      !s.has_vehicle)
+    return "'" + t + "' needs a vehicle in the scene";
+  return {};
+}
+
+std::vector<std::string> recordableTopics(const Scene& scene) {
+  std::vector<std::string> topics;
+  for (const std::string& t : kKnownTopics)
+    if (topicNeeds(scene, t).empty()) topics.push_back(t);
+  return topics;
+}
+
 // Built-in profiles (everything else names a profile file).
 static const std::vector<std::string> kBuiltinRailProfiles = {"uic60"};
 static const std::vector<std::string> kBuiltinWheelProfiles = {"s1002"};
@@ -524,34 +554,8 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   }
   const Output& o = s.output;
   for (std::size_t i = 0; i < o.topics.size(); ++i) {
-    const std::string key = "output.topics[" + std::to_string(i) + "]";
-    const std::string& t = o.topics[i];
-    const char* needs = nullptr;
-    if (t == "rail_deflection" && !s.effects.rail_deflection_output) needs = "effects.rail_deflection_output: true";
-    if (t == "contact_points" && !s.effects.contact_point_output) needs = "effects.contact_point_output: true";
-    if (t == "markers" && !s.effects.rviz_markers) needs = "effects.rviz_markers: true";
-    if (t == "floor_accelerations" && !s.effects.floor_acceleration_output)
-      needs = "effects.floor_acceleration_output: true";
-    if (t == "pad_forces" && !s.effects.pad_force_output) needs = "effects.pad_force_output: true";
-    if ((t == "vehicle_energy" || t == "track_energy") && !s.effects.energy_output)
-      needs = "effects.energy_output: true";
-    if (needs) failScene(file, key, "'" + t + "' is recorded only with " + needs, 0);
-    if (t == "rail_deflection" && s.effects.track_model == TrackModel::kRigid) {
-      failScene(file, key,
-                "'rail_deflection' needs a track node: effects.track_model flexible, or rigid_fe (rails that do not "
-                "move: zeros)",
-                0);
-    }
-    if (t == "track_energy" && s.effects.track_model != TrackModel::kFlexible) {
-      failScene(file, key, "'track_energy' needs the integrated FE track: effects.track_model flexible", 0);
-    }
-    if (t == "pad_forces" && s.effects.track_model != TrackModel::kFlexible) {
-      failScene(file, key, "'pad_forces' needs the integrated FE track: effects.track_model flexible", 0);
-    }
-    if ((t == "wheel_states" || t == "wheelset_kinematics" || t == "contact_wrenches" || t == "floor_accelerations") &&
-        !s.has_vehicle) {
-      failScene(file, key, "'" + t + "' needs a vehicle in the scene", 0);
-    }
+    const std::string why = topicNeeds(s, o.topics[i]);
+    if (!why.empty()) failScene(file, "output.topics[" + std::to_string(i) + "]", why, 0);
   }
 }
 

@@ -1,8 +1,9 @@
 // railsim_validate_scene: checks a scene without starting ROS.
-//   railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan]
+//   railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan | --topics]
 // Prints the fully resolved scene and exits 0, or prints the one error naming the file and field and
 // exits 1. --summary: what a run simulates; --hash: the scene hash; --plan: which launch file runs it
-// (vehicle_standalone, cosim or track_standalone). --set applies an override (scene_loader.hpp), as the
+// (vehicle_standalone, cosim or track_standalone); --topics: the topics a run of it can record (one line,
+// comma-separated; the loader's own rule, recordableTopics). --set applies an override (scene_loader.hpp), as the
 // launch files' `overrides` argument does. `railsim_validate_scene --split "<overrides>"` prints the
 // overrides of such an argument one per line.
 #include <cstdio>
@@ -15,13 +16,13 @@
 
 namespace {
 const char* const kUsage =
-    "usage: railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan]\n"
+    "usage: railsim_validate_scene <scene.yaml> [--set key=value ...] [--summary | --hash | --plan | --topics]\n"
     "  prints the resolved scene (exit 0) or the error (exit 1)\n";
 }  // namespace
 
 int main(int argc, char** argv) {
   const char* path = nullptr;
-  bool summary = false, hash_only = false, plan = false;
+  bool summary = false, hash_only = false, plan = false, topics = false;
   rail::core::SceneOverrides overrides;
   if (argc == 3 && std::strcmp(argv[1], "--split") == 0) {
     // One override per line, as the launch files' `overrides` argument splits them (for scripts).
@@ -40,6 +41,8 @@ int main(int argc, char** argv) {
       summary = true;
     } else if (std::strcmp(argv[i], "--plan") == 0) {
       plan = true;
+    } else if (std::strcmp(argv[i], "--topics") == 0) {
+      topics = true;
     } else if (std::strcmp(argv[i], "--hash") == 0) {
       hash_only = true;
     } else if (path == nullptr) {
@@ -60,6 +63,10 @@ int main(int argc, char** argv) {
                     : scene.cosimulation() ? "cosim"
                                            : "vehicle_standalone")
                 << "\n";
+    } else if (topics) {
+      const std::vector<std::string> names = rail::core::recordableTopics(scene);
+      for (std::size_t i = 0; i < names.size(); ++i) std::cout << (i > 0 ? ", " : "") << names[i];
+      std::cout << "\n";
     } else if (hash_only) {
       std::printf("%016llx\n", static_cast<unsigned long long>(scene.hash));
     } else if (summary) {

@@ -40,6 +40,13 @@ Scene loadSceneText(const std::string& text, const std::string& file, const std:
 // from that path's directory).
 Scene loadSceneHandedOver(const std::string& text, const std::string& file, const SceneOverrides& overrides = {});
 
+// Why `topic` cannot be recorded by a run of `scene` (the effect or track model it needs), or "" when it can.
+// The loader refuses output.topics by this rule.
+std::string topicNeeds(const Scene& scene, const std::string& topic);
+
+// The topics a run of `scene` can record (topicNeeds empty), in the order of the known topics.
+std::vector<std::string> recordableTopics(const Scene& scene);
+
 // The fully resolved scene as YAML (every default filled in). Loading this text again gives the same
 // scene (same hash).
 std::string toYaml(const Scene& scene);
