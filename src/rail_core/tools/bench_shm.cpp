@@ -2,7 +2,6 @@
 // through the protocol objects: shm transport between two processes (spinning, then futex sleep; and
 // futex sleep only), and the in-process loopback between two threads for comparison.
 //
-// usage: bench_shm [exchanges (default 100000)]
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -21,6 +20,13 @@
 #include "rail_core/coupling/shm_transport.hpp"
 
 using namespace rail::core::coupling;
+
+namespace {
+const char* const kUsage =
+    "usage: railsim_bench_shm [exchanges]\n"
+    "Round-trip time of one co-simulation exchange (8 wheel states, 8 wrenches) over shared memory between\n"
+    "two processes (spin, yield, then futex; futex only) and in-process between two threads. Default 100000.\n";
+}  // namespace
 
 namespace {
 
@@ -128,13 +134,6 @@ bool benchLoopback(long warmup, long steps) {
   return ok && track_code == 0;
 }
 
-}  // namespace
-
-namespace {
-const char* const kUsage =
-    "usage: railsim_bench_shm [exchanges]\n"
-    "Round-trip time of one co-simulation exchange (8 wheel states, 8 wrenches) over shared memory between\n"
-    "two processes (spin, yield, then futex; futex only) and in-process between two threads. Default 100000.\n";
 }  // namespace
 
 int main(int argc, char** argv) {

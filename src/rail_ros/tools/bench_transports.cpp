@@ -3,7 +3,6 @@
 // shared-memory transports, between two processes that are two ROS nodes. Prints median and 99th
 // percentile; not a test.
 //
-// usage: railsim_bench_transports [exchanges (default 20000)] [service,topic,shm]
 // Needs a ROS master: `roslaunch test/bench_transports.launch` (starts one), or with a running roscore
 // `rosrun rail_ros railsim_bench_transports`. The program forks its track end itself.
 #include <signal.h>
@@ -30,6 +29,13 @@
 
 using namespace rail::core::coupling;
 using namespace rail::ros_glue;
+
+namespace {
+const char* const kUsage =
+    "usage: railsim_bench_transports [exchanges] [service,topic,shm]\n"
+    "Round-trip time of one co-simulation exchange over each ROS transport and shared memory, between two\n"
+    "processes (needs a ROS master). Defaults: 20000 exchanges, all three transports.\n";
+}  // namespace
 
 namespace {
 
@@ -147,13 +153,6 @@ ros::M_string remappings(int argc, char** argv, std::vector<std::string>& rest) 
   return m;
 }
 
-}  // namespace
-
-namespace {
-const char* const kUsage =
-    "usage: railsim_bench_transports [exchanges] [service,topic,shm]\n"
-    "Round-trip time of one co-simulation exchange over each ROS transport and shared memory, between two\n"
-    "processes (needs a ROS master). Defaults: 20000 exchanges, all three transports.\n";
 }  // namespace
 
 int main(int argc, char** argv) {

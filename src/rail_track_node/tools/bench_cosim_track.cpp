@@ -35,6 +35,15 @@ namespace rc = rail::contact;
 namespace cc = rail::core::coupling;
 using Clock = std::chrono::steady_clock;
 
+namespace {
+const char* const kUsage =
+    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1] [solve_beside 0|1] [supernodal 0|1]\n"
+    "Wall time of one co-simulation track step with the paper coach's 8 wheels on the paper scene: rigid_fe,\n"
+    "flexible (semi-implicit and explicit coupling), and the moving track window (straight and curve runs\n"
+    "of window_steps each). Defaults: 500, 20000, 0 (cost clock off), 1 (the next step's solve on a second\n"
+    "thread), 0 (the simplicial factor; 1: CHOLMOD's supernodal solve, the reference).\n";
+}  // namespace
+
 static std::string configDir() {
 #ifdef RAILSIM_CONFIG_DIR
   return RAILSIM_CONFIG_DIR;
@@ -229,15 +238,6 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
                 static_cast<double>(track.newtonIterations()) / steps);
   if (g_cost && track.flexible()) printClock(clock, steps);
 }
-
-namespace {
-const char* const kUsage =
-    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1] [solve_beside 0|1] [supernodal 0|1]\n"
-    "Wall time of one co-simulation track step with the paper coach's 8 wheels on the paper scene: rigid_fe,\n"
-    "flexible (semi-implicit and explicit coupling), and the moving track window (straight and curve runs\n"
-    "of window_steps each). Defaults: 500, 20000, 0 (cost clock off), 1 (the next step's solve on a second\n"
-    "thread), 0 (the simplicial factor; 1: CHOLMOD's supernodal solve, the reference).\n";
-}  // namespace
 
 int main(int argc, char** argv) {
   if (rail::tools::startTool(argc, argv, kUsage, 5)) return 0;

@@ -1,7 +1,6 @@
 // Benchmark of the track Newmark integrator (not a test): for straight tracks of 100 m and 500 m built from
 // a track data file, prints the free DOF count, the assembly and factorisation times and the median wall
 // time of one step (moving 100 kN wheel loads on both rails).
-// Usage: bench_newmark [track.yaml] [steps]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -17,14 +16,14 @@
 namespace rt = rail::track;
 using Clock = std::chrono::steady_clock;
 
-static double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
 namespace {
 const char* const kUsage =
     "usage: bench_newmark [track.yaml] [steps]\n"
     "Track Newmark integrator on straight tracks of 100 m and 500 m: free DOFs, assembly and factorisation\n"
     "times, median step time with moving 100 kN wheel loads. Defaults: config/track/paper_track.yaml, 200.\n";
 }  // namespace
+
+static double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 int main(int argc, char** argv) {
   if (rail::tools::startTool(argc, argv, kUsage, 2)) return 0;

@@ -2,7 +2,6 @@
 // of 100 m, 500 m and 2 km built through the scene path (paper track data, damping and absorbing ends
 // on), prints the free DOF count, the memory of the matrices and of the CHOLMOD factor, the build and
 // factorisation times and the median wall time of one Newmark step with two moving 100 kN wheel loads.
-// Usage: bench_track [steps_100m] [steps_500m] [steps_2km]   (defaults 2000, 500, 100; dt = 2e-5 s)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -20,6 +19,13 @@ namespace rt = rail::track;
 using Clock = std::chrono::steady_clock;
 
 namespace {
+const char* const kUsage =
+    "usage: bench_track [steps_100m] [steps_500m] [steps_2km]\n"
+    "Standalone flexible track on straights of 100 m, 500 m and 2 km: DOFs, matrix and factor memory, build\n"
+    "and factorisation times, median Newmark step with two moving 100 kN loads. Defaults 2000, 500, 100.\n";
+}  // namespace
+
+namespace {
 
 double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
@@ -33,13 +39,6 @@ double sparseBytes(const Eigen::SparseMatrix<double>& A) {
   return 12.0 * static_cast<double>(A.nonZeros()) + 4.0 * (A.cols() + 1);
 }
 
-}  // namespace
-
-namespace {
-const char* const kUsage =
-    "usage: bench_track [steps_100m] [steps_500m] [steps_2km]\n"
-    "Standalone flexible track on straights of 100 m, 500 m and 2 km: DOFs, matrix and factor memory, build\n"
-    "and factorisation times, median Newmark step with two moving 100 kN loads. Defaults 2000, 500, 100.\n";
 }  // namespace
 
 int main(int argc, char** argv) {

@@ -24,6 +24,13 @@ namespace rt = rail::track;
 using Clock = std::chrono::steady_clock;
 
 namespace {
+const char* const kUsage =
+    "usage: bench_track_window [steps] [full_5km_steps]\n"
+    "Moving track window against the full-length FE track on the paper scene and a 5 km straight: build\n"
+    "time, median step, median window move. Defaults 300 and 20.\n";
+}  // namespace
+
+namespace {
 
 std::string configDir() {
 #ifdef RAILSIM_CONFIG_DIR
@@ -114,13 +121,6 @@ void benchWindow(const rail::core::Scene& scene, const rt::TrackWindowSettings& 
       1e3 * (median(times) + worst_shift / steps_per_shift));
 }
 
-}  // namespace
-
-namespace {
-const char* const kUsage =
-    "usage: bench_track_window [steps] [full_5km_steps]\n"
-    "Moving track window against the full-length FE track on the paper scene and a 5 km straight: build\n"
-    "time, median step, median window move. Defaults 300 and 20.\n";
 }  // namespace
 
 int main(int argc, char** argv) {

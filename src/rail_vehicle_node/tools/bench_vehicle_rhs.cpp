@@ -1,6 +1,5 @@
 // Benchmark program (not part of the library): median wall time of one right-hand side evaluation of the
 // full vehicle model, for both solvers of the augmented system.
-// Usage: bench_vehicle_rhs [vehicle.yaml] [evaluations]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -11,6 +10,13 @@
 #include "rail_contact/tool_args.hpp"
 #include "rail_vehicle_node/multibody_dynamics.hpp"
 #include "rail_vehicle_node/vehicle_loader.hpp"
+
+namespace {
+const char* const kUsage =
+    "usage: bench_vehicle_rhs [vehicle.yaml] [evaluations]\n"
+    "Median wall time of one right-hand side of the full vehicle model, for both solvers of the augmented\n"
+    "system. Defaults: config/vehicle/paper_coach.yaml, 20000 evaluations.\n";
+}  // namespace
 
 #ifndef RAIL_VEHICLE_CONFIG_DIR
 #define RAIL_VEHICLE_CONFIG_DIR "config/vehicle"
@@ -46,13 +52,6 @@ double medianRhsMicroseconds(const std::string& path, rail::vehicle::KktSolver s
   return times[static_cast<std::size_t>(evaluations / 2)];
 }
 
-}  // namespace
-
-namespace {
-const char* const kUsage =
-    "usage: bench_vehicle_rhs [vehicle.yaml] [evaluations]\n"
-    "Median wall time of one right-hand side of the full vehicle model, for both solvers of the augmented\n"
-    "system. Defaults: config/vehicle/paper_coach.yaml, 20000 evaluations.\n";
 }  // namespace
 
 int main(int argc, char** argv) {
