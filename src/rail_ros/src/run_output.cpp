@@ -10,6 +10,7 @@
 #include <cstring>
 #include <stdexcept>
 
+#include <rail_contact/irregularities.hpp>
 #include <rail_core/exit_codes.hpp>
 
 #include "rail_ros/master_watch.hpp"
@@ -141,6 +142,34 @@ void OutputBag::writeBeside(const std::string& node, const std::string& suffix, 
   ROS_ERROR("%s: cannot write %s: %s%s", node.c_str(), path.c_str(), std::strerror(err),
             f != nullptr ? "; removed the partial file" : "");
   fail(path, err, "write error");
+}
+
+NodeRun::NodeRun(std::string node)
+    : node_(std::move(node)),
+      stop_(nodeStop()),
+      master_watch_(std::make_unique<MasterWatch>(stop_.requested)),
+      setup0_(std::chrono::steady_clock::now()),
+      loop0_(setup0_) {}
+
+NodeRun::~NodeRun() = default;
+
+void NodeRun::startLoop() {
+  loop0_ = std::chrono::steady_clock::now();
+  cost_.add(core::CostProfile::kSetUp, std::chrono::duration<double>(loop0_ - setup0_).count() - excluded_);
+  irregularity_stations0_ = contact::Irregularities::stationsEvaluated();
+}
+
+double NodeRun::loopSeconds() const { return secondsSince(loop0_); }
+
+int NodeRun::endLoop(double t, bool stop_logged, int exit_code, const char* suffix) {
+  clock_.counts[core::CostClock::kIrregularityEvaluations] =
+      contact::Irregularities::stationsEvaluated() - irregularity_stations0_;
+  return reportStop(node_, *master_watch_, t, stop_logged, exit_code, suffix);
+}
+
+int NodeRun::writeFailed(const OutputBag& bag, double t) const {
+  ROS_FATAL("%s: %s; stopped at t = %.4f s", node_.c_str(), bag.error().c_str(), t);
+  return core::kExitWriteFailed;
 }
 
 ProgressLine::ProgressLine(std::string node, double t_end_estimate, double period_s)

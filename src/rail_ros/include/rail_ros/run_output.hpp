@@ -14,11 +14,13 @@
 #include <vector>
 
 #include <rail_contact/contact_detection.hpp>
+#include <rail_core/cost_profile.hpp>
 #include <rail_core/scene.hpp>
 
 namespace rail::ros_glue {
 
 class MasterWatch;
+struct NodeStop;
 
 // The directory of a run's files: the node's ~output_dir, else $ROS_HOME/railsim, else ~/.ros/railsim.
 std::string outputDir(const ros::NodeHandle& pnh);
@@ -83,6 +85,46 @@ class OutputBag {
   std::unique_ptr<rosbag::Bag> bag_;
   std::string path_;
   std::string error_;
+};
+
+// A node's run around its loop, kept the same way by both nodes and the moving-load run: the stop flag and
+// the master watch (a lost master stops the run like a signal), the cost profile and its finer clock, the
+// set-up time (from construction to startLoop, less the waits for the peer or viewers), the loop's wall
+// time and the irregularity stations it evaluated.
+class NodeRun {
+ public:
+  explicit NodeRun(std::string node);
+  ~NodeRun();
+  NodeRun(const NodeRun&) = delete;
+  NodeRun& operator=(const NodeRun&) = delete;
+
+  const std::string& node() const { return node_; }
+  NodeStop& stop() const { return stop_; }
+  core::CostProfile& cost() { return cost_; }
+  core::CostClock& clock() { return clock_; }
+
+  // A wait for the peer or for viewers (s): not the node's own set-up.
+  void excludeFromSetUp(double seconds) { excluded_ += seconds; }
+  // The loop starts: the set-up time goes to the cost profile; the loop's clock starts.
+  void startLoop();
+  // Wall time since startLoop (s).
+  double loopSeconds() const;
+  // After the loop: the irregularity stations the loop evaluated go to the clock, a lost master or an
+  // unreported signal is said (reportStop). Returns the exit code to use.
+  int endLoop(double t, bool stop_logged, int exit_code, const char* suffix = "");
+  // The outputs could not be written: one FATAL line naming the file and the reason, and the stop time.
+  // Returns kExitWriteFailed.
+  int writeFailed(const OutputBag& bag, double t) const;
+
+ private:
+  std::string node_;
+  NodeStop& stop_;
+  std::unique_ptr<MasterWatch> master_watch_;
+  core::CostProfile cost_;
+  core::CostClock clock_;
+  std::chrono::steady_clock::time_point setup0_, loop0_;
+  double excluded_ = 0.0;
+  long long irregularity_stations0_ = 0;
 };
 
 // The console's progress line of a long run, at most once per `period_s` of wall time: simulated time, per

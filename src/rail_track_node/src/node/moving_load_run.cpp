@@ -9,7 +9,6 @@
 
 #include <rail_msgs/RailDeflection.h>
 #include <rail_core/exit_codes.hpp>
-#include <rail_ros/master_watch.hpp>
 #include <rail_ros/node_scaffold.hpp>
 #include <rail_ros/run_output.hpp>
 
@@ -24,9 +23,9 @@ using namespace rail::core;
 namespace ros_glue = rail::ros_glue;
 
 int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene) {
-  const std::string me = ros::this_node::getName();
-  ros_glue::NodeStop& stop = ros_glue::nodeStop();
-  ros_glue::MasterWatch master_watch(stop.requested);  // a lost master stops the run like a signal
+  ros_glue::NodeRun node_run(ros::this_node::getName());  // no cost profile: the track simulator reports its own
+  const std::string& me = node_run.node();
+  ros_glue::NodeStop& stop = node_run.stop();
   // ---- build ----
   std::unique_ptr<SceneTrack> track;
   SimulatorSettings settings;
@@ -144,14 +143,13 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
       if (bag_markers) bag.write("/markers", stamp, ma);
     }
     if (bag.failed()) {
-      ROS_FATAL("%s: %s; stopped at t = %.4f s", me.c_str(), bag.error().c_str(), sim.time());
+      exit_code = node_run.writeFailed(bag, sim.time());
       stop_logged = true;
-      exit_code = kExitWriteFailed;
       break;
     }
     if (sim.finished()) break;
   }
-  exit_code = ros_glue::reportStop(me, master_watch, sim.time(), stop_logged, exit_code);
+  exit_code = node_run.endLoop(sim.time(), stop_logged, exit_code);
   bag.close(me);
   if (exit_code == kExitOk) {
     ROS_INFO("%s: finished at t = %.4f s (%ld steps)", me.c_str(), sim.time(), sim.steps());

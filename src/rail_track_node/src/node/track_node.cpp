@@ -12,13 +12,11 @@
 #include <memory>
 #include <string>
 
-#include <rail_contact/irregularities.hpp>
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/replay_transport.hpp>
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/scene_loader.hpp>
 #include <rail_ros/cosim_transport.hpp>
-#include <rail_ros/master_watch.hpp>
 #include <rail_ros/node_scaffold.hpp>
 #include <rail_ros/replay_bag.hpp>
 #include <rail_ros/run_output.hpp>
@@ -40,11 +38,11 @@ namespace {
 // last wheel, m), or of a replay of `replay_bag`. Returns the exit code.
 int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, const std::string& peer, double wheel_span,
              const std::string& replay_bag = "") {
-  const std::string me = ros::this_node::getName();
-  ros_glue::NodeStop& stop = ros_glue::nodeStop();
-  ros_glue::MasterWatch master_watch(stop.requested);  // a lost master stops the run like a signal
-  CostProfile cost;
-  CostClock clock;  // the finer split, filled by the track core (cost_profile.hpp)
+  ros_glue::NodeRun node_run(ros::this_node::getName());
+  const std::string& me = node_run.node();
+  ros_glue::NodeStop& stop = node_run.stop();
+  CostProfile& cost = node_run.cost();
+  CostClock& clock = node_run.clock();  // the finer split, filled by the track core (cost_profile.hpp)
   std::unique_ptr<cc::FrameTransport> transport;
   if (!replay_bag.empty()) {
     try {
@@ -60,7 +58,6 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
       return kExitBadInput;
     }
   }
-  const auto setup0 = std::chrono::steady_clock::now();
   rt::CosimTrackOptions track_options;
   track_options.cost = &clock;
   track_options.window.vehicle_length = wheel_span;
@@ -93,9 +90,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   if (!outputs.openBag(me, pnh)) return kExitBadInput;
 
   rt::CosimTrackRun run(scene, *track, *transport, {peer, !replay_bag.empty(), &cost});
-  const auto wall0 = std::chrono::steady_clock::now();
-  cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count());
-  const long long irregularity_stations0 = rail::contact::Irregularities::stationsEvaluated();
+  node_run.startLoop();
   int exit_code = kExitOk;
   bool stop_logged = false;  // the run loop said why it stopped
   for (rt::TrackRunStatus status; (status = run.step()) != rt::TrackRunStatus::kFinished;) {
@@ -107,9 +102,8 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     if (run.outputDue()) {
       outputs.publish(ros::Time(std::max(run.time(), 1e-9)), run.states());
       if (outputs.bag().failed()) {
-        ROS_FATAL("%s: %s; stopped at t = %.4f s", me.c_str(), outputs.bag().error().c_str(), run.time());
+        exit_code = node_run.writeFailed(outputs.bag(), run.time());
         stop_logged = true;
-        exit_code = kExitWriteFailed;
         break;
       }
     }
@@ -121,12 +115,8 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
     }
   }
   run.close();
-  exit_code = ros_glue::reportStop(me, master_watch, run.time(), stop_logged, exit_code);
-
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  clock.counts[CostClock::kIrregularityEvaluations] =
-      rail::contact::Irregularities::stationsEvaluated() - irregularity_stations0;
-  outputs.close(me, run, exit_code, wall);
+  exit_code = node_run.endLoop(run.time(), stop_logged, exit_code);
+  outputs.close(me, run, exit_code, node_run.loopSeconds());
   return exit_code == kExitOk && outputs.bag().failed() ? kExitWriteFailed : exit_code;
 }
 

@@ -12,13 +12,11 @@
 #include <string>
 
 #include <rail_contact/format.hpp>
-#include <rail_contact/irregularities.hpp>
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/exit_codes.hpp>
 #include <rail_core/scene_loader.hpp>
 #include <rail_ros/cosim_transport.hpp>
-#include <rail_ros/master_watch.hpp>
 #include <rail_ros/node_scaffold.hpp>
 #include <rail_ros/run_output.hpp>
 #include <rail_ros/scene_param.hpp>
@@ -38,15 +36,14 @@ namespace {
 // Runs the vehicle to solver.end: alone on the rigid track, or (scene.cosimulation()) as the vehicle side of
 // the co-simulation with the track node over the scene's transport. Returns the exit code.
 int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
-  const std::string node = ros::this_node::getName();
+  ros_glue::NodeRun node_run(ros::this_node::getName());
+  const std::string& node = node_run.node();
   const bool cosim = scene.cosimulation();
-  ros_glue::NodeStop& stop = ros_glue::nodeStop();
-  ros_glue::MasterWatch master_watch(stop.requested);  // a lost master stops the run like a signal
-  CostProfile cost;
-  CostClock clock;  // the finer split, filled by the simulator (cost_profile.hpp)
+  ros_glue::NodeStop& stop = node_run.stop();
+  CostProfile& cost = node_run.cost();
+  CostClock& clock = node_run.clock();  // the finer split, filled by the simulator (cost_profile.hpp)
   rv::SimulatorSettings settings;
   settings.cost = &clock;
-  const auto setup0 = std::chrono::steady_clock::now();
   std::unique_ptr<cc::FrameTransport> transport;
   std::unique_ptr<cc::TimedTransport> timed_transport;  // adds exchange waits to `cost`
   std::unique_ptr<rv::CosimVehicle> cosim_vehicle;
@@ -63,12 +60,12 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   }
   rv::VehicleSimulator& sim = cosim ? cosim_vehicle->simulator() : *alone;
   std::string peer;
-  double peer_wait = 0.0;  // the handshake waits for the track node: not the vehicle's set-up
   if (cosim) {
     const auto wait0 = std::chrono::steady_clock::now();
     const int rc = ros_glue::handshakeAsVehicle(scene, sim.model().wheelSpan(), peer);
     if (rc != kExitOk) return rc;
-    peer_wait = std::chrono::duration<double>(std::chrono::steady_clock::now() - wait0).count();
+    // The handshake waits for the track node: not the vehicle's set-up.
+    node_run.excludeFromSetUp(std::chrono::duration<double>(std::chrono::steady_clock::now() - wait0).count());
     if (const int rc = ros_glue::openTransport(scene, cc::Role::kVehicle, nh, pnh, peer, &stop.requested, transport);
         rc != kExitOk)
       return rc;
@@ -88,14 +85,12 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
   rv::VehicleOutputs outputs(nh, pnh, scene, sim, cosim, cost, clock);
   const auto viewer0 = std::chrono::steady_clock::now();  // a wait for viewers is not the vehicle's set-up
   if (!outputs.waitForSubscribers(node, nh, pnh, stop.requested)) return kExitBadInput;
-  const double viewer_wait = std::chrono::duration<double>(std::chrono::steady_clock::now() - viewer0).count();
+  node_run.excludeFromSetUp(std::chrono::duration<double>(std::chrono::steady_clock::now() - viewer0).count());
   if (!outputs.openBag(node, pnh)) return kExitBadInput;
 
   const rv::VehicleRunOptions options{&stop.requested, &cost};
   rv::VehicleRun run = cosim ? rv::VehicleRun(scene, *cosim_vehicle, options) : rv::VehicleRun(scene, sim, options);
-  const auto wall0 = std::chrono::steady_clock::now();
-  cost.add(CostProfile::kSetUp, std::chrono::duration<double>(wall0 - setup0).count() - peer_wait - viewer_wait);
-  const long long irregularity_stations0 = rail::contact::Irregularities::stationsEvaluated();
+  node_run.startLoop();
   ros_glue::ProgressLine progress(node, sim.endTimeEstimate());
   char where[64];
   bool write_failed = false;
@@ -103,7 +98,7 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     while (run.next() == rv::VehicleRun::Event::kOutput) {
       outputs.publish(run.outputIndex());
       if (outputs.bag().failed()) {
-        ROS_FATAL("%s: %s; stopped at t = %.4f s", node.c_str(), outputs.bag().error().c_str(), sim.time());
+        node_run.writeFailed(outputs.bag(), sim.time());
         write_failed = true;
         break;
       }
@@ -136,12 +131,9 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     ROS_INFO("%s: %llu steps exchanged with the track node, largest CVODE step %.3g s", node.c_str(),
              static_cast<unsigned long long>(cosim_vehicle->stepsExchanged()), cosim_vehicle->maxInternalStep());
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-  clock.counts[CostClock::kIrregularityEvaluations] =
-      rail::contact::Irregularities::stationsEvaluated() - irregularity_stations0;
-  const int rc = ros_glue::reportStop(node, master_watch, sim.time(), run.end() == rv::VehicleRun::End::kStopped,
-                                      write_failed ? kExitWriteFailed : run.exitCode(), "; closing the bag");
-  outputs.close(node, cosim_vehicle.get(), wall, rc);
+  const int rc = node_run.endLoop(sim.time(), run.end() == rv::VehicleRun::End::kStopped,
+                                  write_failed ? kExitWriteFailed : run.exitCode(), "; closing the bag");
+  outputs.close(node, cosim_vehicle.get(), node_run.loopSeconds(), rc);
   return rc == kExitOk && outputs.bag().failed() ? kExitWriteFailed : rc;
 }
 
