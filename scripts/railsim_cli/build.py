@@ -12,7 +12,7 @@ STAMP = os.path.join(ROOT, "build", ".railsim_build_stamp")
 # What the build reads: the packages' sources, data and build files.
 SOURCE_DIRS = ("src", "test")
 SKIP_DIRS = {"__pycache__", ".git"}
-PROGRESS_PERIOD = 5.0  # s between two progress lines
+PROGRESS_PERIOD = 10.0  # s at least between two progress lines (each says a new percentage)
 
 
 def jobs():
@@ -47,17 +47,16 @@ def run_with_progress(cmd, log_path, what):
     """Runs cmd with its output to log_path; says the build's percentage every few seconds. Returns its
     exit code."""
     percent = re.compile(rb"^\[\s*(\d+)%\]")
-    last_said, last_percent = time.monotonic(), None
+    last_said, said_percent = time.monotonic(), None
     with open(log_path, "wb") as logf:
         proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
         for line in iter(proc.stdout.readline, b""):
             logf.write(line)
             m = percent.match(line)
-            if m:
-                last_percent = int(m.group(1))
-                if time.monotonic() - last_said >= PROGRESS_PERIOD:
-                    log("%s: %d %%" % (what, last_percent))
-                    last_said = time.monotonic()
+            if m and int(m.group(1)) != said_percent and time.monotonic() - last_said >= PROGRESS_PERIOD:
+                said_percent = int(m.group(1))
+                log("%s: %d %%" % (what, said_percent))
+                last_said = time.monotonic()
         return proc.wait()
 
 

@@ -127,14 +127,14 @@ class NamingCheck(unittest.TestCase):
         d = self_dir()
         bad, good = os.path.join(d, "bad.cpp"), os.path.join(d, "good.cpp")
         with open(bad, "w") as f:
-            f.write("namespace rail {\nvoid load_scene_file();\nstruct wheel_state {};\nvoid advanceTo(double t);\n}\n")
+            f.write("namespace rail {\nvoid load_scene_file();\nstruct wheel_state {};\nvoid AdvanceTo(double t);\n}\n")
         with open(good, "w") as f:
             f.write("namespace rail {\nvoid loadSceneFile();\nstruct WheelState { double speed() const; };\n}\n")
         p = run(["/bin/bash", os.path.join(REPO, "scripts", "check_naming"), bad], timeout=120)
         self.assertEqual(p.returncode, 1, p.stdout + p.stderr)
         self.assertIn("%s:2:6: invalid case style for function 'load_scene_file'" % bad, p.stdout)
         self.assertIn("%s:3:8: invalid case style for struct 'wheel_state'" % bad, p.stdout)
-        self.assertIn("%s:4:6: invalid case style for function 'advanceTo'" % bad, p.stdout)
+        self.assertIn("%s:4:6: invalid case style for function 'AdvanceTo'" % bad, p.stdout)
         self.assertIn("3 name(s) break the convention", p.stderr)
         p = run(["/bin/bash", os.path.join(REPO, "scripts", "check_naming"), good], timeout=120)
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)

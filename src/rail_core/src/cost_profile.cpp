@@ -1,75 +1,34 @@
 #include "rail_core/cost_profile.hpp"
 
 #include <cstdio>
+#include <iterator>
 #include <sstream>
 
 namespace rail::core {
 
-const char* CostProfile::name(Component c) {
-  switch (c) {
-    case kVehicleIntegration:
-      return "vehicle_integration";
-    case kTrackStep:
-      return "track_step";
-    case kTransportWait:
-      return "transport_wait";
-    case kPublish:
-      return "publish";
-    case kBagWrite:
-      return "bag_write";
-    case kSetUp:
-      return "set_up";
-    case kComponentCount:
-      break;
-  }
-  return "?";
+namespace {
+
+// Each name at its enumerator's index (cost_profile.hpp); the sizes are checked against the enums.
+constexpr const char* kComponentNames[] = {"vehicle_integration", "track_step", "transport_wait", "publish",
+                                           "bag_write",           "set_up"};
+constexpr const char* kPartNames[] = {
+    "vehicle_rhs",         "vehicle_jacobian", "track_rhs", "track_solve",     "track_solve_wait",     "window_moves",
+    "floor_accelerations", "pad_forces",       "markers",   "rail_deflection", "contact_point_output", "energy_output"};
+constexpr const char* kCountNames[] = {"damping_products", "end_dashpot_forces", "irregularity_evaluations"};
+static_assert(std::size(kComponentNames) == CostProfile::kComponentCount);
+static_assert(std::size(kPartNames) == CostClock::kPartCount);
+static_assert(std::size(kCountNames) == CostClock::kCountCount);
+
+template <std::size_t N>
+const char* nameAt(const char* const (&names)[N], int i) {
+  return i >= 0 && i < static_cast<int>(N) ? names[i] : "?";
 }
 
-const char* CostClock::name(Part p) {
-  switch (p) {
-    case kVehicleRhs:
-      return "vehicle_rhs";
-    case kVehicleJacobian:
-      return "vehicle_jacobian";
-    case kTrackRhs:
-      return "track_rhs";
-    case kTrackSolve:
-      return "track_solve";
-    case kTrackSolveWait:
-      return "track_solve_wait";
-    case kWindowMoves:
-      return "window_moves";
-    case kFloorAccelerations:
-      return "floor_accelerations";
-    case kPadForces:
-      return "pad_forces";
-    case kMarkers:
-      return "markers";
-    case kRailDeflection:
-      return "rail_deflection";
-    case kContactPointOutput:
-      return "contact_point_output";
-    case kEnergyOutput:
-      return "energy_output";
-    case kPartCount:
-      break;
-  }
-  return "?";
-}
+}  // namespace
 
-const char* CostClock::name(Count c) {
-  switch (c) {
-    case kDampingProducts:
-      return "damping_products";
-    case kEndDashpotForces:
-      return "end_dashpot_forces";
-    case kIrregularityEvaluations:
-      return "irregularity_evaluations";
-    case kCountCount:
-      break;
-  }
-  return "?";
-}
+const char* CostProfile::name(Component c) { return nameAt(kComponentNames, c); }
+const char* CostClock::name(Part p) { return nameAt(kPartNames, p); }
+const char* CostClock::name(Count c) { return nameAt(kCountNames, c); }
 
 int CostProfile::finerLines(const CostClock& k, std::array<FinerLine, kMaxFinerLines>& lines) const {
   const bool track_side = calls_[kTrackStep] > 0;

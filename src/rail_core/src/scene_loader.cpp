@@ -148,17 +148,14 @@ DataFile readFileKey(MapReader& r, const char* key, bool required, const Context
 
 void readDirection(MapReader& r, Segment& seg, bool required) {
   if (required) r.require("direction");
-  r.choice("direction", seg.direction, {{"left", Direction::kLeft}, {"right", Direction::kRight}});
+  r.choice("direction", seg.direction, kDirectionWords, 1);
 }
 
 Segment readSegment(const YAML::Node& node, const std::string& path, const Context& ctx) {
   MapReader r(node, path, ctx.file, raiseSceneError);
   Segment seg;
   r.require("type");
-  r.choice("type", seg.type,
-           {{"straight", SegmentType::kStraight},
-            {"transition", SegmentType::kTransition},
-            {"circular", SegmentType::kCircular}});
+  r.choice("type", seg.type, kSegmentTypeWords);
   r.require("length");
   r.number("length", seg.length);
   positive(r, "length", seg.length);
@@ -304,9 +301,7 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
   Irregularities& irr = t.irregularities;
   if (const YAML::Node n = r.child("irregularities")) {
     MapReader ir(n, "track.irregularities", ctx.file, raiseSceneError);
-    ir.choice(
-        "source", irr.source,
-        {{"none", IrregularitySource::kNone}, {"file", IrregularitySource::kFile}, {"psd", IrregularitySource::kPsd}});
+    ir.choice("source", irr.source, kIrregularitySourceWords);
     if (irr.source == IrregularitySource::kFile) {
       irr.file = readFileKey(ir, "file", true, ctx);
     } else if (irr.source == IrregularitySource::kPsd) {
@@ -392,7 +387,7 @@ void readMovingLoads(MapReader& root, Scene& s, const Context& ctx) {
     MovingLoad l;
     lr.number("offset", l.offset);
     nonNegative(lr, "offset", l.offset);
-    lr.choice("rail", l.rail, {{"both", LoadRail::kBoth}, {"left", LoadRail::kLeft}, {"right", LoadRail::kRight}});
+    lr.choice("rail", l.rail, kLoadRailWords);
     lr.number("vertical", l.vertical);
     inRange(lr, "vertical", l.vertical, -1e6, 1e6, "N");
     lr.number("lateral", l.lateral);
@@ -408,12 +403,11 @@ void readEffects(MapReader& root, Scene& s) {
   if (!n) return;
   MapReader r(n, "effects", root.file(), raiseSceneError);
   Effects& e = s.effects;
-  r.choice("track_model", e.track_model,
-           {{"rigid", TrackModel::kRigid}, {"rigid_fe", TrackModel::kRigidFe}, {"flexible", TrackModel::kFlexible}});
+  r.choice("track_model", e.track_model, kTrackModelWords);
   r.boolean("irregularities", e.irregularities);
   r.boolean("flange_contact", e.flange_contact);
   r.boolean("spin_creepage", e.spin_creepage);
-  r.choice("creep_law", e.creep_law, {{"polach", CreepLaw::kPolach}});
+  r.choice("creep_law", e.creep_law, kCreepLawWords);
   r.boolean("track_damping", e.track_damping);
   r.boolean("absorbing_ends", e.absorbing_ends);
   r.boolean("rail_deflection_output", e.rail_deflection_output);
@@ -441,10 +435,8 @@ void readSolver(MapReader& root, Scene& s) {
   r.number("standalone_max_step", v.standalone_max_step);
   if (v.standalone_max_step != 0.0)
     inRange(r, "standalone_max_step", v.standalone_max_step, 1e-8, 1e-1, "s (or 0: none)");
-  r.choice("vehicle_method", v.vehicle_method,
-           {{"auto", VehicleMethod::kAuto}, {"bdf", VehicleMethod::kBdf}, {"adams", VehicleMethod::kAdams}});
-  r.choice("transport", v.transport,
-           {{"service", Transport::kService}, {"topic", Transport::kTopic}, {"shm", Transport::kShm}});
+  r.choice("vehicle_method", v.vehicle_method, kVehicleMethodWords);
+  r.choice("transport", v.transport, kTransportWords);
   r.number("exchange_timeout", v.exchange_timeout);
   inRange(r, "exchange_timeout", v.exchange_timeout, 0.01, 3600.0, "s");
   r.number("handshake_timeout", v.handshake_timeout);

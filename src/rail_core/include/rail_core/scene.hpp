@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "rail_core/enum_words.hpp"
+
 namespace rail::core {
 
 // How the track is represented (effects.track_model).
@@ -26,6 +28,26 @@ enum class IrregularitySource { kNone, kFile, kPsd };
 enum class VehicleMethod { kAuto, kBdf, kAdams };
 enum class EndKind { kTime, kArcLength };
 enum class LoadRail { kBoth, kLeft, kRight };
+
+// The scene file's words for these values (enum_words.hpp): what the loader accepts and toString writes.
+inline constexpr Word<TrackModel> kTrackModelWords[] = {
+    {"rigid", TrackModel::kRigid}, {"rigid_fe", TrackModel::kRigidFe}, {"flexible", TrackModel::kFlexible}};
+inline constexpr Word<CreepLaw> kCreepLawWords[] = {{"polach", CreepLaw::kPolach}};
+inline constexpr Word<Transport> kTransportWords[] = {
+    {"service", Transport::kService}, {"topic", Transport::kTopic}, {"shm", Transport::kShm}};
+inline constexpr Word<SegmentType> kSegmentTypeWords[] = {{"straight", SegmentType::kStraight},
+                                                          {"transition", SegmentType::kTransition},
+                                                          {"circular", SegmentType::kCircular}};
+// "none" (a straight's) is written, never read: a curve's direction is left or right.
+inline constexpr Word<Direction> kDirectionWords[] = {
+    {"none", Direction::kNone}, {"left", Direction::kLeft}, {"right", Direction::kRight}};
+inline constexpr Word<IrregularitySource> kIrregularitySourceWords[] = {
+    {"none", IrregularitySource::kNone}, {"file", IrregularitySource::kFile}, {"psd", IrregularitySource::kPsd}};
+inline constexpr Word<VehicleMethod> kVehicleMethodWords[] = {
+    {"auto", VehicleMethod::kAuto}, {"bdf", VehicleMethod::kBdf}, {"adams", VehicleMethod::kAdams}};
+inline constexpr Word<EndKind> kEndKindWords[] = {{"time", EndKind::kTime}, {"arc_length", EndKind::kArcLength}};
+inline constexpr Word<LoadRail> kLoadRailWords[] = {
+    {"both", LoadRail::kBoth}, {"left", LoadRail::kLeft}, {"right", LoadRail::kRight}};
 
 // A data file named by the scene: the path as the user wrote it and the path it resolves to (relative
 // paths are taken from the scene file's directory).
@@ -194,14 +216,15 @@ struct Scene {
 // Topics a scene may record (output.topics).
 extern const std::vector<std::string> kKnownTopics;
 
-const char* toString(TrackModel v);
-const char* toString(Transport v);
-const char* toString(CreepLaw v);
-const char* toString(SegmentType v);
-const char* toString(Direction v);
-const char* toString(IrregularitySource v);
-const char* toString(VehicleMethod v);
-const char* toString(EndKind v);
-const char* toString(LoadRail v);
+// The scene file's word of a value (the tables above).
+inline const char* toString(TrackModel v) { return wordOf(kTrackModelWords, v); }
+inline const char* toString(Transport v) { return wordOf(kTransportWords, v); }
+inline const char* toString(CreepLaw v) { return wordOf(kCreepLawWords, v); }
+inline const char* toString(SegmentType v) { return wordOf(kSegmentTypeWords, v); }
+inline const char* toString(Direction v) { return wordOf(kDirectionWords, v); }
+inline const char* toString(IrregularitySource v) { return wordOf(kIrregularitySourceWords, v); }
+inline const char* toString(VehicleMethod v) { return wordOf(kVehicleMethodWords, v); }
+inline const char* toString(EndKind v) { return wordOf(kEndKindWords, v); }
+inline const char* toString(LoadRail v) { return wordOf(kLoadRailWords, v); }
 
 }  // namespace rail::core

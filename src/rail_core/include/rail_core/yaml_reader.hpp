@@ -16,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "rail_core/enum_words.hpp"
+
 namespace rail::core {
 
 // Throws a loader's own exception type with the message (a scene loader throws SceneError, the vehicle
@@ -67,8 +69,9 @@ class MapReader {
   void string(const char* key, std::string& value);
   void numberList(const char* key, std::vector<double>& value);
   void stringList(const char* key, std::vector<std::string>& value);
-  template <typename E>
-  void choice(const char* key, E& value, std::initializer_list<std::pair<const char*, E>> choices);
+  // One of `words` from the first (enum_words.hpp): "must be one of ..., got '...'" otherwise.
+  template <class E, std::size_t N>
+  void choice(const char* key, E& value, const Word<E> (&words)[N], std::size_t first = 0);
 
   // Required values: a missing key is "required key missing".
   double number(const char* key);
@@ -121,20 +124,20 @@ class MapReader {
   std::set<std::string> read_;
 };
 
-template <typename E>
-void MapReader::choice(const char* key, E& value, std::initializer_list<std::pair<const char*, E>> choices) {
+template <class E, std::size_t N>
+void MapReader::choice(const char* key, E& value, const Word<E> (&words)[N], std::size_t first) {
   std::string text;
   bool present = has(key);
   string(key, text);
   if (!present) return;
   std::string names;
-  for (const auto& c : choices) {
-    if (text == c.first) {
-      value = c.second;
+  for (std::size_t i = first; i < N; ++i) {
+    if (text == words[i].text) {
+      value = words[i].value;
       return;
     }
     names += names.empty() ? "" : ", ";
-    names += c.first;
+    names += words[i].text;
   }
   fail(key, "must be one of " + names + ", got '" + text + "'");
 }
