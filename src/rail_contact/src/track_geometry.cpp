@@ -178,7 +178,8 @@ struct Hermite {
 
 }  // namespace
 
-TrackGeometry::TrackGeometry(const GeometrySpec& spec, const Irregularities& irregularities) : spec_(spec) {
+TrackGeometry::TrackGeometry(const GeometrySpec& spec, const Irregularities& irregularities, TrackDefects defects)
+    : spec_(spec), defects_(std::move(defects)) {
   // ---- validation ----
   requireFinite(spec.s_start, "s_start");
   requireFinite(spec.cant_reference_width, "cant_reference_width");
@@ -394,6 +395,13 @@ void TrackGeometry::rail(RailSide side, double s, RailPoint& out) const {
   interpolateNodes(a.p, a.dp, a.R, a.dR, b.p, b.dp, b.R, b.dR, tau, h_, out.p_origin_in_world, out.dp_origin_ds,
                    out.R_rail_to_world, out.dR_ds);
   out.lateral_sign = side == RailSide::kLeft ? -1.0 : 1.0;
+  if (defects_.empty()) return;
+  double z, dz_ds;
+  defects_.evaluate(side, s, z, dz_ds);
+  if (z == 0.0 && dz_ds == 0.0) return;
+  // The defect's height along the rail frame's b axis: p += z b, dp/ds += z' b + z db/ds.
+  out.p_origin_in_world += z * out.R_rail_to_world.col(2);
+  out.dp_origin_ds += dz_ds * out.R_rail_to_world.col(2) + z * out.dR_ds.col(2);
 }
 
 RailSurfacePoint TrackGeometry::railSurface(const RailPoint& rail, double y, double z, double dy_du, double dz_du) {

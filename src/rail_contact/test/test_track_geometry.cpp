@@ -427,6 +427,73 @@ TEST(TrackGeometry, NoIrregularitiesIsThePlainGeometry) {
   EXPECT_EQ(a.R_rail_to_world, b.R_rail_to_world);
 }
 
+// Local defects against their analytic shapes (track_defects.hpp): a dipped joint of total angle 0.01 rad
+// over 2 m on the left rail (depth alpha L / 2 = 5 mm at the joint, slopes -/+ alpha on its two ramps) and a
+// weld dip of 0.3 mm over 0.2 m on both rails move the rail origin along the rail frame's b axis by z(s) and
+// its slope by z'(s) b; the slope agrees with central differences of the position; a rail without the defect,
+// and any point beyond a defect, is the plain geometry to the last bit.
+TEST(TrackGeometry, LocalDefectsAddTheirAnalyticShapeAlongTheRailNormal) {
+  rc::GeometrySpec spec;
+  spec.segments = {straight(100.0)};
+  spec.table_step = 0.5;
+  rc::RailDefect joint;
+  joint.shape = rc::DefectShape::kDippedJoint;
+  joint.s_centre = 40.0;
+  joint.length = 2.0;
+  joint.dip_angle = 0.01;
+  joint.right = false;
+  rc::RailDefect weld;
+  weld.shape = rc::DefectShape::kWeld;
+  weld.s_centre = 60.0;
+  weld.length = 0.2;
+  weld.height = -3e-4;
+  const rc::TrackGeometry plain(spec);
+  const rc::TrackGeometry with(spec, rc::Irregularities(), rc::TrackDefects({weld, joint}));
+  auto height = [&](rc::RailSide side, double s, double& z, double& slope) {
+    rc::RailPoint a, b;
+    plain.rail(side, s, a);
+    with.rail(side, s, b);
+    z = (b.p_origin_in_world - a.p_origin_in_world).dot(a.R_rail_to_world.col(2));
+    slope = (b.dp_origin_ds - a.dp_origin_ds).dot(a.R_rail_to_world.col(2));
+    EXPECT_LT((b.p_origin_in_world - a.p_origin_in_world - z * a.R_rail_to_world.col(2)).norm(), 1e-13);
+  };
+  const double alpha = 0.005, k = 2.0 * M_PI / 0.2;
+  const struct {
+    rc::RailSide side;
+    double s, z, slope;
+  } expected[] = {
+      {rc::RailSide::kLeft, 40.0 - 1e-6, -alpha * (1.0 - 1e-6), -alpha},  // either side of the joint
+      {rc::RailSide::kLeft, 40.0 + 1e-6, -alpha * (1.0 - 1e-6), alpha},
+      {rc::RailSide::kLeft, 39.5, -alpha * 0.5, -alpha},
+      {rc::RailSide::kLeft, 40.75, -alpha * 0.25, alpha},
+      {rc::RailSide::kRight, 60.0, -3e-4, 0.0},
+      {rc::RailSide::kLeft, 60.05, -1.5e-4, 1.5e-4 * k},
+      {rc::RailSide::kRight, 59.97, -1.5e-4 * (1.0 + std::cos(k * 0.03)), -1.5e-4 * k * std::sin(k * 0.03)},
+  };
+  for (const auto& e : expected) {
+    SCOPED_TRACE(e.s);
+    double z = 0.0, slope = 0.0;
+    height(e.side, e.s, z, slope);
+    EXPECT_NEAR(z, e.z, 1e-13);  // the plain geometry's round-off at s ~ 50 m
+    EXPECT_NEAR(slope, e.slope, 1e-12);
+    if (std::abs(e.s - 40.0) > 1e-3) {  // away from the kink: the slope is the position's derivative
+      double zp = 0.0, zm = 0.0, unused = 0.0;
+      const double ds = 1e-5;
+      height(e.side, e.s + ds, zp, unused);
+      height(e.side, e.s - ds, zm, unused);
+      EXPECT_NEAR((zp - zm) / (2.0 * ds), slope, 1e-7 * (1.0 + std::abs(slope)));
+    }
+  }
+  for (const auto& [side, s] : {std::pair{rc::RailSide::kRight, 40.0}, std::pair{rc::RailSide::kLeft, 41.01},
+                                std::pair{rc::RailSide::kLeft, 59.89}, std::pair{rc::RailSide::kRight, 70.0}}) {
+    rc::RailPoint a, b;
+    plain.rail(side, s, a);
+    with.rail(side, s, b);
+    EXPECT_EQ(a.p_origin_in_world, b.p_origin_in_world) << s;
+    EXPECT_EQ(a.dp_origin_ds, b.dp_origin_ds) << s;
+  }
+}
+
 TEST(TrackGeometry, OutOfRangeThrowsWithValue) {
   rc::GeometrySpec spec;
   spec.s_start = 10.0;

@@ -130,6 +130,7 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
   o << "effects:\n"
     << "  track_model: " << toString(e.track_model) << "\n"
     << "  irregularities: " << onOff(e.irregularities) << "\n"
+    << "  track_defects: " << onOff(e.track_defects) << "\n"
     << "  flange_contact: " << onOff(e.flange_contact) << "\n"
     << "  spin_creepage: " << onOff(e.spin_creepage) << "\n"
     << "  creep_law: " << toString(e.creep_law) << "\n"

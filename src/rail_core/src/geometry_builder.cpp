@@ -164,8 +164,10 @@ rc::TrackGeometry buildTrackGeometry(const Scene& scene) {
   rc::GeometrySpec spec = geometrySpec(scene);
   const rc::Irregularities irr = buildIrregularities(scene);
   if (!irr.empty()) spec.table_step = std::min(spec.table_step, irr.shortestWavelength() / 8.0);
+  rc::TrackDefects defects;
+  if (scene.effects.track_defects) defects = rc::TrackDefects(scene.track.defects);
   try {
-    return rc::TrackGeometry(spec, irr);
+    return rc::TrackGeometry(spec, irr, std::move(defects));
   } catch (const std::exception& e) {
     fail(scene, geometryField(e.what()), e.what());
   }

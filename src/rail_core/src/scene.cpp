@@ -127,7 +127,22 @@ std::string toYaml(const Scene& s) {
     num(e, "wavelength_min", irr.wavelength_min);
     num(e, "wavelength_max", irr.wavelength_max);
   }
-  e << YAML::EndMap << YAML::EndMap;
+  e << YAML::EndMap;
+  if (!t.defects.empty()) {
+    e << YAML::Key << "defects" << YAML::Value << YAML::BeginSeq;
+    for (const contact::RailDefect& d : t.defects) {
+      e << YAML::BeginMap;
+      kv(e, "type", wordOf(kDefectShapeWords, d.shape));
+      num(e, "s", d.s_centre);
+      num(e, "length", d.length);
+      kv(e, "rail", toString(d.left && d.right ? LoadRail::kBoth : d.left ? LoadRail::kLeft : LoadRail::kRight));
+      if (d.shape == contact::DefectShape::kDippedJoint) num(e, "dip_angle", d.dip_angle);
+      if (d.shape == contact::DefectShape::kWeld) num(e, "height", d.height);
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq;
+  }
+  e << YAML::EndMap;
 
   if (s.has_vehicle) {
     const Vehicle& v = s.vehicle;
@@ -170,6 +185,7 @@ std::string toYaml(const Scene& s) {
   e << YAML::Key << "effects" << YAML::Value << YAML::BeginMap;
   kv(e, "track_model", toString(f.track_model));
   kv(e, "irregularities", f.irregularities);
+  kv(e, "track_defects", f.track_defects);
   kv(e, "flange_contact", f.flange_contact);
   kv(e, "spin_creepage", f.spin_creepage);
   kv(e, "creep_law", toString(f.creep_law));
@@ -266,6 +282,20 @@ std::string describe(const Scene& s, Role role) {
   for (std::size_t i = 0; i < t.segments.size(); ++i) {
     o << "  segment " << i << ": " << segmentLine(t.segments[i]) << "\n";
   }
+  if (f.track_defects) {
+    for (std::size_t i = 0; i < t.defects.size(); ++i) {
+      const contact::RailDefect& d = t.defects[i];
+      o << "  defect " << i << ": " << wordOf(kDefectShapeWords, d.shape) << " at s = " << fixed(d.s_centre, 2)
+        << " m, "
+        << (d.left && d.right ? "both rails"
+            : d.left          ? "left rail"
+                              : "right rail")
+        << ", " << fixed(d.length, 3) << " m long, "
+        << (d.shape == contact::DefectShape::kDippedJoint ? "total angle " + fixed(d.dip_angle * 1e3, 1) + " mrad"
+                                                          : "height " + fixed(d.height * 1e3, 2) + " mm")
+        << "\n";
+    }
+  }
   if (s.has_vehicle) {
     const Vehicle& v = s.vehicle;
     o << "vehicle: " << v.data.as_written << ", " << v.wheelsets << " wheelsets, " << fixed(v.speed * 3.6, 1)
@@ -278,6 +308,7 @@ std::string describe(const Scene& s, Role role) {
   std::vector<std::string> on{std::string("track_model=") + toString(f.track_model)}, off;
   auto flag = [&](const char* name, bool v) { (v ? on : off).push_back(name); };
   flag("irregularities", f.irregularities);
+  flag("track_defects", f.track_defects);
   // Contact exists only with a vehicle (moving loads are prescribed forces).
   flag("flange_contact", f.flange_contact && s.has_vehicle);
   flag("spin_creepage", f.spin_creepage && s.has_vehicle);

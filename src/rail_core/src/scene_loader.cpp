@@ -146,6 +146,45 @@ DataFile readFileKey(MapReader& r, const char* key, bool required, const Context
   return resolveFile(r, key, s, ctx);
 }
 
+// track.defects: each defect lies wholly on the track; its shape's own figure is in range.
+void readDefects(MapReader& r, Track& t, const Context& ctx) {
+  const YAML::Node seq = r.child("defects");
+  if (!seq) return;
+  if (!seq.IsSequence()) r.fail("defects", "must be a list of defects");
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    MapReader dr(seq[i], "track.defects[" + std::to_string(i) + "]", ctx.file, raiseSceneError);
+    contact::RailDefect d;
+    dr.require("type");
+    dr.choice("type", d.shape, kDefectShapeWords);
+    dr.require("s");
+    dr.number("s", d.s_centre);
+    dr.require("length");
+    dr.number("length", d.length);
+    inRange(dr, "length", d.length, 1e-3, 20.0, "m");
+    if (!(d.s_centre - 0.5 * d.length >= t.start_arc_length && d.s_centre + 0.5 * d.length <= t.endArcLength())) {
+      dr.fail("s", "the defect (" + formatNumber(d.length) + " m long) must lie on the track (" +
+                       formatNumber(t.start_arc_length) + " .. " + formatNumber(t.endArcLength()) + " m)" +
+                       got(d.s_centre));
+    }
+    LoadRail rails = LoadRail::kBoth;
+    dr.choice("rail", rails, kLoadRailWords);
+    d.left = rails != LoadRail::kRight;
+    d.right = rails != LoadRail::kLeft;
+    if (d.shape == contact::DefectShape::kDippedJoint) {
+      dr.require("dip_angle");
+      dr.number("dip_angle", d.dip_angle);
+      inRange(dr, "dip_angle", d.dip_angle, 1e-4, 0.1, "rad (the total angle between the two ramps)");
+    } else {
+      dr.require("height");
+      dr.number("height", d.height);
+      if (!(d.height != 0.0 && std::abs(d.height) <= 0.005))
+        dr.fail("height", "must be non-zero and at most 0.005 m in size (> 0 a bump, < 0 a dip)" + got(d.height));
+    }
+    dr.finish();
+    t.defects.push_back(d);
+  }
+}
+
 void readDirection(MapReader& r, Segment& seg, bool required) {
   if (required) r.require("direction");
   r.choice("direction", seg.direction, kDirectionWords, 1);
@@ -321,6 +360,7 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
     }
     ir.finish();
   }
+  readDefects(r, t, ctx);
   r.finish();
 }
 
@@ -405,6 +445,7 @@ void readEffects(MapReader& root, Scene& s) {
   Effects& e = s.effects;
   r.choice("track_model", e.track_model, kTrackModelWords);
   r.boolean("irregularities", e.irregularities);
+  r.boolean("track_defects", e.track_defects);
   r.boolean("flange_contact", e.flange_contact);
   r.boolean("spin_creepage", e.spin_creepage);
   r.choice("creep_law", e.creep_law, kCreepLawWords);
@@ -520,6 +561,9 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   if (s.effects.irregularities && s.track.irregularities.source == IrregularitySource::kNone) {
     failScene(file, "effects.irregularities", "is on but track.irregularities gives no source (file or psd)",
               line_of("effects", "irregularities"));
+  }
+  if (s.effects.track_defects && s.track.defects.empty()) {
+    failScene(file, "effects.track_defects", "is on but track.defects lists none", line_of("effects", "track_defects"));
   }
   if (s.cosimulation() && s.solver.vehicle_max_step > s.solver.track_step) {
     failScene(file, "solver.vehicle_max_step",

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "rail_core/geometry_builder.hpp"
 #include "rail_core/scene_loader.hpp"
 #include "rail_core/testing/fixtures.hpp"
 
@@ -155,7 +156,7 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
       {"misspelt effect", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  flange_contat: true"),
        "scene.yaml: effects.flange_contat: unknown key (known here: absorbing_ends, contact_point_output, "
        "creep_law, energy_output, flange_contact, floor_acceleration_output, irregularities, pad_force_output, "
-       "rail_deflection_output, rviz_markers, spin_creepage, track_damping, track_model) (line 16)"},
+       "rail_deflection_output, rviz_markers, spin_creepage, track_damping, track_defects, track_model) (line 16)"},
       {"missing field", replaced(kBase, "  speed: 30.0\n", ""),
        "scene.yaml: vehicle.speed: required key missing (line 10)"},
       {"wrong type", replaced(kBase, "speed: 30.0", "speed: fast"),
@@ -249,6 +250,27 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
                 "  data: track_data.yaml\n  irregularities: {source: psd, psd: fra_class_9}\n"),
        "scene.yaml: track.irregularities.psd: must be one of fra_class_1, fra_class_2, fra_class_3, fra_class_4, "
        "fra_class_5, fra_class_6, german_low, german_high, got 'fra_class_9' (line 5)"},
+      {"track defects on without defects",
+       replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  track_defects: true"),
+       "scene.yaml: effects.track_defects: is on but track.defects lists none (line 16)"},
+      {"defect off the track",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  defects: [{type: dipped_joint, s: 149.5, length: 2.0, dip_angle: 0.01}]\n"),
+       "scene.yaml: track.defects[0].s: the defect (2 m long) must lie on the track (0 .. 150 m), got 149.5 (line 5)"},
+      {"joint angle out of range",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  defects: [{type: dipped_joint, s: 40, length: 2.0, dip_angle: 0.5}]\n"),
+       "scene.yaml: track.defects[0].dip_angle: must be between 0.0001 and 0.1 rad (the total angle between the two "
+       "ramps), got 0.5 (line 5)"},
+      {"weld of no height",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  defects: [{type: weld, s: 40, length: 0.2, height: 0}]\n"),
+       "scene.yaml: track.defects[0].height: must be non-zero and at most 0.005 m in size (> 0 a bump, < 0 a dip), "
+       "got 0 (line 5)"},
+      {"unknown defect",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  defects: [{type: squat, s: 40, length: 0.2}]\n"),
+       "scene.yaml: track.defects[0].type: must be one of dipped_joint, weld, got 'squat' (line 5)"},
       {"not YAML", "track: [unclosed\n", "scene.yaml: not valid YAML: end of sequence flow not found (line 2)"},
       {"vehicle and moving loads", kBase + "moving_loads: {speed: 1.0}\n",
        "scene.yaml: a scene has exactly one of vehicle (a run with a train) or moving_loads (the track alone)"},
@@ -257,6 +279,39 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
     SCOPED_TRACE(c.what);
     EXPECT_EQ(errorOf(c.text), c.message);
   }
+}
+
+// Local defects reach the scene, its resolved print-out (which loads back to the same hash) and its summary;
+// listed with the effect off they are kept in the scene but not applied.
+TEST(Scene, TrackDefectsRoundTripAndAreSummarised) {
+  const std::string text =
+      replaced(replaced(kBase, "  data: track_data.yaml\n",
+                        "  data: track_data.yaml\n  defects:\n"
+                        "    - {type: dipped_joint, s: 30.0, length: 1.0, dip_angle: 0.01, rail: left}\n"
+                        "    - {type: weld, s: 45.0, length: 0.2, height: -0.0003}\n"),
+               "track_model: rigid_fe", "track_model: rigid_fe\n  track_defects: true");
+  const Scene s = load(text);
+  ASSERT_EQ(s.track.defects.size(), 2u);
+  EXPECT_TRUE(s.track.defects[0].left);
+  EXPECT_FALSE(s.track.defects[0].right);
+  EXPECT_DOUBLE_EQ(s.track.defects[1].height, -0.0003);
+  const Scene again = loadSceneText(toYaml(s), "scene.yaml", kData);
+  EXPECT_EQ(again.hash, s.hash);
+  const std::string summary = describe(s, Role::kValidator);
+  EXPECT_NE(summary.find("  defect 0: dipped_joint at s = 30.00 m, left rail, 1.000 m long, total angle 10.0 mrad\n"),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("  defect 1: weld at s = 45.00 m, both rails, 0.200 m long, height -0.30 mm\n"),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("effects on: track_model=rigid_fe, track_defects"), std::string::npos) << summary;
+  const Scene off = load(replaced(text, "  track_defects: true", "  track_defects: false"));
+  EXPECT_EQ(off.track.defects.size(), 2u);
+  EXPECT_NE(off.hash, s.hash);
+  EXPECT_EQ(describe(off, Role::kValidator).find("defect 0"), std::string::npos);
+  // The geometry the contact sees carries them only with the effect on (off: nothing to evaluate).
+  EXPECT_EQ(buildTrackGeometry(s).defects().defects().size(), 2u);
+  EXPECT_TRUE(buildTrackGeometry(off).defects().empty());
 }
 
 TEST(Scene, ContactSectionReachesTheSceneAndItsHash) {
@@ -291,7 +346,7 @@ TEST(Scene, DescribeListsEffectsAndComponents) {
   EXPECT_NE(v.find("effects on: track_model=rigid_fe, flange_contact, spin_creepage, creep_law=polach"),
             std::string::npos)
       << v;
-  EXPECT_NE(v.find("effects off: irregularities, track_damping, absorbing_ends, rail_deflection_output"),
+  EXPECT_NE(v.find("effects off: irregularities, track_defects, track_damping, absorbing_ends, rail_deflection_output"),
             std::string::npos)
       << v;
   EXPECT_NE(v.find("wheel-centre wrenches from the track node over shm"), std::string::npos) << v;

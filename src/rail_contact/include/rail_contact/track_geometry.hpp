@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "rail_contact/irregularities.hpp"
+#include "rail_contact/track_defects.hpp"
 
 namespace rail {
 namespace contact {
@@ -85,7 +86,8 @@ class TrackGeometry {
  public:
   /// Builds the tables; throws std::runtime_error naming the segment/field and value on bad input, and
   /// when table_step is too coarse for the irregularities (> shortest wavelength / 8).
-  explicit TrackGeometry(const GeometrySpec& spec, const Irregularities& irregularities = Irregularities());
+  explicit TrackGeometry(const GeometrySpec& spec, const Irregularities& irregularities = Irregularities(),
+                         TrackDefects defects = TrackDefects());
 
   double sStart() const { return s_start_; }
   double sEnd() const { return s_end_; }
@@ -93,6 +95,7 @@ class TrackGeometry {
   double tableStep() const { return h_; }
   int numIntervals() const { return n_intervals_; }
   bool hasIrregularities() const { return has_irregularities_; }
+  const TrackDefects& defects() const { return defects_; }
   const GeometrySpec& spec() const { return spec_; }
 
   /// Centre line at s.
@@ -124,6 +127,7 @@ class TrackGeometry {
   double s_start_ = 0.0, s_end_ = 0.0, h_ = 0.0;
   int n_intervals_ = 0;
   bool has_irregularities_ = false;
+  TrackDefects defects_;            // added to the rails by rail() (not tabulated: a joint's kink needs no table step)
   std::vector<double> segment_s0_;  // arc length at each segment start
   std::vector<Node> centre_nodes_, rail_nodes_[2];
   std::vector<double> curvature_nodes_, cant_angle_nodes_;

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <rail_contact/track_defects.hpp>
+
 #include "rail_core/enum_words.hpp"
 
 namespace rail::core {
@@ -46,6 +48,8 @@ inline constexpr Word<IrregularitySource> kIrregularitySourceWords[] = {
 inline constexpr Word<VehicleMethod> kVehicleMethodWords[] = {
     {"auto", VehicleMethod::kAuto}, {"bdf", VehicleMethod::kBdf}, {"adams", VehicleMethod::kAdams}};
 inline constexpr Word<EndKind> kEndKindWords[] = {{"time", EndKind::kTime}, {"arc_length", EndKind::kArcLength}};
+inline constexpr Word<contact::DefectShape> kDefectShapeWords[] = {{"dipped_joint", contact::DefectShape::kDippedJoint},
+                                                                   {"weld", contact::DefectShape::kWeld}};
 inline constexpr Word<LoadRail> kLoadRailWords[] = {
     {"both", LoadRail::kBoth}, {"left", LoadRail::kLeft}, {"right", LoadRail::kRight}};
 
@@ -100,6 +104,8 @@ struct Track {
   DataFile data;                  // track materials (Tables 1 and 2 of the paper)
   std::vector<Segment> segments;
   Irregularities irregularities;
+  // Local defects of the rails (dipped joints, welds), applied with effects.track_defects.
+  std::vector<contact::RailDefect> defects;
 
   double length() const;  // sum of the segment lengths [m]
   double endArcLength() const { return start_arc_length + length(); }
@@ -142,6 +148,7 @@ struct Contact {
 struct Effects {
   TrackModel track_model = TrackModel::kFlexible;
   bool irregularities = false;  // apply track.irregularities to the rails
+  bool track_defects = false;   // apply track.defects (dipped joints, welds) to the rails
   bool flange_contact = true;   // flange-rail contact searched besides tread-rail
   bool spin_creepage = true;    // spin in the creep forces
   CreepLaw creep_law = CreepLaw::kPolach;
