@@ -47,9 +47,10 @@ ContactGeometryTable::ContactGeometryTable(const WheelProfile& wheel, const Prof
   x0_ = 10.0;
   const Eigen::Vector2d centre =
       spec.rail_section_centre_yz.allFinite() ? spec.rail_section_centre_yz : railSectionCentre(rail);
-  // A table row is one contact point per surface (the benchmark's convention): no second contacts.
+  // A table row is one contact point per surface (the benchmark's convention) of round wheels.
   WheelContactOptions table_options = options;
   table_options.second_contacts = false;
+  table_options.wheel_defects = WheelDefects();
   model_ = std::make_unique<WheelContactModel>(wheel, spec.nominal_radius, rail, centre, table_options);
   rail_top_yz_ = railTopPoint(rail);
   z_guess_ = spec.nominal_radius + rail_top_yz_.y();

@@ -312,8 +312,22 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
     const Eigen::Vector3d v_wheel_shape =
         ws.v_wheel_in_world + omega_without_spin.cross(g.p_wheel_in_world - ws.p_wheel_in_world);
     c.penetration_rate = -(v_wheel_shape - v_rail).dot(n);
+    bool in_contact = g.in_contact;
+    if (!options_.wheel_defects.empty()) {
+      // The defect lowers the surface along the wheel radius where the contact is; its angle in the
+      // wheelset frame advances with the spin about the axle.
+      const Eigen::Vector3d r_in_wheelset =
+          ws.R_wheelset_to_world.transpose() * (g.p_wheel_in_world - ws.p_wheel_in_world);
+      const double beta = std::atan2(r_in_wheelset.x(), -r_in_wheelset.z());
+      double depth = 0.0, d_depth_d_beta = 0.0;
+      options_.wheel_defects.evaluate(ws.id, beta, depth, d_depth_d_beta);
+      const double spin = ws.omega_wheelset_in_world.dot(axle);
+      c.penetration -= depth * g.cos_normal_radial;
+      c.penetration_rate -= d_depth_d_beta * spin * g.cos_normal_radial;
+      in_contact = c.penetration > 0.0;
+    }
     updateImpactMemory(memory, c.penetration, c.penetration_rate);
-    if (!g.in_contact) continue;
+    if (!in_contact) continue;
 
     // Hertz (eq. 9): principal curvatures, rail longitudinal curvature ~ 0.
     PrincipalCurvatures kc;

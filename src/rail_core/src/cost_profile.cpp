@@ -131,6 +131,7 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
     << "  track_model: " << toString(e.track_model) << "\n"
     << "  irregularities: " << onOff(e.irregularities) << "\n"
     << "  track_defects: " << onOff(e.track_defects) << "\n"
+    << "  wheel_defects: " << onOff(e.wheel_defects) << "\n"
     << "  flange_contact: " << onOff(e.flange_contact) << "\n"
     << "  spin_creepage: " << onOff(e.spin_creepage) << "\n"
     << "  creep_law: " << toString(e.creep_law) << "\n"

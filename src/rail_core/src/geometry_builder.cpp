@@ -78,6 +78,9 @@ rc::WheelContactOptions contactOptions(const Scene& scene, rc::WheelContactOptio
   base.friction = scene.contact.friction;
   base.damping.restitution = scene.contact.restitution;
   base.damping.impact_velocity_floor = scene.contact.impact_velocity_floor;
+  base.wheel_defects = scene.effects.wheel_defects
+                           ? rc::WheelDefects(scene.vehicle.wheel_defects, scene.vehicle.nominal_radius)
+                           : rc::WheelDefects();
   return base;
 }
 

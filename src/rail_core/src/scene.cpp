@@ -154,6 +154,26 @@ std::string toYaml(const Scene& s) {
     num(e, "nominal_radius", v.nominal_radius);
     num(e, "back_to_back", v.back_to_back);
     kv(e, "wheelsets", v.wheelsets);
+    if (!v.wheel_defects.empty()) {
+      e << YAML::Key << "wheel_defects" << YAML::Value << YAML::BeginSeq;
+      for (const contact::WheelDefect& d : v.wheel_defects) {
+        e << YAML::BeginMap;
+        kv(e, "type", wordOf(kWheelDefectShapeWords, d.shape));
+        kv(e, "wheelset", static_cast<int>(d.wheel / 2));
+        kv(e, "side", toString(d.wheel % 2 == 0 ? LoadRail::kLeft : LoadRail::kRight));
+        num(e, "angle", d.angle);
+        if (d.shape == contact::WheelDefectShape::kFlat) {
+          num(e, "length", d.length);
+          kv(e, "shape", wordOf(kFlatShapeWords, d.rounded));
+          if (d.rounded) num(e, "depth", d.depth);
+        } else {
+          kv(e, "order", d.order);
+          num(e, "amplitude", d.amplitude);
+        }
+        e << YAML::EndMap;
+      }
+      e << YAML::EndSeq;
+    }
     e << YAML::EndMap;
   } else {
     const MovingLoads& m = s.moving_loads;
@@ -186,6 +206,7 @@ std::string toYaml(const Scene& s) {
   kv(e, "track_model", toString(f.track_model));
   kv(e, "irregularities", f.irregularities);
   kv(e, "track_defects", f.track_defects);
+  kv(e, "wheel_defects", f.wheel_defects);
   kv(e, "flange_contact", f.flange_contact);
   kv(e, "spin_creepage", f.spin_creepage);
   kv(e, "creep_law", toString(f.creep_law));
@@ -301,6 +322,21 @@ std::string describe(const Scene& s, Role role) {
     o << "vehicle: " << v.data.as_written << ", " << v.wheelsets << " wheelsets, " << fixed(v.speed * 3.6, 1)
       << " km/h from s = " << fixed(v.start_arc_length, 1) << " m, wheel " << v.wheel_profile
       << " r0 = " << fixed(v.nominal_radius, 3) << " m\n";
+    if (f.wheel_defects) {
+      for (std::size_t i = 0; i < v.wheel_defects.size(); ++i) {
+        const contact::WheelDefect& d = v.wheel_defects[i];
+        o << "  wheel defect " << i << ": " << wordOf(kWheelDefectShapeWords, d.shape) << " on wheelset " << d.wheel / 2
+          << " " << (d.wheel % 2 == 0 ? "left" : "right") << " at " << fixed(d.angle, 2) << " rad, ";
+        if (d.shape == contact::WheelDefectShape::kOutOfRound) {
+          o << "order " << d.order << ", amplitude " << fixed(d.amplitude * 1e3, 3) << " mm";
+        } else {
+          const double depth = d.rounded ? d.depth : contact::WheelDefects::newFlatDepth(d.length, v.nominal_radius);
+          o << wordOf(kFlatShapeWords, d.rounded) << ", " << fixed(d.length * 1e3, 1) << " mm long, "
+            << fixed(depth * 1e3, 3) << " mm deep";
+        }
+        o << "\n";
+      }
+    }
   } else {
     o << "moving loads: " << s.moving_loads.loads.size() << " load(s) at " << fixed(s.moving_loads.speed, 2)
       << " m/s from s = " << fixed(s.moving_loads.start_arc_length, 1) << " m\n";
@@ -309,6 +345,7 @@ std::string describe(const Scene& s, Role role) {
   auto flag = [&](const char* name, bool v) { (v ? on : off).push_back(name); };
   flag("irregularities", f.irregularities);
   flag("track_defects", f.track_defects);
+  flag("wheel_defects", f.wheel_defects && s.has_vehicle);
   // Contact exists only with a vehicle (moving loads are prescribed forces).
   flag("flange_contact", f.flange_contact && s.has_vehicle);
   flag("spin_creepage", f.spin_creepage && s.has_vehicle);

@@ -7,6 +7,8 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -82,6 +84,13 @@ bool contains(const std::vector<std::string>& v, const std::string& s) {
 }
 
 std::string got(double v) { return ", got " + formatNumber(v); }
+
+// A limit derived from other values, to 4 significant digits (a message's figure, not the rule's).
+std::string derived(double v) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.4g", v);
+  return formatNumber(std::strtod(text, nullptr));
+}
 
 // Value checks: each names the rule and the offending value.
 void positive(MapReader& r, const char* key, double v) {
@@ -364,6 +373,71 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
   r.finish();
 }
 
+// vehicle.wheel_defects: on an existing wheelset; a flat no longer than a quarter of the circumference and,
+// rounded, no deeper than the wheel can follow; an out-of-roundness of a sensible order and amplitude.
+void readWheelDefects(MapReader& r, Vehicle& v, const Context& ctx) {
+  const YAML::Node seq = r.child("wheel_defects");
+  if (!seq) return;
+  if (!seq.IsSequence()) r.fail("wheel_defects", "must be a list of wheel defects");
+  constexpr double kPi = 3.14159265358979323846;
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    MapReader dr(seq[i], "vehicle.wheel_defects[" + std::to_string(i) + "]", ctx.file, raiseSceneError);
+    contact::WheelDefect d;
+    dr.require("type");
+    dr.choice("type", d.shape, kWheelDefectShapeWords);
+    dr.require("wheelset");
+    int wheelset = 0;
+    dr.integer("wheelset", wheelset);
+    if (wheelset < 0 || wheelset >= v.wheelsets) {
+      dr.fail("wheelset", "must be a wheelset of the vehicle, 0 .. " + std::to_string(v.wheelsets - 1) + ", got " +
+                              std::to_string(wheelset));
+    }
+    LoadRail sides = LoadRail::kBoth;
+    dr.choice("side", sides, kLoadRailWords);
+    dr.number("angle", d.angle);
+    inRange(dr, "angle", d.angle, -kPi, kPi, "rad (from straight down toward forward at the start)");
+    if (d.shape == contact::WheelDefectShape::kFlat) {
+      dr.require("length");
+      dr.number("length", d.length);
+      const double quarter = 0.5 * kPi * v.nominal_radius;
+      if (!(d.length >= 1e-3 && d.length <= quarter)) {
+        dr.fail("length", "must be between 0.001 m and a quarter of the wheel's circumference (" + derived(quarter) +
+                              " m)" + got(d.length));
+      }
+      dr.choice("shape", d.rounded, kFlatShapeWords);
+      if (d.rounded) {
+        dr.require("depth");
+        dr.number("depth", d.depth);
+        const double deepest = contact::WheelDefects::roundedFlatMaxDepth(d.length, v.nominal_radius);
+        if (!(d.depth > 0.0 && d.depth <= deepest)) {
+          dr.fail("depth", "must be positive and at most length^2 / (2 pi^2 r0) = " + derived(deepest) +
+                               " m (deeper, the wheel could not follow the dip's curvature)" + got(d.depth));
+        }
+      } else if (dr.has("depth")) {
+        dr.fail("depth", "applies to a rounded flat only (a new flat " + formatNumber(d.length) + " m long is " +
+                             derived(contact::WheelDefects::newFlatDepth(d.length, v.nominal_radius)) + " m deep)");
+      }
+    } else {
+      dr.require("order");
+      dr.integer("order", d.order);
+      if (d.order < 1 || d.order > 40) {
+        dr.fail("order", "must be between 1 and 40 (harmonics round the wheel), got " + std::to_string(d.order));
+      }
+      dr.require("amplitude");
+      dr.number("amplitude", d.amplitude);
+      if (!(d.amplitude > 0.0 && d.amplitude <= 1e-3)) {
+        dr.fail("amplitude", "must be positive and at most 0.001 m" + got(d.amplitude));
+      }
+    }
+    dr.finish();
+    for (int side = 0; side < 2; ++side) {
+      if ((side == 0 && sides == LoadRail::kRight) || (side == 1 && sides == LoadRail::kLeft)) continue;
+      d.wheel = static_cast<std::uint32_t>(2 * wheelset + side);
+      v.wheel_defects.push_back(d);
+    }
+  }
+}
+
 void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
   MapReader r(root.child("vehicle"), "vehicle", ctx.file, raiseSceneError);
   Vehicle& v = s.vehicle;
@@ -392,6 +466,7 @@ void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
   if (v.wheelsets < 1 || v.wheelsets > 16) {
     r.fail("wheelsets", "must be between 1 and 16, got " + std::to_string(v.wheelsets));
   }
+  readWheelDefects(r, v, ctx);
   r.finish();
 }
 
@@ -446,6 +521,7 @@ void readEffects(MapReader& root, Scene& s) {
   r.choice("track_model", e.track_model, kTrackModelWords);
   r.boolean("irregularities", e.irregularities);
   r.boolean("track_defects", e.track_defects);
+  r.boolean("wheel_defects", e.wheel_defects);
   r.boolean("flange_contact", e.flange_contact);
   r.boolean("spin_creepage", e.spin_creepage);
   r.choice("creep_law", e.creep_law, kCreepLawWords);
@@ -564,6 +640,11 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   }
   if (s.effects.track_defects && s.track.defects.empty()) {
     failScene(file, "effects.track_defects", "is on but track.defects lists none", line_of("effects", "track_defects"));
+  }
+  if (s.effects.wheel_defects && s.vehicle.wheel_defects.empty()) {
+    failScene(file, "effects.wheel_defects",
+              s.has_vehicle ? "is on but vehicle.wheel_defects lists none" : "needs a vehicle in the scene",
+              line_of("effects", "wheel_defects"));
   }
   if (s.cosimulation() && s.solver.vehicle_max_step > s.solver.track_step) {
     failScene(file, "solver.vehicle_max_step",

@@ -156,7 +156,8 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
       {"misspelt effect", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  flange_contat: true"),
        "scene.yaml: effects.flange_contat: unknown key (known here: absorbing_ends, contact_point_output, "
        "creep_law, energy_output, flange_contact, floor_acceleration_output, irregularities, pad_force_output, "
-       "rail_deflection_output, rviz_markers, spin_creepage, track_damping, track_defects, track_model) (line 16)"},
+       "rail_deflection_output, rviz_markers, spin_creepage, track_damping, track_defects, track_model, wheel_defects) "
+       "(line 16)"},
       {"missing field", replaced(kBase, "  speed: 30.0\n", ""),
        "scene.yaml: vehicle.speed: required key missing (line 10)"},
       {"wrong type", replaced(kBase, "speed: 30.0", "speed: fast"),
@@ -267,6 +268,33 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
                 "  data: track_data.yaml\n  defects: [{type: weld, s: 40, length: 0.2, height: 0}]\n"),
        "scene.yaml: track.defects[0].height: must be non-zero and at most 0.005 m in size (> 0 a bump, < 0 a dip), "
        "got 0 (line 5)"},
+      {"wheel defects on without defects",
+       replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  wheel_defects: true"),
+       "scene.yaml: effects.wheel_defects: is on but vehicle.wheel_defects lists none (line 16)"},
+      {"flat on a wheelset the vehicle lacks",
+       replaced(kBase, "  speed: 30.0\n",
+                "  speed: 30.0\n  wheel_defects: [{type: flat, wheelset: 4, length: 0.05}]\n"),
+       "scene.yaml: vehicle.wheel_defects[0].wheelset: must be a wheelset of the vehicle, 0 .. 3, got 4 (line 13)"},
+      {"flat longer than a quarter of the wheel",
+       replaced(kBase, "  speed: 30.0\n", "  speed: 30.0\n  wheel_defects: [{type: flat, wheelset: 1, length: 0.8}]\n"),
+       "scene.yaml: vehicle.wheel_defects[0].length: must be between 0.001 m and a quarter of the wheel's "
+       "circumference (0.699 m), got 0.8 (line 13)"},
+      {"rounded flat deeper than the wheel can follow",
+       replaced(
+           kBase, "  speed: 30.0\n",
+           "  speed: 30.0\n  wheel_defects: [{type: flat, wheelset: 1, length: 0.1, shape: rounded, depth: 0.002}]\n"),
+       "scene.yaml: vehicle.wheel_defects[0].depth: must be positive and at most length^2 / (2 pi^2 r0) = "
+       "0.001138 m (deeper, the wheel could not follow the dip's curvature), got 0.002 (line 13)"},
+      {"new flat given a depth",
+       replaced(kBase, "  speed: 30.0\n",
+                "  speed: 30.0\n  wheel_defects: [{type: flat, wheelset: 1, length: 0.05, depth: 0.001}]\n"),
+       "scene.yaml: vehicle.wheel_defects[0].depth: applies to a rounded flat only (a new flat 0.05 m long is "
+       "0.0007028 m deep) (line 13)"},
+      {"out-of-roundness of order zero",
+       replaced(kBase, "  speed: 30.0\n",
+                "  speed: 30.0\n  wheel_defects: [{type: out_of_round, wheelset: 0, order: 0, amplitude: 1e-4}]\n"),
+       "scene.yaml: vehicle.wheel_defects[0].order: must be between 1 and 40 (harmonics round the wheel), got 0 "
+       "(line 13)"},
       {"unknown defect",
        replaced(kBase, "  data: track_data.yaml\n",
                 "  data: track_data.yaml\n  defects: [{type: squat, s: 40, length: 0.2}]\n"),
@@ -314,6 +342,47 @@ TEST(Scene, TrackDefectsRoundTripAndAreSummarised) {
   EXPECT_TRUE(buildTrackGeometry(off).defects().empty());
 }
 
+// Wheel defects: a defect on both wheels is one entry per wheel; the print-out loads back to the same hash,
+// the summary lists each with its depth, and the contact options carry them only with the effect on.
+TEST(Scene, WheelDefectsRoundTripAndAreSummarised) {
+  const std::string text =
+      replaced(replaced(kBase, "  speed: 30.0\n",
+                        "  speed: 30.0\n  wheel_defects:\n"
+                        "    - {type: flat, wheelset: 0, length: 0.05, angle: 0.5}\n"
+                        "    - {type: flat, wheelset: 2, side: right, length: 0.1, shape: rounded, depth: 0.0008}\n"
+                        "    - {type: out_of_round, wheelset: 3, side: left, order: 3, amplitude: 5.0e-5}\n"),
+               "track_model: rigid_fe", "track_model: rigid_fe\n  wheel_defects: true");
+  const Scene s = load(text);
+  ASSERT_EQ(s.vehicle.wheel_defects.size(), 4u);
+  EXPECT_EQ(s.vehicle.wheel_defects[0].wheel, 0u);
+  EXPECT_EQ(s.vehicle.wheel_defects[1].wheel, 1u);
+  EXPECT_EQ(s.vehicle.wheel_defects[2].wheel, 5u);
+  EXPECT_TRUE(s.vehicle.wheel_defects[2].rounded);
+  EXPECT_EQ(s.vehicle.wheel_defects[3].wheel, 6u);
+  EXPECT_EQ(s.vehicle.wheel_defects[3].order, 3);
+  const Scene again = loadSceneText(toYaml(s), "scene.yaml", kData);
+  EXPECT_EQ(again.hash, s.hash);
+  const std::string summary = describe(s, Role::kValidator);
+  // A new flat's depth r0 (1 - cos(asin(L / 2 r0))) = 0.7025 mm for L = 50 mm, r0 = 0.445 m.
+  EXPECT_NE(summary.find("  wheel defect 0: flat on wheelset 0 left at 0.50 rad, new, 50.0 mm long, 0.703 mm deep\n"),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find("  wheel defect 2: flat on wheelset 2 right at 0.00 rad, rounded, 100.0 mm long, 0.800 mm "
+                         "deep\n"),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(
+      summary.find("  wheel defect 3: out_of_round on wheelset 3 left at 0.00 rad, order 3, amplitude 0.050 mm\n"),
+      std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find(", wheel_defects"), std::string::npos) << summary;
+  const Scene off = load(replaced(text, "  wheel_defects: true", "  wheel_defects: false"));
+  EXPECT_NE(off.hash, s.hash);
+  EXPECT_EQ(describe(off, Role::kValidator).find("wheel defect 0"), std::string::npos);
+  EXPECT_EQ(contactOptions(s, rail::contact::WheelContactOptions()).wheel_defects.defects().size(), 4u);
+  EXPECT_TRUE(contactOptions(off, rail::contact::WheelContactOptions()).wheel_defects.empty());
+}
+
 TEST(Scene, ContactSectionReachesTheSceneAndItsHash) {
   const Scene base = load(kBase);
   EXPECT_DOUBLE_EQ(base.contact.friction, 0.3);  // the defaults are rail_contact's
@@ -346,7 +415,8 @@ TEST(Scene, DescribeListsEffectsAndComponents) {
   EXPECT_NE(v.find("effects on: track_model=rigid_fe, flange_contact, spin_creepage, creep_law=polach"),
             std::string::npos)
       << v;
-  EXPECT_NE(v.find("effects off: irregularities, track_defects, track_damping, absorbing_ends, rail_deflection_output"),
+  EXPECT_NE(v.find("effects off: irregularities, track_defects, wheel_defects, track_damping, absorbing_ends, "
+                   "rail_deflection_output"),
             std::string::npos)
       << v;
   EXPECT_NE(v.find("wheel-centre wrenches from the track node over shm"), std::string::npos) << v;

@@ -18,6 +18,7 @@
 #include "rail_contact/hertz.hpp"
 #include "rail_contact/kalker.hpp"
 #include "rail_contact/polach.hpp"
+#include "rail_contact/wheel_defects.hpp"
 #include "rail_contact/wheel_state.hpp"
 #include "rail_contact/wrench_transfer.hpp"
 
@@ -63,6 +64,9 @@ struct WheelContactOptions {
   bool second_contacts = true;
   double patch_dip = 0.1;       ///< [0, 1)
   double patch_min_dip = 5e-6;  ///< m, about the rail grid's bilinear error near the gauge corner (search_cell)
+  /// Flats and out-of-roundness per wheel (WheelState::id), applied to each contact's penetration and its
+  /// rate; empty: nothing is evaluated.
+  WheelDefects wheel_defects;
 };
 
 /// Throws std::runtime_error naming the field and value when an option is non-physical.

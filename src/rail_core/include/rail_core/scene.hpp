@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <rail_contact/track_defects.hpp>
+#include <rail_contact/wheel_defects.hpp>
 
 #include "rail_core/enum_words.hpp"
 
@@ -50,6 +51,10 @@ inline constexpr Word<VehicleMethod> kVehicleMethodWords[] = {
 inline constexpr Word<EndKind> kEndKindWords[] = {{"time", EndKind::kTime}, {"arc_length", EndKind::kArcLength}};
 inline constexpr Word<contact::DefectShape> kDefectShapeWords[] = {{"dipped_joint", contact::DefectShape::kDippedJoint},
                                                                    {"weld", contact::DefectShape::kWeld}};
+inline constexpr Word<contact::WheelDefectShape> kWheelDefectShapeWords[] = {
+    {"flat", contact::WheelDefectShape::kFlat}, {"out_of_round", contact::WheelDefectShape::kOutOfRound}};
+// A flat's edges: sharp (as cut by a sliding wheel) or rounded by wear.
+inline constexpr Word<bool> kFlatShapeWords[] = {{"new", false}, {"rounded", true}};
 inline constexpr Word<LoadRail> kLoadRailWords[] = {
     {"both", LoadRail::kBoth}, {"left", LoadRail::kLeft}, {"right", LoadRail::kRight}};
 
@@ -120,6 +125,9 @@ struct Vehicle {
   double nominal_radius = 0.445;        // nominal rolling radius r0 [m]
   double back_to_back = 1.360;          // distance between the wheels' inner (back) faces [m]
   int wheelsets = 4;                    // must match the vehicle data file
+  // Flats and out-of-roundness, one entry per wheel (WheelDefect::wheel = 2 * wheelset + side), applied
+  // with effects.wheel_defects.
+  std::vector<contact::WheelDefect> wheel_defects;
 };
 
 // Standalone track scenario: prescribed loads travelling along the track (no vehicle).
@@ -149,6 +157,7 @@ struct Effects {
   TrackModel track_model = TrackModel::kFlexible;
   bool irregularities = false;  // apply track.irregularities to the rails
   bool track_defects = false;   // apply track.defects (dipped joints, welds) to the rails
+  bool wheel_defects = false;   // apply vehicle.wheel_defects (flats, out-of-roundness) to the wheels
   bool flange_contact = true;   // flange-rail contact searched besides tread-rail
   bool spin_creepage = true;    // spin in the creep forces
   CreepLaw creep_law = CreepLaw::kPolach;
