@@ -761,6 +761,51 @@ TEST(VehicleSimulator, AWheelFlatStrikesOnceARevolutionWhereTheWheelAngleSays) {
   EXPECT_EQ((a.state() - b.state()).cwiseAbs().maxCoeff(), 0.0);
 }
 
+// The speed at which a new flat throws its wheel off the rail. Rolling onto a new flat the wheel pivots
+// about the flat's first edge, so its centre follows a circle of radius r0 about that edge and needs a
+// downward acceleration V^2 / r0; the rail can push only the wheel load Q0 onto the unsprung mass m per
+// wheel, so the wheel stays on while V^2 / r0 < Q0 / m, V_c = sqrt(r0 Q0 / m) (rigid rails). Paper coach:
+// m = (1800 + 2 x 10) / 2 = 910 kg (wheelset and axleboxes, Table 3), Q0 = 72.94 kN: V_c = 5.97 m/s. With
+// flats on both wheels the wheelset drops without rolling about the other wheel.
+// Below V_c the wheel unloads by m V^2 / r0, a step in the acceleration it must follow, which the Hertz
+// spring can overshoot up to twice (undamped): at V = V_c / 2 the least force lies between
+// Q0 (1 - 2 (1/2)^2) and Q0 (1 - (1/2)^2). At 1.5 V_c the wheel leaves the rail (no force).
+TEST(VehicleSimulator, ANewFlatThrowsTheWheelOffTheRailAboveItsCriticalSpeed) {
+  const double r0 = 0.445, L = 0.05, m = 910.0, share = kCoachMass * kG / 8.0;
+  const double v_critical = std::sqrt(r0 * share / m);
+  for (const double ratio : {0.5, 1.5}) {
+    const double V = ratio * v_critical, t_hit = 0.05;
+    core::Scene scene = straightScene(V, t_hit + 0.02);
+    rc::WheelDefect flat;
+    flat.length = L;
+    flat.angle = t_hit * V / r0;  // the flat's centre reaches the contact at t_hit
+    for (std::uint32_t w : {0u, 1u}) {
+      flat.wheel = w;
+      scene.vehicle.wheel_defects.push_back(flat);
+    }
+    scene.effects.wheel_defects = true;
+    VehicleSimulator sim(scene);
+    const double t_pivot = t_hit - std::asin(0.5 * L / r0) * r0 / V;  // the first edge reaches the rail
+    double least = 1e9;
+    RunStatus status = RunStatus::kRunning;
+    for (int i = 1; status == RunStatus::kRunning; ++i) {
+      status = sim.advanceTo(std::min(t_hit + 0.02, 2e-5 * i));
+      if (sim.time() > t_pivot - 1e-3 && sim.time() < t_hit)
+        least = std::min(least, sim.wheels()[0].force_in_world.z());
+    }
+    ASSERT_EQ(status, RunStatus::kFinished) << sim.message();
+    std::printf("V = %.2f V_c (%.2f m/s): least wheel force before the strike %.1f kN (Q0 %.1f kN)\n", ratio, V,
+                least * 1e-3, share * 1e-3);
+    if (ratio < 1.0) {
+      const double drop = ratio * ratio;
+      EXPECT_GT(least, share * (1.0 - 2.0 * drop));
+      EXPECT_LT(least, share * (1.0 - drop) + 0.01 * share);
+    } else {
+      EXPECT_EQ(least, 0.0);
+    }
+  }
+}
+
 TEST(VehicleSimulatorCost, BdfJacobianRightHandSidesAreTimedAsJacobianWithoutChangingTheRun) {
   const double t_end = 0.01;
   core::Scene scene = straightScene(30.5556, t_end);
