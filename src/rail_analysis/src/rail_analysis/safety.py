@@ -54,6 +54,14 @@ Q_QST_LIMIT = 145e3
 # Filtering and windows (EN 14363: wheel forces low-passed at 20 Hz, Y/Q and SumY as 2 m sliding means).
 Q_CUTOFF_HZ = 20.0
 QST_CUTOFF_HZ = 2.0          # quasi-static part: low-pass cut-off (a choice; an option)
+# Impacts (dipped joints, wheel flats): P1, the first peak, from the unfiltered force; P2, the wheel-on-track
+# resonance that follows (30-90 Hz: Jenkins, Stephenson, Clayton, Morland and Lyon, "The effect of track and
+# vehicle parameters on wheel/rail vertical dynamic forces", Railway Engineering Journal 3(1), 1974), from the
+# force low-passed well above it and well below P1 (500-1000 Hz): 2nd order forward and backward at 150 Hz
+# (gain 1 / (1 + (f/150)^4)) keeps 97.5 % of a steady 60 Hz sine and 0.2 % of a 700 Hz one.
+P2_CUTOFF_HZ = 150.0
+# An impact lasts about a millisecond: below this output rate P1 is under-sampled and says so.
+P1_MIN_RATE_HZ = 5000.0
 SLIDING_WINDOW_M = 2.0
 # Tgamma bands of the Whole Life Rail Model damage function (Burstow, "A model to predict and understand
 # rolling contact fatigue in wheels and rails", 2004): no damage below 15 J/m, the largest rolling contact
@@ -90,6 +98,7 @@ class Settings(object):
         self.window = SLIDING_WINDOW_M         # [m] sliding mean of Y/Q and SumY
         self.q_cutoff_hz = Q_CUTOFF_HZ         # [Hz] low-pass of Q before its maximum
         self.qst_cutoff_hz = QST_CUTOFF_HZ     # [Hz] quasi-static Q
+        self.p2_cutoff_hz = P2_CUTOFF_HZ       # [Hz] low-pass of Q before the P2 peak
         self.t_discard = 0.25                  # [s] start transient discarded
         self.comfort_window = comfort.WINDOW_S # [s]
         self.comfort_settle = 3.0              # [s] after t_discard, for the 0.4 Hz high-pass to settle
@@ -181,6 +190,16 @@ def lowpass_zero_phase(t, y, fc):
 
 # ---------------------------------------------------------------------------------------------------------
 # Loading
+
+def p2_force(t, Q, cutoff_hz=P2_CUTOFF_HZ):
+    """Q (N, ...) low-passed at cutoff_hz [Hz] (zero phase), whose maximum is the P2 force of an impact; None
+    when the samples (t, uniform) are too sparse for the cut-off (rate at most twice it)."""
+    rate = (len(t) - 1) / (t[-1] - t[0]) if len(t) > 1 and t[-1] > t[0] else 0.0
+    if not rate > 2.0 * cutoff_hz:
+        return None
+    Q = np.asarray(Q, dtype=float)
+    return lowpass_zero_phase(t, Q.reshape(len(t), -1), cutoff_hz).reshape(Q.shape)
+
 
 def _find_topic(bags, topic):
     """The first of the bags (paths, None skipped) that records topic, or None."""
@@ -503,6 +522,20 @@ def evaluate(run, settings=None):
               "EN 14363 Q_lim for V = %.0f km/h" % (speed * 3.6) if st.q_limit is None else "option")
     wheel_row("quasi-static Q (%.1f Hz low-pass)" % st.qst_cutoff_hz, "N", Qqst, st.q_qst_limit,
               "EN 14363 Q_qst,lim; low-pass cut-off %.1f Hz" % st.qst_cutoff_hz)
+    # Impact peaks: informative (no limit of their own; EN 14363's Q_lim above judges the 20 Hz force).
+    rate = (len(t) - 1) / (t[-1] - t[0]) if t[-1] > t[0] else 0.0
+    p1_note = "unfiltered, at the output rate %.0f Hz" % rate
+    if rate < P1_MIN_RATE_HZ:
+        p1_note += " (under-sampled: an impact lasts about 1 ms; output.rate >= %.0f Hz resolves it)" % P1_MIN_RATE_HZ
+    wheel_row("impact force P1 (unfiltered Q)", "N", Q, None, p1_note)
+    Qp2 = p2_force(t, Q, st.p2_cutoff_hz)
+    ev.Q_p2 = Qp2
+    if Qp2 is not None:
+        wheel_row("impact force P2 (%.0f Hz low-pass)" % st.p2_cutoff_hz, "N", Qp2, None,
+                  "the wheel-on-track resonance after an impact (30-90 Hz)")
+    else:
+        rows.append(Row("impact force P2 (%.0f Hz low-pass)" % st.p2_cutoff_hz, "N", status=NOT_AVAILABLE,
+                        note="needs output.rate above %.0f Hz" % (2.0 * st.p2_cutoff_hz)))
 
     # Tgamma.
     ev.tgamma = None

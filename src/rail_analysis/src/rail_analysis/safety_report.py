@@ -29,6 +29,9 @@ SOURCES = [
     "1967), written (SumY_2m)_lim = alpha (10 + 2 Q0/3) kN in EN 14363; alpha = 1 for passenger vehicles.",
     "Q: vertical wheel force low-passed at 20 Hz against EN 14363's Q_lim (200 kN up to 160 km/h); "
     "quasi-static Q (low-pass, cut-off an option) against Q_qst,lim = 145 kN.",
+    "P1, P2: the impact forces of a dipped joint or a wheel flat (Jenkins, Stephenson, Clayton, Morland and "
+    "Lyon, Railway Engineering Journal 3(1), 1974): P1 the unfiltered maximum of Q, P2 the maximum of Q "
+    "low-passed at 150 Hz; informative.",
     "Tgamma: sum over the wheel's contacts of |Tx nu_x| + |Ty nu_y| [N = J/m] (spin term not included); "
     "informative; Whole Life Rail Model bands 15 / 65 / 175 J/m (Burstow 2004).",
     "N_MV: EN 12299 mean comfort 6 sqrt(a_XP95^2 + a_YP95^2 + a_ZP95^2), Wd (x, y) and Wb (z) weightings "
