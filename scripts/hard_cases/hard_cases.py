@@ -124,6 +124,19 @@ def q_rms_leading(d):
     return float(np.sqrt(np.nanmean(q * q)))
 
 
+# The impact cases' defects come after this [s]: before it, the co-simulation's start (the vehicle, settled
+# on rigid rails, meets the elastic track) loads a wheel up to 1.35 Q0 around t = 0.01 s.
+IMPACT_FROM = 0.05
+
+
+def p2_leading_left(d):
+    """P2 of the leading wheelset's left wheel: the largest vertical force low-passed at 150 Hz [N]
+    (rail_analysis.safety.p2_force) from IMPACT_FROM on."""
+    t, q = _leading_q(d, "left")
+    qp2 = safety.p2_force(t, q)
+    return float(np.nanmax(qp2[t >= IMPACT_FROM])) if qp2 is not None else float("nan")
+
+
 def derail_time(d):
     """Simulated time at which the derailment was detected [s] (from the vehicle node's log)."""
     m = DERAIL_LOG.search(d["log"])
@@ -203,10 +216,66 @@ def check_derailed(d):
         m.group(1), code, d["bag_messages"])
 
 
+# British Rail's P2 formula (Jenkins, Stephenson, Clayton, Morland and Lyon, "The effect of track and vehicle
+# parameters on wheel/rail vertical dynamic forces", Railway Engineering Journal 3(1), 1974; as restated by
+# Mandal, Dhanasekar and Sun, Proc. IMechE Part F 230(1), 2016, doi 10.1177/0954409714537816):
+#   P2 = P0 + 2 alpha V sqrt(Mu / (Mu + Mt)) (1 - Ct pi / (4 sqrt(Kt (Mu + Mt)))) sqrt(Kt Mu)
+# with BR's constants for concrete-sleeper track, per rail: Kt = 150 MN/m, Mt = 245 kg, Ct = 55.7 kN s/m.
+# This track's own static stiffness under one wheel is 141 MN/m (docs/receptance: 7.1e-9 m/N at 10 Hz), close
+# to BR's Kt; its receptance has no single-mass shape to fit Mt and Ct to, so BR's are kept.
+BR_KT, BR_MT, BR_CT = 150e6, 245.0, 55.7e3
+# 15 %: the formula idealises wheel and track as two masses on springs, linear, with BR's empirical track
+# mass and damping; the model's track is a beam on discrete supports with its own.
+BR_P2_TOLERANCE = 0.15
+
+
+def british_rail_p2(p0, dip_angle, speed, mu):
+    """P2 [N] of a dipped joint of total angle dip_angle [rad] at speed [m/s], unsprung mass mu [kg] per wheel."""
+    m = mu + BR_MT
+    return p0 + dip_angle * speed * math.sqrt(mu / m) * (1.0 - BR_CT * math.pi / (4.0 * math.sqrt(BR_KT * m))) \
+        * math.sqrt(BR_KT * mu)
+
+
+def check_p2_british_rail(d):
+    """The leading wheel's P2 within BR_P2_TOLERANCE of British Rail's formula (flexible track only)."""
+    if d.get("model") != "flexible":
+        return "n/a", "BR's formula needs the track's mass and stiffness: flexible track only"
+    joint = d["scene"]["track"]["defects"][0]
+    speed = float(d["scene"]["vehicle"]["speed"])
+    mu = 0.5 * d["wheelset_mass"]
+    expected = british_rail_p2(d["q0"], float(joint["dip_angle"]), speed, mu)
+    got = p2_leading_left(d)
+    err = got / expected - 1.0
+    return ("pass" if abs(err) <= BR_P2_TOLERANCE else "fail"), (
+        "P2 %.1f kN vs British Rail's %.1f kN (%+.1f %%, tolerance %.0f %%; Mu %.0f kg, P0 %.1f kN)"
+        % (got / 1e3, expected / 1e3, 100 * err, 100 * BR_P2_TOLERANCE, mu, d["q0"] / 1e3))
+
+
+def check_flat_strike(d):
+    """The flatted wheel leaves the rail (Q < 1 N) before the strike and strikes (Q > 2 Q0) within 3 ms of the
+    instant its rolling angle brings the flat's centre to the rail."""
+    v = d["scene"]["vehicle"]
+    flat = v["wheel_defects"][0]
+    r0 = float(v.get("nominal_radius", 0.445))
+    angle = float(flat.get("angle", 0.0))
+    hit = ((angle if angle > 0 else 2 * math.pi + angle) * r0) / float(v["speed"])
+    t, q = _leading_q(d, "left")
+    before = (t > hit - 0.01) & (t < hit)
+    after = (t >= hit - 0.003) & (t < hit + 0.003)
+    if not before.any() or not after.any():
+        return "fail", "the run does not reach the strike at t = %.4f s" % hit
+    least = float(np.nanmin(q[before]))
+    i = int(np.nanargmax(np.where(after, q, -np.inf)))
+    ok = least < 1.0 and q[i] > 2.0 * d["q0"]
+    return ("pass" if ok else "fail"), "least Q before %.1f kN, strike %.0f kN (%.1f Q0) at %.4f s, predicted %.4f s" % (
+        least / 1e3, q[i] / 1e3, q[i] / d["q0"], t[i], hit)
+
+
 # Short names of the case checks in the table.
 CHECK_NAMES = {"check_lift_off": "lift-off and re-contact", "check_two_point": "two-point contact",
                "check_static": "static load (Q0 within 2 %)", "check_bounded_hunting": "bounded lateral motion",
-               "check_derailed": "derailment reported"}
+               "check_derailed": "derailment reported", "check_p2_british_rail": "P2 against British Rail's formula",
+               "check_flat_strike": "flat: loss of contact and strike"}
 
 
 # -------------------------------------------------------------------------------------------- the cases
@@ -255,6 +324,16 @@ CASES = [
          "derailment detected and reported (wheel, s, t); clean stop, readable bag, no NaN", MODELS, ("rigid",),
          ("derailment time", "s", 1.0, derail_time, 0.05, "the detection instant: 5 %"),
          expect="derail", specific=check_derailed),
+    Case("dipped_joint_impact", "9. dipped joint, 2 alpha = 10 mrad on both rails, at 110 km/h",
+         "P1 and P2 resolved; P2 against British Rail's formula", ("flexible",), ("flexible",),
+         ("P2 leading left (150 Hz low-pass)", "kN", 1e-3, p2_leading_left, 0.03,
+          "the wheel-on-track bounce (~60 Hz) after the impact: 3 %"),
+         specific=check_p2_british_rail),
+    Case("wheel_flat_impact", "10. new 50 mm wheel flats on the leading wheelset at 70 km/h",
+         "the wheel leaves the rail and strikes when the flat comes round", MODELS, ("rigid",),
+         ("P2 leading left (150 Hz low-pass)", "kN", 1e-3, p2_leading_left, 0.05,
+          "the strike's bounce, after a loss of contact: 5 %"),
+         specific=check_flat_strike),
 ]
 
 
@@ -379,6 +458,8 @@ def load_data(run, rec):
     vdata = os.path.normpath(os.path.join(os.path.dirname(run.case.scene), scene["vehicle"]["data"]))
     d["q0"] = safety.static_wheel_load_from_vehicle(vdata, int(scene["vehicle"].get("wheelsets", 4)))
     d["wheelset_mass"] = _wheelset_mass(vdata)
+    d["scene"] = scene
+    d["model"] = run.model
     d["friction"] = float((scene.get("contact") or {}).get("friction", 0.3))  # scene, else the default
     bags = [p for p in (os.path.join(run.dir, "run.bag"), os.path.join(run.dir, "run.track.bag")) if os.path.isfile(p)]
     d["bags"] = bags

@@ -325,6 +325,13 @@ void WheelContactModel::evaluate(const WheelState& ws, RailSide side, const Trac
       c.penetration -= depth * g.cos_normal_radial;
       c.penetration_rate -= d_depth_d_beta * spin * g.cos_normal_radial;
       in_contact = c.penetration > 0.0;
+      // The wheel bears on the defect's edge, d depth / d beta ahead of or behind the round wheel's point
+      // (a flat's edge lies exactly there): the force's moment about the axle turns the drop into spin and
+      // back, as the rolling angle's share of the contact's potential energy requires.
+      const Eigen::Vector3d shift = -d_depth_d_beta * t_w;
+      c.p_wheel_in_world += shift;
+      c.p_rail_in_world += shift;
+      c.p_contact_in_world += shift;
     }
     updateImpactMemory(memory, c.penetration, c.penetration_rate);
     if (!in_contact) continue;
