@@ -132,6 +132,7 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
     << "  irregularities: " << onOff(e.irregularities) << "\n"
     << "  track_defects: " << onOff(e.track_defects) << "\n"
     << "  wheel_defects: " << onOff(e.wheel_defects) << "\n"
+    << "  support_variation: " << onOff(e.support_variation) << "\n"
     << "  flange_contact: " << onOff(e.flange_contact) << "\n"
     << "  spin_creepage: " << onOff(e.spin_creepage) << "\n"
     << "  creep_law: " << toString(e.creep_law) << "\n"

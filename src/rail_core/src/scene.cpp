@@ -142,6 +142,21 @@ std::string toYaml(const Scene& s) {
     }
     e << YAML::EndSeq;
   }
+  if (!t.support.empty()) {
+    e << YAML::Key << "support" << YAML::Value << YAML::BeginSeq;
+    for (const SupportZone& z : t.support) {
+      e << YAML::BeginMap;
+      num(e, "s_from", z.s_from);
+      num(e, "s_to", z.s_to);
+      num(e, "ramp", z.ramp);
+      num(e, "pad_stiffness", z.pad_stiffness);
+      num(e, "pad_damping", z.pad_damping);
+      num(e, "ballast_stiffness", z.ballast_stiffness);
+      num(e, "ballast_damping", z.ballast_damping);
+      e << YAML::EndMap;
+    }
+    e << YAML::EndSeq;
+  }
   e << YAML::EndMap;
 
   if (s.has_vehicle) {
@@ -207,6 +222,7 @@ std::string toYaml(const Scene& s) {
   kv(e, "irregularities", f.irregularities);
   kv(e, "track_defects", f.track_defects);
   kv(e, "wheel_defects", f.wheel_defects);
+  kv(e, "support_variation", f.support_variation);
   kv(e, "flange_contact", f.flange_contact);
   kv(e, "spin_creepage", f.spin_creepage);
   kv(e, "creep_law", toString(f.creep_law));
@@ -317,6 +333,15 @@ std::string describe(const Scene& s, Role role) {
         << "\n";
     }
   }
+  if (f.support_variation) {
+    for (std::size_t i = 0; i < t.support.size(); ++i) {
+      const SupportZone& z = t.support[i];
+      o << "  support zone " << i << ": s = " << fixed(z.s_from, 2) << " .. " << fixed(z.s_to, 2) << " m, ramps "
+        << fixed(z.ramp, 2) << " m; pads x" << fixed(z.pad_stiffness, 2) << " stiffness, x" << fixed(z.pad_damping, 2)
+        << " damping; ballast x" << fixed(z.ballast_stiffness, 2) << " stiffness, x" << fixed(z.ballast_damping, 2)
+        << " damping\n";
+    }
+  }
   if (s.has_vehicle) {
     const Vehicle& v = s.vehicle;
     o << "vehicle: " << v.data.as_written << ", " << v.wheelsets << " wheelsets, " << fixed(v.speed * 3.6, 1)
@@ -346,6 +371,7 @@ std::string describe(const Scene& s, Role role) {
   flag("irregularities", f.irregularities);
   flag("track_defects", f.track_defects);
   flag("wheel_defects", f.wheel_defects && s.has_vehicle);
+  flag("support_variation", f.support_variation && s.runsFeIntegration());
   // Contact exists only with a vehicle (moving loads are prescribed forces).
   flag("flange_contact", f.flange_contact && s.has_vehicle);
   flag("spin_creepage", f.spin_creepage && s.has_vehicle);

@@ -194,6 +194,40 @@ void readDefects(MapReader& r, Track& t, const Context& ctx) {
   }
 }
 
+// track.support: zones on the track, their ramps inside them, factors in a physical range.
+void readSupport(MapReader& r, Track& t, const Context& ctx) {
+  const YAML::Node seq = r.child("support");
+  if (!seq) return;
+  if (!seq.IsSequence()) r.fail("support", "must be a list of support zones");
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    MapReader zr(seq[i], "track.support[" + std::to_string(i) + "]", ctx.file, raiseSceneError);
+    SupportZone z;
+    zr.require("s_from");
+    zr.number("s_from", z.s_from);
+    zr.require("s_to");
+    zr.number("s_to", z.s_to);
+    if (!(z.s_from >= t.start_arc_length && z.s_from < z.s_to && z.s_to <= t.endArcLength())) {
+      zr.fail("s_to", "the zone " + formatNumber(z.s_from) + " .. " + formatNumber(z.s_to) +
+                          " m must lie on the track (" + formatNumber(t.start_arc_length) + " .. " +
+                          formatNumber(t.endArcLength()) + " m) and end after it starts");
+    }
+    zr.number("ramp", z.ramp);
+    if (!(z.ramp >= 0.0 && 2.0 * z.ramp <= z.s_to - z.s_from)) {
+      zr.fail("ramp", "must be between 0 and half the zone's length (" + formatNumber(0.5 * (z.s_to - z.s_from)) +
+                          " m)" + got(z.ramp));
+    }
+    for (auto [key, value] : {std::pair<const char*, double*>{"pad_stiffness", &z.pad_stiffness},
+                              {"pad_damping", &z.pad_damping},
+                              {"ballast_stiffness", &z.ballast_stiffness},
+                              {"ballast_damping", &z.ballast_damping}}) {
+      zr.number(key, *value);
+      inRange(zr, key, *value, 0.01, 100.0, "(a factor on the track data's value)");
+    }
+    zr.finish();
+    t.support.push_back(z);
+  }
+}
+
 void readDirection(MapReader& r, Segment& seg, bool required) {
   if (required) r.require("direction");
   r.choice("direction", seg.direction, kDirectionWords, 1);
@@ -370,6 +404,7 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
     ir.finish();
   }
   readDefects(r, t, ctx);
+  readSupport(r, t, ctx);
   r.finish();
 }
 
@@ -522,6 +557,7 @@ void readEffects(MapReader& root, Scene& s) {
   r.boolean("irregularities", e.irregularities);
   r.boolean("track_defects", e.track_defects);
   r.boolean("wheel_defects", e.wheel_defects);
+  r.boolean("support_variation", e.support_variation);
   r.boolean("flange_contact", e.flange_contact);
   r.boolean("spin_creepage", e.spin_creepage);
   r.choice("creep_law", e.creep_law, kCreepLawWords);
@@ -640,6 +676,16 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   }
   if (s.effects.track_defects && s.track.defects.empty()) {
     failScene(file, "effects.track_defects", "is on but track.defects lists none", line_of("effects", "track_defects"));
+  }
+  if (s.effects.support_variation && s.track.support.empty()) {
+    failScene(file, "effects.support_variation", "is on but track.support lists no zone",
+              line_of("effects", "support_variation"));
+  }
+  if (s.effects.support_variation && !s.runsFeIntegration()) {
+    failScene(file, "effects.support_variation",
+              std::string("needs the integrated FE track (effects.track_model: flexible), got ") +
+                  toString(s.effects.track_model),
+              line_of("effects", "support_variation"));
   }
   if (s.effects.wheel_defects && s.vehicle.wheel_defects.empty()) {
     failScene(file, "effects.wheel_defects",

@@ -156,8 +156,8 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
       {"misspelt effect", replaced(kBase, "track_model: rigid_fe", "track_model: rigid_fe\n  flange_contat: true"),
        "scene.yaml: effects.flange_contat: unknown key (known here: absorbing_ends, contact_point_output, "
        "creep_law, energy_output, flange_contact, floor_acceleration_output, irregularities, pad_force_output, "
-       "rail_deflection_output, rviz_markers, spin_creepage, track_damping, track_defects, track_model, wheel_defects) "
-       "(line 16)"},
+       "rail_deflection_output, rviz_markers, spin_creepage, support_variation, track_damping, track_defects, "
+       "track_model, wheel_defects) (line 16)"},
       {"missing field", replaced(kBase, "  speed: 30.0\n", ""),
        "scene.yaml: vehicle.speed: required key missing (line 10)"},
       {"wrong type", replaced(kBase, "speed: 30.0", "speed: fast"),
@@ -295,6 +295,26 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
                 "  speed: 30.0\n  wheel_defects: [{type: out_of_round, wheelset: 0, order: 0, amplitude: 1e-4}]\n"),
        "scene.yaml: vehicle.wheel_defects[0].order: must be between 1 and 40 (harmonics round the wheel), got 0 "
        "(line 13)"},
+      {"support zone off the track",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  support: [{s_from: 140, s_to: 160, ballast_stiffness: 3}]\n"),
+       "scene.yaml: track.support[0].s_to: the zone 140 .. 160 m must lie on the track (0 .. 150 m) and end after "
+       "it starts (line 5)"},
+      {"support ramps longer than the zone",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  support: [{s_from: 40, s_to: 50, ramp: 6, ballast_stiffness: 3}]\n"),
+       "scene.yaml: track.support[0].ramp: must be between 0 and half the zone's length (5 m), got 6 (line 5)"},
+      {"support factor out of range",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  support: [{s_from: 40, s_to: 50, pad_stiffness: 0}]\n"),
+       "scene.yaml: track.support[0].pad_stiffness: must be between 0.01 and 100 (a factor on the track data's "
+       "value), got 0 (line 5)"},
+      {"support variation without the FE track",
+       replaced(replaced(kBase, "  data: track_data.yaml\n",
+                         "  data: track_data.yaml\n  support: [{s_from: 40, s_to: 50, pad_stiffness: 2}]\n"),
+                "track_model: rigid_fe", "track_model: rigid_fe\n  support_variation: true"),
+       "scene.yaml: effects.support_variation: needs the integrated FE track (effects.track_model: flexible), got "
+       "rigid_fe (line 17)"},
       {"unknown defect",
        replaced(kBase, "  data: track_data.yaml\n",
                 "  data: track_data.yaml\n  defects: [{type: squat, s: 40, length: 0.2}]\n"),
@@ -383,6 +403,42 @@ TEST(Scene, WheelDefectsRoundTripAndAreSummarised) {
   EXPECT_TRUE(contactOptions(off, rail::contact::WheelContactOptions()).wheel_defects.empty());
 }
 
+// Support zones: the print-out loads back to the same hash, the summary lists them, and the FE track data
+// carries them only with the effect on (rail_track_node's tests check the mesh).
+TEST(Scene, SupportZonesRoundTripAndAreSummarised) {
+  const std::string text =
+      replaced(replaced(kBase, "  data: track_data.yaml\n",
+                        "  data: track_data.yaml\n  support:\n"
+                        "    - {s_from: 40.0, s_to: 70.0, ramp: 5.0, ballast_stiffness: 4.0, ballast_damping: 2.0}\n"
+                        "    - {s_from: 100.0, s_to: 101.2, pad_stiffness: 0.3}\n"),
+               "track_model: rigid_fe", "track_model: flexible\n  support_variation: true");
+  const Scene s = load(text);
+  ASSERT_EQ(s.track.support.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.track.support[0].ramp, 5.0);
+  EXPECT_DOUBLE_EQ(s.track.support[0].pad_stiffness, 1.0);
+  EXPECT_DOUBLE_EQ(s.track.support[1].pad_stiffness, 0.3);
+  EXPECT_DOUBLE_EQ(s.track.support[1].ramp, 0.0);
+  const Scene again = loadSceneText(toYaml(s), "scene.yaml", kData);
+  EXPECT_EQ(again.hash, s.hash);
+  const std::string summary = describe(s, Role::kValidator);
+  EXPECT_NE(summary.find("  support zone 0: s = 40.00 .. 70.00 m, ramps 5.00 m; pads x1.00 stiffness, x1.00 damping; "
+                         "ballast x4.00 stiffness, x2.00 damping\n"),
+            std::string::npos)
+      << summary;
+  EXPECT_NE(summary.find(", support_variation"), std::string::npos) << summary;
+  const Scene off = load(replaced(text, "  support_variation: true", "  support_variation: false"));
+  EXPECT_NE(off.hash, s.hash);
+  EXPECT_EQ(describe(off, Role::kValidator).find("support zone 0"), std::string::npos);
+  // Half-way up the first zone's ramp (s = 42.5 m) the ballast is at half its change; overlapping nothing
+  // else, the pads are untouched.
+  const SupportFactors f = supportFactors(s.track.support, 42.5);
+  EXPECT_DOUBLE_EQ(f.ballast_stiffness, 2.5);
+  EXPECT_DOUBLE_EQ(f.ballast_damping, 1.5);
+  EXPECT_DOUBLE_EQ(f.pad_stiffness, 1.0);
+  EXPECT_DOUBLE_EQ(supportFactors(s.track.support, 39.9).ballast_stiffness, 1.0);
+  EXPECT_DOUBLE_EQ(supportFactors(s.track.support, 55.0).ballast_stiffness, 4.0);
+}
+
 TEST(Scene, ContactSectionReachesTheSceneAndItsHash) {
   const Scene base = load(kBase);
   EXPECT_DOUBLE_EQ(base.contact.friction, 0.3);  // the defaults are rail_contact's
@@ -415,8 +471,8 @@ TEST(Scene, DescribeListsEffectsAndComponents) {
   EXPECT_NE(v.find("effects on: track_model=rigid_fe, flange_contact, spin_creepage, creep_law=polach"),
             std::string::npos)
       << v;
-  EXPECT_NE(v.find("effects off: irregularities, track_defects, wheel_defects, track_damping, absorbing_ends, "
-                   "rail_deflection_output"),
+  EXPECT_NE(v.find("effects off: irregularities, track_defects, wheel_defects, support_variation, track_damping, "
+                   "absorbing_ends, rail_deflection_output"),
             std::string::npos)
       << v;
   EXPECT_NE(v.find("wheel-centre wrenches from the track node over shm"), std::string::npos) << v;

@@ -192,7 +192,9 @@ Agreement compare(const History& w, const History& full) {
   return a;
 }
 
-void checkAgainstFull(bool curve) {
+// zone: a soft support zone (pads and ballast at half their stiffness, 61.8 .. 67.8 m, 1.2 m ramps) under
+// the wheels' path and the second section: a window over it is no translated copy of the previous one.
+void checkAgainstFull(bool curve, bool zone = false) {
   // h = 1e-4 s: the semi-implicit coupling is stable there and within 20 N of the 1e-5 s wheel load
   // (doc/cosim_track.md); both models take the same step, so it does not enter the comparison.
   const double h = 1e-4;
@@ -201,7 +203,17 @@ void checkAgainstFull(bool curve) {
   // First section just ahead of the leading wheel (passed at once); second reached by the leading wheel
   // after 0.23 s, after 2 moves of the window.
   const double sections[2] = {61.0, 67.0};
-  const Scene sc = lineScene(curve, h);
+  Scene sc = lineScene(curve, h);
+  if (zone) {
+    rail::core::SupportZone z;
+    z.s_from = 61.8;
+    z.s_to = 67.8;
+    z.ramp = 1.2;
+    z.pad_stiffness = 0.5;
+    z.ballast_stiffness = 0.5;
+    sc.track.support = {z};
+    sc.effects.support_variation = true;
+  }
   const History full = run(sc, s_front0, steps, sections);
   ASSERT_EQ(full.outside, 0);
   ASSERT_EQ(full.steps, steps - 1);
@@ -223,22 +235,28 @@ void checkAgainstFull(bool curve) {
     // refactorises and drops the influence columns.
     if (curve) {
       EXPECT_EQ(w.rebuilds, w.moves);
+    } else if (zone) {
+      EXPECT_GE(w.rebuilds, 1);  // a window over the zone differs from its predecessor
     } else {
       EXPECT_EQ(w.rebuilds, 0);
     }
     EXPECT_EQ(w.drops, w.rebuilds);
     const Agreement a = compare(w, full);
     std::printf(
-        "%s, margins %.0f m: %d moves (%d rebuilt); |window - full| / peak: wheel Fz %.3g %%, Fy %.3g %%, "
+        "%s%s, margins %.0f m: %d moves (%d rebuilt); |window - full| / peak: wheel Fz %.3g %%, Fy %.3g %%, "
         "section z %.3g %%, y %.3g %% (peaks Fz %.0f N, Fy %.0f N)\n",
-        curve ? "curve" : "straight", margin, w.moves, w.rebuilds, 100 * a.fz, 100 * a.fy, 100 * a.sz, 100 * a.sy,
+        curve ? "curve" : "straight", zone ? " over a soft zone" : "", margin, w.moves, w.rebuilds, 100 * a.fz, 100 * a.fy, 100 * a.sz, 100 * a.sy,
         Qpeak, Ypeak);
     // 1 % of each quantity's peak, the target of the window design (doc/track_window.md: its own
-    // moving-load comparison gives <= 0.15 % with 2 m margins).
-    EXPECT_LT(a.fz, 0.01);
-    EXPECT_LT(a.fy, 0.01);
-    EXPECT_LT(a.sz, 0.01);
-    EXPECT_LT(a.sy, 0.01);
+    // moving-load comparison gives <= 0.15 % with 2 m margins). Over a support zone the track beyond a
+    // window end is condensed as plain track, so a zone just ahead of the end is missing from it: with 2 m
+    // margins the lateral forces differ by up to 2 % (measured 1.97 %, allowed 3 %), with the default 5 m
+    // within the 1 %.
+    const double tolerance = zone && margin < 5.0 ? 0.03 : 0.01;
+    EXPECT_LT(a.fz, tolerance);
+    EXPECT_LT(a.fy, tolerance);
+    EXPECT_LT(a.sz, tolerance);
+    EXPECT_LT(a.sy, tolerance);
     const double overall = std::max(std::max(a.fz, a.fy), std::max(a.sz, a.sy));
     // Larger margins agree as well or better (10 % slack on the worst figure: round-off level at 5 m).
     EXPECT_LE(overall, 1.1 * previous + 1e-6);
@@ -251,6 +269,8 @@ void checkAgainstFull(bool curve) {
 TEST(CosimTrackWindow, StraightLineMatchesFullLengthTrack) { checkAgainstFull(false); }
 
 TEST(CosimTrackWindow, TransitionIntoCantedCurveMatchesFullLengthTrack) { checkAgainstFull(true); }
+
+TEST(CosimTrackWindow, SoftSupportZoneMatchesFullLengthTrack) { checkAgainstFull(false, true); }
 
 // A wheel that the window cannot cover (wheels spread over more than the window) is reported, nothing is
 // evaluated or integrated, and a following good frame steps normally. Non-finite arc lengths too.

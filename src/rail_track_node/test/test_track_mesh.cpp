@@ -174,13 +174,14 @@ TEST(TrackMesh, RailPointLoadIsStaticallyEquivalent) {
 // entering k (w0 ~ k^(-3/4)) or in E I would fail the test. The 60 m length puts the ends ~40 / beta away.
 namespace {
 
-void checkWinkler(const rt::TrackData& d, double k_sb) {
+// pad_factor: the support zone's factor on the pads at s = 30 m (k_sb carries the ballast's).
+void checkWinkler(const rt::TrackData& d, double k_sb, double pad_factor = 1.0) {
   rt::MeshOptions opt;
   opt.track_length = 60.0;
   const rt::TrackModel model = rt::buildTrackModel(d, opt, rt::straightTrackFrames());
   const rt::TrackMesh& m = model.mesh;
   const double F = 1.0e5;
-  const double k = 1.0 / (1.0 / d.pad.k(2) + 1.0 / k_sb) / d.layout.sleeper_spacing;
+  const double k = 1.0 / (1.0 / (pad_factor * d.pad.k(2)) + 1.0 / k_sb) / d.layout.sleeper_spacing;
   const double EI = d.rail.E * d.rail.I_y;
   const double beta = std::pow(k / (4.0 * EI), 0.25);
   const double w0 = F * beta / (2.0 * k);
@@ -222,4 +223,41 @@ TEST(TrackMesh, WinklerStaticDeflectionPaperTrack) {
   const double c_f = (b - a_s) * (b - a_s) * (b + 2.0 * a_s) / (3.0 * d.sleeper.E * d.sleeper.I_y);
   const double k_b = d.ballast.k(2);
   checkWinkler(d, k_b * (1.0 + 1.0 / (1.0 + k_b * c_f)));
+}
+
+// A support zone (s = 10 .. 50 m, 2 m ramps) with pads at 0.4 and ballast at 0.5 of their stiffness: at
+// s = 30 m, 20 m (28 / beta) from either ramp, the rail deflects as the Winkler beam of the scaled
+// foundation (w0 ~ k^(-3/4): 1.8 times the unscaled track's, so a zone left out fails by far); each sleeper's
+// pads and ballast carry the factor of its arc length, half-way up a ramp half of the zone's change.
+TEST(TrackMesh, SupportZoneScalesPadsAndBallastAndTheDeflectionFollowsWinkler) {
+  rt::TrackData d = rt::loadTrackData(paperTrackPath());
+  d.absorbing_ends.enabled = false;
+  d.sleeper.E *= 1e4;  // rigid sleeper, as in WinklerStaticDeflectionRigidSleeper
+  rail::core::SupportZone z;
+  z.s_from = 10.0;
+  z.s_to = 50.0;
+  z.ramp = 2.0;
+  z.pad_stiffness = 0.4;
+  z.ballast_stiffness = 0.5;
+  z.ballast_damping = 3.0;
+  d.support_zones = {z};
+  checkWinkler(d, 0.5 * 2.0 * d.ballast.k(2), 0.4);
+  rt::MeshOptions opt;
+  opt.track_length = 60.0;
+  const rt::TrackMesh m = rt::buildTrackMesh(d, opt, rt::straightTrackFrames());
+  int checked = 0;
+  for (const rt::SpringDamperElement& e : m.springs) {
+    const double s = e.p_point_in_world.x();
+    const double w = s < 10.0 || s > 50.0 ? 0.0 : std::min(1.0, std::min(s - 10.0, 50.0 - s) / 2.0);
+    if (e.kind == rt::SpringKind::Pad) {
+      EXPECT_NEAR(e.k(2), (1.0 + w * (0.4 - 1.0)) * d.pad.k(2), 1e-9 * d.pad.k(2)) << "pad at s = " << s;
+      EXPECT_NEAR(e.c(2), d.pad.c(2), 1e-9 * d.pad.c(2)) << "pad at s = " << s;
+      ++checked;
+    } else if (e.kind == rt::SpringKind::Ballast) {
+      EXPECT_NEAR(e.k(2), (1.0 + w * (0.5 - 1.0)) * d.ballast.k(2), 1e-9 * d.ballast.k(2)) << "ballast at s = " << s;
+      EXPECT_NEAR(e.c(2), (1.0 + w * (3.0 - 1.0)) * d.ballast.c(2), 1e-9 * d.ballast.c(2)) << "ballast at s = " << s;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 2 * m.n_sleepers + 4 * m.n_sleepers);
 }

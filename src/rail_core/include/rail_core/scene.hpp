@@ -13,6 +13,8 @@
 #include <rail_contact/track_defects.hpp>
 #include <rail_contact/wheel_defects.hpp>
 
+#include "rail_core/support_zone.hpp"
+
 #include "rail_core/enum_words.hpp"
 
 namespace rail::core {
@@ -111,6 +113,8 @@ struct Track {
   Irregularities irregularities;
   // Local defects of the rails (dipped joints, welds), applied with effects.track_defects.
   std::vector<contact::RailDefect> defects;
+  // Zones of scaled pad and ballast stiffness and damping, applied with effects.support_variation.
+  std::vector<SupportZone> support;
 
   double length() const;  // sum of the segment lengths [m]
   double endArcLength() const { return start_arc_length + length(); }
@@ -158,6 +162,7 @@ struct Effects {
   bool irregularities = false;  // apply track.irregularities to the rails
   bool track_defects = false;   // apply track.defects (dipped joints, welds) to the rails
   bool wheel_defects = false;   // apply vehicle.wheel_defects (flats, out-of-roundness) to the wheels
+  bool support_variation = false;  // apply track.support (zones of scaled pads and ballast) to the FE track
   bool flange_contact = true;   // flange-rail contact searched besides tread-rail
   bool spin_creepage = true;    // spin in the creep forces
   CreepLaw creep_law = CreepLaw::kPolach;

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <rail_core/support_zone.hpp>
+
 #include "rail_track_node/elements.hpp"
 
 namespace rail {
@@ -53,6 +55,9 @@ struct TrackData {
   SpringDamperData sleeper_interaction;
   TrackLayout layout;
   AbsorbingEnds absorbing_ends;
+  /// Pads and ballast scaled along the track (the scene's track.support, effects.support_variation);
+  /// empty: every sleeper as the data say.
+  std::vector<rail::core::SupportZone> support_zones;
 };
 
 /// Loads a track data file. Throws std::runtime_error("<file>: <key.path>: <what>, got <value>") on an

@@ -41,6 +41,7 @@ TrackData sceneTrackData(const Scene& scene, const rc::GeometrySpec& geometry, c
                      ": layout.sleeper_length " + rc::formatNumber(L.sleeper_length) + " m)");
   if (!scene.effects.track_damping) removeTrackDamping(data);
   data.absorbing_ends.enabled = scene.effects.absorbing_ends;
+  if (scene.effects.support_variation) data.support_zones = scene.track.support;
   return data;
 }
 

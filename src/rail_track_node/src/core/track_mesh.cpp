@@ -181,14 +181,18 @@ TrackMesh buildTrackMesh(const TrackData& data, const MeshOptions& options, cons
   }
 
   // Pads: rail node (a) to the sleeper node under it (b), acting at the rail seat, in the rail frame.
+  // Each sleeper's pads and ballast carry the support factors at its arc length (all 1 without zones).
+  auto factorsAt = [&](int k) { return rail::core::supportFactors(data.support_zones, options.s_start + k * a); };
   const Vector6d k_pad = springVector(data.pad.k, data.pad.k_roll);
   const Vector6d c_pad = springVector(data.pad.c, 0.0);
   for (int k = 0; k < n_sleepers; ++k) {
     const TrackFrameSample& F = sleeper_frames[k];
+    const rail::core::SupportFactors f = factorsAt(k);
     for (int r = 0; r < 2; ++r) {
       mesh.springs.push_back(SpringDamperElement{SpringKind::Pad, mesh.rail_nodes[r][k * n_e],
                                                  mesh.sleeper_nodes[k][seat_node[r]], railSeat(F, r, L),
-                                                 railFrame(F, r, L.rail_inclination), k_pad, c_pad});
+                                                 railFrame(F, r, L.rail_inclination), f.pad_stiffness * k_pad,
+                                                 f.pad_damping * c_pad});
     }
   }
 
@@ -196,11 +200,13 @@ TrackMesh buildTrackMesh(const TrackData& data, const MeshOptions& options, cons
   const Vector6d k_bal = springVector(data.ballast.k, 0.0);
   const Vector6d c_bal = springVector(data.ballast.c, 0.0);
   for (int k = 0; k < n_sleepers; ++k) {
+    const rail::core::SupportFactors f = factorsAt(k);
     for (std::size_t q = 0; q < L.ballast_nodes.size(); ++q) {
       const int sn = mesh.sleeper_nodes[k][L.ballast_nodes[q]];
       const int fn = foundation_nodes[k][q];
       mesh.springs.push_back(SpringDamperElement{SpringKind::Ballast, sn, fn, mesh.nodes[fn].p_in_world,
-                                                 sleeper_frames[k].R_track_to_world, k_bal, c_bal});
+                                                 sleeper_frames[k].R_track_to_world, f.ballast_stiffness * k_bal,
+                                                 f.ballast_damping * c_bal});
       mesh.masses.push_back(PointMass{sn, data.ballast.mass});
     }
   }

@@ -245,10 +245,13 @@ std::array<int, 8> planeNodes(const TrackMesh& mesh, int k) {
 TrackWindow::CondensedEnd TrackWindow::condenseEnd(const TrackData& data, int bays, bool front) {
   // A straight level piece in track axes (world = track frame). front: the line ahead of an end plane,
   // which is the piece's first plane; else the line behind it, the piece's last plane.
+  // The line beyond an end is the data's plain track: support zones act inside the window only.
+  TrackData plain = data;
+  plain.support_zones.clear();
   MeshOptions mo;
   mo.s_start = 0.0;
   mo.track_length = bays * data.layout.sleeper_spacing;
-  TrackMesh mesh = buildTrackMesh(data, mo, straightTrackFrames());
+  TrackMesh mesh = buildTrackMesh(plain, mo, straightTrackFrames());
   CondensedEnd e;
   e.piece = mesh;
   const int kb = front ? 0 : mesh.n_sleepers - 1;
