@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """CI subset of the hard-case suite (hard_cases.py, subset 'ci': the vehicle alone on the rigid track for
-lift-off, two-point contact, standstill, creep speed and derailment, each with its refined run): every
-check of every case must pass. The runs start their own ROS masters (rail_analysis.runner.run_case), so no rostest
-master is needed. Takes about 2-3 minutes on two cores.
+lift-off, two-point contact, standstill, creep speed, derailment and a wheel flat, and the dipped joint on the
+flexible track, each with its refined run): every check of every case must pass. The runs start their own ROS
+masters (rail_analysis.runner.run_case), so no rostest master is needed. Takes about 3 minutes on two cores.
 
   /usr/bin/python3 test_hard_cases_ci.py [--gtest_output=xml:FILE]
 """

@@ -245,8 +245,8 @@ void checkAgainstFull(bool curve, bool zone = false) {
     std::printf(
         "%s%s, margins %.0f m: %d moves (%d rebuilt); |window - full| / peak: wheel Fz %.3g %%, Fy %.3g %%, "
         "section z %.3g %%, y %.3g %% (peaks Fz %.0f N, Fy %.0f N)\n",
-        curve ? "curve" : "straight", zone ? " over a soft zone" : "", margin, w.moves, w.rebuilds, 100 * a.fz, 100 * a.fy, 100 * a.sz, 100 * a.sy,
-        Qpeak, Ypeak);
+        curve ? "curve" : "straight", zone ? " over a soft zone" : "", margin, w.moves, w.rebuilds, 100 * a.fz,
+        100 * a.fy, 100 * a.sz, 100 * a.sy, Qpeak, Ypeak);
     // 1 % of each quantity's peak, the target of the window design (doc/track_window.md: its own
     // moving-load comparison gives <= 0.15 % with 2 m margins). Over a support zone the track beyond a
     // window end is condensed as plain track, so a zone just ahead of the end is missing from it: with 2 m

@@ -159,12 +159,12 @@ struct Contact {
 // What is simulated. An effect that is off is not built and costs nothing.
 struct Effects {
   TrackModel track_model = TrackModel::kFlexible;
-  bool irregularities = false;  // apply track.irregularities to the rails
-  bool track_defects = false;   // apply track.defects (dipped joints, welds) to the rails
-  bool wheel_defects = false;   // apply vehicle.wheel_defects (flats, out-of-roundness) to the wheels
+  bool irregularities = false;     // apply track.irregularities to the rails
+  bool track_defects = false;      // apply track.defects (dipped joints, welds) to the rails
+  bool wheel_defects = false;      // apply vehicle.wheel_defects (flats, out-of-roundness) to the wheels
   bool support_variation = false;  // apply track.support (zones of scaled pads and ballast) to the FE track
-  bool flange_contact = true;   // flange-rail contact searched besides tread-rail
-  bool spin_creepage = true;    // spin in the creep forces
+  bool flange_contact = true;      // flange-rail contact searched besides tread-rail
+  bool spin_creepage = true;       // spin in the creep forces
   CreepLaw creep_law = CreepLaw::kPolach;
   bool track_damping = true;               // Rayleigh damping of the beams and the dampers of pads/ballast
   bool absorbing_ends = true;              // dashpots at both track ends

@@ -189,10 +189,9 @@ TrackMesh buildTrackMesh(const TrackData& data, const MeshOptions& options, cons
     const TrackFrameSample& F = sleeper_frames[k];
     const rail::core::SupportFactors f = factorsAt(k);
     for (int r = 0; r < 2; ++r) {
-      mesh.springs.push_back(SpringDamperElement{SpringKind::Pad, mesh.rail_nodes[r][k * n_e],
-                                                 mesh.sleeper_nodes[k][seat_node[r]], railSeat(F, r, L),
-                                                 railFrame(F, r, L.rail_inclination), f.pad_stiffness * k_pad,
-                                                 f.pad_damping * c_pad});
+      mesh.springs.push_back(SpringDamperElement{
+          SpringKind::Pad, mesh.rail_nodes[r][k * n_e], mesh.sleeper_nodes[k][seat_node[r]], railSeat(F, r, L),
+          railFrame(F, r, L.rail_inclination), f.pad_stiffness * k_pad, f.pad_damping * c_pad});
     }
   }
 
