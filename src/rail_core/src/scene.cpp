@@ -461,6 +461,7 @@ std::string describe(const Scene& s, Role role) {
     for (const auto& tp : s.output.topics) o << " " << tp;
   }
   o << "\n";
+  for (const std::string& w : sceneWarnings(s)) o << "warning: " << w << "\n";
   return o.str();
 }
 

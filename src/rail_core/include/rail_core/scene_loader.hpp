@@ -47,6 +47,11 @@ std::string topicNeeds(const Scene& scene, const std::string& topic);
 // The topics a run of `scene` can record (topicNeeds empty), in the order of the known topics.
 std::vector<std::string> recordableTopics(const Scene& scene);
 
+// What a valid scene asks for more finely than it says: one line per setting too coarse for an effect that
+// is on (e.g. a track step too long for an impact's first peak), naming the setting, its value and the value
+// wanted. describe() lists them as "warning:" lines; empty when nothing is too coarse.
+std::vector<std::string> sceneWarnings(const Scene& scene);
+
 // The fully resolved scene as YAML (every default filled in). Loading this text again gives the same
 // scene (same hash).
 std::string toYaml(const Scene& scene);
