@@ -72,17 +72,20 @@ std::vector<std::string> sceneWarnings(const Scene& s) {
   if (s.effects.track_defects)
     for (const contact::RailDefect& d : s.track.defects) joint = joint || d.shape == contact::DefectShape::kDippedJoint;
   if (s.effects.wheel_defects && s.has_vehicle)
-    for (const contact::WheelDefect& d : s.vehicle.wheel_defects) flat = flat || d.shape == contact::WheelDefectShape::kFlat;
+    for (const contact::WheelDefect& d : s.vehicle.wheel_defects)
+      flat = flat || d.shape == contact::WheelDefectShape::kFlat;
   if (!joint && !flat) return w;
-  const std::string what = joint && flat ? "a dipped joint's and a wheel flat's" : joint ? "a dipped joint's" : "a wheel flat's";
+  const std::string what = joint && flat ? "a dipped joint's and a wheel flat's"
+                           : joint       ? "a dipped joint's"
+                                         : "a wheel flat's";
   if (s.needsTrackNode() && s.solver.track_step > kImpactTrackStep * (1.0 + 1e-9)) {
     w.push_back("solver.track_step " + formatNumber(s.solver.track_step) + " s is coarser than the " +
                 formatNumber(kImpactTrackStep) + " s that " + what +
                 " impact peak P1 needs (its P2 converges at coarser steps; docs/defects.md)");
   }
   if (s.output.rate < kImpactOutputRate) {
-    w.push_back("output.rate " + formatNumber(s.output.rate) + " Hz under-samples " + what + " impact (about 1 ms): " +
-                formatNumber(kImpactOutputRate) + " Hz or more resolves its P1 in the bag");
+    w.push_back("output.rate " + formatNumber(s.output.rate) + " Hz under-samples " + what +
+                " impact (about 1 ms): " + formatNumber(kImpactOutputRate) + " Hz or more resolves its P1 in the bag");
   }
   return w;
 }

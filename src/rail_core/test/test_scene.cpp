@@ -443,22 +443,26 @@ TEST(Scene, SupportZonesRoundTripAndAreSummarised) {
 // for the impact's first peak, in the summary the nodes and the validator print; without the effect, or fine
 // enough, nothing is said.
 TEST(Scene, ImpactsWarnOfACoarseTrackStepAndOutputRate) {
-  const std::string text =
-      replaced(replaced(kBase, "  data: track_data.yaml\n",
-                        "  data: track_data.yaml\n  defects: [{type: dipped_joint, s: 30.0, length: 1.0, dip_angle: 0.01}]\n"),
-               "track_model: rigid_fe", "track_model: rigid_fe\n  track_defects: true");
-  const Scene coarse = loadSceneText(text, "scene.yaml", kData, {"solver.track_step=4e-5", "solver.vehicle_max_step=4e-5"});
+  const std::string text = replaced(
+      replaced(kBase, "  data: track_data.yaml\n",
+               "  data: track_data.yaml\n  defects: [{type: dipped_joint, s: 30.0, length: 1.0, dip_angle: 0.01}]\n"),
+      "track_model: rigid_fe", "track_model: rigid_fe\n  track_defects: true");
+  const Scene coarse =
+      loadSceneText(text, "scene.yaml", kData, {"solver.track_step=4e-5", "solver.vehicle_max_step=4e-5"});
   const std::vector<std::string> w = sceneWarnings(coarse);
   ASSERT_EQ(w.size(), 2u);
-  EXPECT_EQ(w[0], "solver.track_step 4e-05 s is coarser than the 2e-05 s that a dipped joint's impact peak P1 needs "
-                  "(its P2 converges at coarser steps; docs/defects.md)");
-  EXPECT_EQ(w[1], "output.rate 1000 Hz under-samples a dipped joint's impact (about 1 ms): 5000 Hz or more resolves "
-                  "its P1 in the bag");
+  EXPECT_EQ(w[0],
+            "solver.track_step 4e-05 s is coarser than the 2e-05 s that a dipped joint's impact peak P1 needs "
+            "(its P2 converges at coarser steps; docs/defects.md)");
+  EXPECT_EQ(w[1],
+            "output.rate 1000 Hz under-samples a dipped joint's impact (about 1 ms): 5000 Hz or more resolves "
+            "its P1 in the bag");
   EXPECT_NE(describe(coarse, Role::kTrack).find("\nwarning: solver.track_step 4e-05 s is coarser"), std::string::npos);
   const Scene fine = loadSceneText(text, "scene.yaml", kData, {"output.rate=10000"});
   EXPECT_TRUE(sceneWarnings(fine).empty());
-  const Scene off = loadSceneText(text, "scene.yaml", kData, {"effects.track_defects=false", "solver.track_step=4e-5",
-                                                              "solver.vehicle_max_step=4e-5"});
+  const Scene off =
+      loadSceneText(text, "scene.yaml", kData,
+                    {"effects.track_defects=false", "solver.track_step=4e-5", "solver.vehicle_max_step=4e-5"});
   EXPECT_TRUE(sceneWarnings(off).empty());
   EXPECT_EQ(describe(off, Role::kTrack).find("warning:"), std::string::npos);
 }
