@@ -60,6 +60,16 @@ class HardCasesCi(unittest.TestCase):
     def test_derailment_climb(self):
         self._assert_row("derailment_climb")
 
+    def test_dipped_joint_impact(self):
+        self._assert_row("dipped_joint_impact")
+
+    def test_wheel_flat_impact(self):
+        self._assert_row("wheel_flat_impact")
+
+    def test_every_ci_case_is_asserted(self):
+        asserted = {n[len("test_"):] for n in dir(self) if n.startswith("test_") and n != "test_every_ci_case_is_asserted"}
+        self.assertEqual({r["case"].key for r in self.rows}, asserted)
+
 
 def main():
     suite = unittest.TestLoader().loadTestsFromTestCase(HardCasesCi)
