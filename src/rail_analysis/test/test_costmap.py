@@ -103,6 +103,22 @@ class Metrics(unittest.TestCase):
         self.assertAlmostEqual(m["lateral_rms"], 1e-3, delta=1e-18)
         self.assertIsNone(m["deflection_z_max"])   # the case has no rail deflection: not available
         self.assertIsNone(m["force_z_rms"])
+        self.assertIsNone(m["impact_p1"])          # no wheel force: no impact peaks
+
+    def test_impact_peaks_are_the_cases_own_after_the_discard(self):
+        # Two wheels at 10 kHz: a 300 kN spike before the discard (left out), a 700 Hz burst on a 60 Hz
+        # bounce after it. P1 is the raw maximum after the discard; P2 the 150 Hz low-pass's maximum, below P1.
+        t = np.arange(0.0, 0.3, 1e-4)
+        tau = np.clip(t - 0.15, 0.0, None)
+        q = 73e3 + 50e3 * np.exp(-tau / 0.02) * np.sin(2 * np.pi * 60.0 * tau) \
+            + 80e3 * np.exp(-tau / 1e-3) * np.sin(2 * np.pi * 700.0 * tau)
+        q[100] = 300e3
+        both = np.column_stack([q, np.full_like(q, 73e3)])
+        m = costmap.metrics_against({"force_z": (t, both)}, {"force_z": (t, both)}, 0.05)
+        self.assertAlmostEqual(m["impact_p1"], float(q[t >= 0.05].max()), delta=1e-6)
+        self.assertLess(m["impact_p2"], m["impact_p1"] - 20e3)
+        self.assertGreater(m["impact_p2"], 73e3 + 0.9 * 50e3 * 0.6)  # the bounce's first peak, less its decay
+        self.assertEqual(m["force_z_max"], 0.0)                      # against itself
 
 
 class Pareto(unittest.TestCase):

@@ -53,7 +53,11 @@ DEFAULT_DISCARD = 0.1            # s of simulated time skipped at the start (set
 RESULT = "result.yaml"
 # (name, unit) of the metric signals, in table order.
 SIGNALS = (("lateral", "m"), ("vertical", "m"), ("force_z", "N"), ("force_y", "N"), ("deflection_z", "m"))
-METRIC_NAMES = tuple("%s_%s" % (s, k) for s, _ in SIGNALS for k in ("max", "rms"))
+# The case's own impact peaks (not deviations): the largest vertical force on the metrics' wheelset after the
+# discard, unfiltered (P1) and low-passed at 150 Hz (P2, rail_analysis.safety.p2_force) [N].
+IMPACT_METRICS = ("impact_p1", "impact_p2")
+DEVIATION_METRICS = tuple("%s_%s" % (s, k) for s, _ in SIGNALS for k in ("max", "rms"))
+METRIC_NAMES = DEVIATION_METRICS + IMPACT_METRICS
 # Components of the cost profiles copied into the table (seconds).
 COST_COLUMNS = (("vehicle", "loop_wall_time"), ("vehicle", "vehicle_integration"), ("vehicle", "transport_wait"),
                 ("track", "loop_wall_time"), ("track", "track_step"), ("track", "transport_wait"))
@@ -212,9 +216,9 @@ class Grid(object):
         self.deflection_section = None if sec is None else self._number(metrics, "deflection_section", 0,
                                                                         "metrics.")
         self.pareto_metric = str(metrics.get("pareto_metric", "force_z_rms"))
-        if self.pareto_metric not in METRIC_NAMES:
+        if self.pareto_metric not in DEVIATION_METRICS:
             raise GridError("%s: metrics.pareto_metric: unknown metric '%s' (known: %s)"
-                            % (path, self.pareto_metric, ", ".join(METRIC_NAMES)))
+                            % (path, self.pareto_metric, ", ".join(DEVIATION_METRICS)))
         self.pareto_time = str(metrics.get("pareto_time", "wall_time"))
         if self.pareto_time not in ("wall_time", "loop_wall_time"):
             raise GridError("%s: metrics.pareto_time: must be wall_time or loop_wall_time, got '%s'"
@@ -390,6 +394,16 @@ def metrics_against(ref_series, series, discard):
             mx = rms = float("nan")
         m[name + "_max"] = mx if math.isfinite(mx) else None
         m[name + "_rms"] = rms if math.isfinite(rms) else None
+    m["impact_p1"] = m["impact_p2"] = None
+    if "force_z" in series:
+        from .safety import p2_force
+        t, q = np.asarray(series["force_z"][0], float), np.asarray(series["force_z"][1], float)
+        late = t >= discard
+        if late.any():
+            m["impact_p1"] = float(np.nanmax(q[late]))
+            qp2 = p2_force(t, q)
+            if qp2 is not None:
+                m["impact_p2"] = float(np.nanmax(qp2[late]))
     return m
 
 
