@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <limits>
 #include <string>
@@ -82,6 +83,61 @@ rc::WheelContactOptions contactOptions(const Scene& scene, rc::WheelContactOptio
                            ? rc::WheelDefects(scene.vehicle.wheel_defects, scene.vehicle.nominal_radius)
                            : rc::WheelDefects();
   return base;
+}
+
+std::vector<DefectOutline> defectOutlines(const Scene& scene, const rc::TrackGeometry& geometry) {
+  std::vector<DefectOutline> out;
+  auto samples = [](double from, double to, double spacing) {
+    return std::max(2, static_cast<int>(std::ceil((to - from) / spacing)) + 1);
+  };
+  char text[96];
+  if (scene.effects.track_defects) {
+    for (const rc::RailDefect& d : scene.track.defects) {
+      if (d.shape == rc::DefectShape::kDippedJoint) {
+        std::snprintf(text, sizeof(text), "dipped joint %.1f mrad", d.dip_angle * 1e3);
+      } else {
+        std::snprintf(text, sizeof(text), "weld %+.2f mm", d.height * 1e3);
+      }
+      for (const rc::RailSide side : {rc::RailSide::kLeft, rc::RailSide::kRight}) {
+        if (side == rc::RailSide::kLeft ? !d.left : !d.right) continue;
+        DefectOutline o;
+        o.label = text;
+        const double from = d.s_centre - 0.5 * d.length, to = d.s_centre + 0.5 * d.length;
+        const int n = samples(from, to, 0.1);
+        rc::RailPoint rp;
+        for (int i = 0; i < n; ++i) {
+          geometry.rail(side, from + (to - from) * i / (n - 1), rp);
+          o.points.push_back(rp.p_origin_in_world);
+        }
+        out.push_back(std::move(o));
+      }
+    }
+  }
+  if (scene.effects.support_variation) {
+    for (const SupportZone& z : scene.track.support) {
+      DefectOutline o;
+      o.kind = DefectOutline::Kind::kSupportZone;
+      std::string label;
+      auto factor = [&](const char* what, double f) {
+        if (f == 1.0) return;
+        std::snprintf(text, sizeof(text), "%s%s x%.2f", label.empty() ? "" : ", ", what, f);
+        label += text;
+      };
+      factor("pads", z.pad_stiffness);
+      factor("pad damping", z.pad_damping);
+      factor("ballast", z.ballast_stiffness);
+      factor("ballast damping", z.ballast_damping);
+      o.label = label.empty() ? "support zone" : label;
+      const int n = samples(z.s_from, z.s_to, 1.0);
+      rc::TrackPoint tp;
+      for (int i = 0; i < n; ++i) {
+        geometry.centre(z.s_from + (z.s_to - z.s_from) * i / (n - 1), tp);
+        o.points.push_back(tp.p_center_in_world);
+      }
+      out.push_back(std::move(o));
+    }
+  }
+  return out;
 }
 
 Eigen::Vector2d gaugePointInTrackPlane(const rc::ProfileCurve& rail_own_frame, double inclination, double depth) {

@@ -467,6 +467,43 @@ TEST(Scene, ImpactsWarnOfACoarseTrackStepAndOutputRate) {
   EXPECT_EQ(describe(off, Role::kTrack).find("warning:"), std::string::npos);
 }
 
+// What rviz draws of the defects: a joint on the left rail along that rail's top (dipped by the joint itself
+// at its centre), a zone along the centre line, each labelled; nothing of an effect that is off.
+TEST(Scene, DefectOutlinesFollowTheRailsAndTheCentreLine) {
+  const std::string text = replaced(
+      replaced(kBase, "  data: track_data.yaml\n",
+               "  data: track_data.yaml\n"
+               "  defects: [{type: dipped_joint, s: 30.0, length: 1.0, dip_angle: 0.01, rail: left}]\n"
+               "  support: [{s_from: 40.0, s_to: 70.0, ramp: 5.0, ballast_stiffness: 4.0, ballast_damping: 2.0}]\n"),
+      "track_model: rigid_fe", "track_model: flexible\n  track_defects: true\n  support_variation: true");
+  const Scene s = load(text);
+  const rail::contact::TrackGeometry geometry = buildTrackGeometry(s);
+  const std::vector<DefectOutline> outlines = defectOutlines(s, geometry);
+  ASSERT_EQ(outlines.size(), 2u);
+  const DefectOutline& joint = outlines[0];
+  EXPECT_EQ(joint.kind, DefectOutline::Kind::kRailDefect);
+  EXPECT_EQ(joint.label, "dipped joint 10.0 mrad");
+  ASSERT_EQ(joint.points.size(), 11u);  // 1 m at most 0.1 m apart
+  rail::contact::RailPoint rp;
+  geometry.rail(rail::contact::RailSide::kLeft, 29.5, rp);
+  EXPECT_LT((joint.points.front() - rp.p_origin_in_world).norm(), 1e-12);
+  // At the joint the rail top lies alpha L / 2 = 2.5 mm below the plain rail's (the geometry without defects).
+  Scene plain = s;
+  plain.effects.track_defects = false;
+  buildTrackGeometry(plain).rail(rail::contact::RailSide::kLeft, 30.0, rp);
+  EXPECT_NEAR((rp.p_origin_in_world - joint.points[5]).norm(), 2.5e-3, 1e-5);
+  const DefectOutline& zone = outlines[1];
+  EXPECT_EQ(zone.kind, DefectOutline::Kind::kSupportZone);
+  EXPECT_EQ(zone.label, "ballast x4.00, ballast damping x2.00");
+  ASSERT_EQ(zone.points.size(), 31u);
+  rail::contact::TrackPoint tp;
+  geometry.centre(70.0, tp);
+  EXPECT_LT((zone.points.back() - tp.p_center_in_world).norm(), 1e-12);
+  Scene off = s;
+  off.effects.track_defects = off.effects.support_variation = false;
+  EXPECT_TRUE(defectOutlines(off, geometry).empty());
+}
+
 TEST(Scene, ContactSectionReachesTheSceneAndItsHash) {
   const Scene base = load(kBase);
   EXPECT_DOUBLE_EQ(base.contact.friction, 0.3);  // the defaults are rail_contact's

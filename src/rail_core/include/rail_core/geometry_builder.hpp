@@ -4,6 +4,10 @@
 // or irregularity code come back as SceneError naming the scene file and the field.
 #pragma once
 
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
 #include <rail_contact/irregularities.hpp>
 #include <rail_contact/profile.hpp>
 #include <rail_contact/track_geometry.hpp>
@@ -26,6 +30,18 @@ rail::contact::WheelProfile wheelProfile(const Scene& scene);
 // effects.spin_creepage, Polach's creep law, contact.friction and the impact damping of contact.restitution
 // and contact.impact_velocity_floor.
 rail::contact::WheelContactOptions contactOptions(const Scene& scene, rail::contact::WheelContactOptions base);
+
+// Where a scene's local defects are, for the picture (rviz): a dipped joint or a weld as a line along the
+// top of each rail it is on, a support zone as a line along the centre line at the sleepers' level, each with
+// a short label. Only the effects that are on; empty when none is. Points at most 0.1 m (rail defects) or
+// 1 m (zones) apart, world frame.
+struct DefectOutline {
+  enum class Kind { kRailDefect, kSupportZone };
+  Kind kind = Kind::kRailDefect;
+  std::string label;  // e.g. "dipped joint 10.0 mrad", "ballast x4.00"
+  std::vector<Eigen::Vector3d> points;
+};
+std::vector<DefectOutline> defectOutlines(const Scene& scene, const rail::contact::TrackGeometry& geometry);
 
 // Gauge point of a rail (EN 13848-1: on the gauge face, depth below the running surface) in a frame
 // aligned with the track plane with its origin at the rail profile origin: y toward the track centre,

@@ -19,7 +19,10 @@
 #include <rail_msgs/FloorAccelerations.h>
 #include <rail_msgs/WheelStates.h>
 #include <rail_msgs/WheelsetKinematics.h>
+#include <Eigen/Geometry>
+
 #include <rail_core/exit_codes.hpp>
+#include <rail_core/geometry_builder.hpp>
 #include <rail_ros/contact_point_message.hpp>
 
 namespace rail::vehicle {
@@ -166,7 +169,11 @@ struct VehicleMarkers {
   double force_scale = 1e-5;      // m per N: 100 kN draws 1 m
   double wheel_radius = 0.445;    // m
 
-  VehicleMarkers(const VehicleSimulator& sim, double radius, double scale) : force_scale(scale), wheel_radius(radius) {
+  std::vector<int> flat_marker;             // per wheel flat: the spot on its wheel's rim
+  std::vector<contact::WheelDefect> flats;  // the flats, in flat_marker's order
+
+  VehicleMarkers(const VehicleSimulator& sim, const core::Scene& scene, double radius, double scale)
+      : force_scale(scale), wheel_radius(radius) {
     const std::size_t nb = sim.bodies().size();
     body_marker.assign(nb, -1);
     auto add = [&](const std::string& ns, int type, double sx, double sy, double sz, float r, float g, float b) {
@@ -204,6 +211,30 @@ struct VehicleMarkers {
           add("contact_forces", visualization_msgs::Marker::ARROW, 0.05, 0.12, 0.15, 0.9f, 0.2f, 0.1f));
       array.markers.back().points.resize(2);
     }
+    // Local defects where they are (static): rail defects along the rail heads, support zones as a band at
+    // the sleepers, each labelled; wheel flats as a spot on their wheel's rim (turning with it).
+    for (const core::DefectOutline& o : core::defectOutlines(scene, sim.track())) {
+      const bool rail = o.kind == core::DefectOutline::Kind::kRailDefect;
+      const Vector3 lift(0.0, 0.0, rail ? 0.02 : -0.25);
+      const int line = rail ? add("rail_defects", visualization_msgs::Marker::LINE_STRIP, 0.12, 0, 0, 1.0f, 0.5f, 0.0f)
+                            : add("support_zones", visualization_msgs::Marker::LINE_STRIP, 2.6, 0, 0, 0.2f, 0.7f, 0.3f);
+      visualization_msgs::Marker& m = array.markers[static_cast<std::size_t>(line)];
+      if (!rail) m.color.a = 0.4f;
+      m.points.resize(o.points.size());
+      for (std::size_t k = 0; k < o.points.size(); ++k) fill(m.points[k], o.points[k] + lift);
+      const int text = add("defect_labels", visualization_msgs::Marker::TEXT_VIEW_FACING, 0, 0, 0.3, 1.0f, 1.0f, 1.0f);
+      visualization_msgs::Marker& t = array.markers[static_cast<std::size_t>(text)];
+      t.text = o.label;
+      fill(t.pose.position, o.points[o.points.size() / 2] + Vector3(0.0, 0.0, rail ? 1.2 : 0.8));
+    }
+    if (scene.effects.wheel_defects) {
+      for (const contact::WheelDefect& d : scene.vehicle.wheel_defects) {
+        if (d.shape != contact::WheelDefectShape::kFlat || d.wheel >= sim.wheels().size()) continue;
+        flats.push_back(d);
+        flat_marker.push_back(
+            add("wheel_defects", visualization_msgs::Marker::SPHERE, 0.09, 0.09, 0.09, 1.0f, 0.1f, 0.1f));
+      }
+    }
   }
 
   // q * (rotation of +90 deg about x): a cylinder's axis (z) along the body's y (the axle).
@@ -233,6 +264,14 @@ struct VehicleMarkers {
       fill(arrow.points[0], foot - force_scale * w.force_in_world);
       fill(arrow.points[1], foot);
     }
+    for (std::size_t k = 0; k < flats.size(); ++k) {
+      // The flat's centre on the rim: angle from the wheelset's -z toward +x, turned with the wheelset.
+      const WheelOutput& w = sim.wheels()[flats[k].wheel];
+      const Eigen::Quaterniond q(w.orientation[0], w.orientation[1], w.orientation[2], w.orientation[3]);
+      const Vector3 rim(wheel_radius * std::sin(flats[k].angle), 0.0, -wheel_radius * std::cos(flats[k].angle));
+      fill(array.markers[static_cast<std::size_t>(flat_marker[k])].pose.position,
+           w.p_in_world + q.normalized().toRotationMatrix() * rim);
+    }
     return array;
   }
 };
@@ -254,7 +293,8 @@ VehicleOutputs::VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const 
   // rviz markers (effects.rviz_markers): built only when on, published at ~marker_rate (default 25 Hz).
   if (scene.effects.rviz_markers) {
     pub_markers_ = nh.advertise<visualization_msgs::MarkerArray>("/vehicle_markers", 2);
-    markers_ = std::make_unique<VehicleMarkers>(sim, scene.vehicle.nominal_radius, pnh.param("force_scale", 1e-5));
+    markers_ =
+        std::make_unique<VehicleMarkers>(sim, scene, scene.vehicle.nominal_radius, pnh.param("force_scale", 1e-5));
     marker_period_ = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
   }
 }
