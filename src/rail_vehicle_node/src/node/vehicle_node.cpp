@@ -113,18 +113,21 @@ int runVehicle(const Scene& scene, ros::NodeHandle& nh, ros::NodeHandle& pnh) {
     if (cosim_vehicle) cosim_vehicle->close();
     return kExitInternal;  // the outputs close their bag
   }
-  switch (write_failed ? rv::VehicleRun::End::kFinished : run.end()) {
-    case rv::VehicleRun::End::kFinished:
-      break;
-    case rv::VehicleRun::End::kStopped:
-      ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim.time(), stop.reason());
-      break;
-    case rv::VehicleRun::End::kFailed:
-      ROS_ERROR("%s: %s", node.c_str(), run.message().c_str());
-      break;
-    case rv::VehicleRun::End::kExchangeFailed:
-      ROS_FATAL("%s: %s (track node %s)", node.c_str(), run.message().c_str(), peer.c_str());
-      break;
+  // A write failure has said its one line (NodeRun::writeFailed); the run's own end is reported otherwise.
+  if (!write_failed) {
+    switch (run.end()) {
+      case rv::VehicleRun::End::kFinished:
+        break;
+      case rv::VehicleRun::End::kStopped:
+        ROS_WARN("%s: stopped at t = %.4f s (%s); closing the bag", node.c_str(), sim.time(), stop.reason());
+        break;
+      case rv::VehicleRun::End::kFailed:
+        ROS_ERROR("%s: %s", node.c_str(), run.message().c_str());
+        break;
+      case rv::VehicleRun::End::kExchangeFailed:
+        ROS_FATAL("%s: %s (track node %s)", node.c_str(), run.message().c_str(), peer.c_str());
+        break;
+    }
   }
   if (cosim_vehicle) {
     cosim_vehicle->close();
