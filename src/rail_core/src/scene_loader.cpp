@@ -185,13 +185,22 @@ DataFile readFileKey(MapReader& r, const char* key, bool required, const Context
   return resolveFile(r, key, s, ctx);
 }
 
+// Each item of the list `key` in r (a sequence of maps), handed to `read` with its own reader named
+// path[i]; absent: nothing; not a list: refused naming the key.
+template <class Read>
+void readList(MapReader& r, const char* key, const std::string& path, const char* what, const Context& ctx, Read read) {
+  const YAML::Node seq = r.child(key);
+  if (!seq) return;
+  if (!seq.IsSequence()) r.fail(key, std::string("must be a list of ") + what);
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    MapReader item(seq[i], path + "[" + std::to_string(i) + "]", ctx.file, raiseSceneError);
+    read(item);
+  }
+}
+
 // track.defects: each defect lies wholly on the track; its shape's own figure is in range.
 void readDefects(MapReader& r, Track& t, const Context& ctx) {
-  const YAML::Node seq = r.child("defects");
-  if (!seq) return;
-  if (!seq.IsSequence()) r.fail("defects", "must be a list of defects");
-  for (std::size_t i = 0; i < seq.size(); ++i) {
-    MapReader dr(seq[i], "track.defects[" + std::to_string(i) + "]", ctx.file, raiseSceneError);
+  readList(r, "defects", "track.defects", "defects", ctx, [&](MapReader& dr) {
     contact::RailDefect d;
     dr.require("type");
     dr.choice("type", d.shape, kDefectShapeWords);
@@ -221,16 +230,12 @@ void readDefects(MapReader& r, Track& t, const Context& ctx) {
     }
     dr.finish();
     t.defects.push_back(d);
-  }
+  });
 }
 
 // track.support: zones on the track, their ramps inside them, factors in a physical range.
 void readSupport(MapReader& r, Track& t, const Context& ctx) {
-  const YAML::Node seq = r.child("support");
-  if (!seq) return;
-  if (!seq.IsSequence()) r.fail("support", "must be a list of support zones");
-  for (std::size_t i = 0; i < seq.size(); ++i) {
-    MapReader zr(seq[i], "track.support[" + std::to_string(i) + "]", ctx.file, raiseSceneError);
+  readList(r, "support", "track.support", "support zones", ctx, [&](MapReader& zr) {
     SupportZone z;
     zr.require("s_from");
     zr.number("s_from", z.s_from);
@@ -255,7 +260,7 @@ void readSupport(MapReader& r, Track& t, const Context& ctx) {
     }
     zr.finish();
     t.support.push_back(z);
-  }
+  });
 }
 
 void readDirection(MapReader& r, Segment& seg, bool required) {
@@ -441,12 +446,8 @@ void readTrack(MapReader& root, Scene& s, const Context& ctx) {
 // vehicle.wheel_defects: on an existing wheelset; a flat no longer than a quarter of the circumference and,
 // rounded, no deeper than the wheel can follow; an out-of-roundness of a sensible order and amplitude.
 void readWheelDefects(MapReader& r, Vehicle& v, const Context& ctx) {
-  const YAML::Node seq = r.child("wheel_defects");
-  if (!seq) return;
-  if (!seq.IsSequence()) r.fail("wheel_defects", "must be a list of wheel defects");
   constexpr double kPi = 3.14159265358979323846;
-  for (std::size_t i = 0; i < seq.size(); ++i) {
-    MapReader dr(seq[i], "vehicle.wheel_defects[" + std::to_string(i) + "]", ctx.file, raiseSceneError);
+  readList(r, "wheel_defects", "vehicle.wheel_defects", "wheel defects", ctx, [&](MapReader& dr) {
     contact::WheelDefect d;
     dr.require("type");
     dr.choice("type", d.shape, kWheelDefectShapeWords);
@@ -500,7 +501,7 @@ void readWheelDefects(MapReader& r, Vehicle& v, const Context& ctx) {
       d.wheel = static_cast<std::uint32_t>(2 * wheelset + side);
       v.wheel_defects.push_back(d);
     }
-  }
+  });
 }
 
 void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
