@@ -27,7 +27,8 @@ struct CostClock {
   enum Part {
     kVehicleRhs,          // vehicle right-hand sides for the integrator's steps (contact on the rigid track inside)
     kVehicleJacobian,     // right-hand sides of CVODE's difference-quotient Jacobians (BDF)
-    kTrackRhs,            // Newmark right-hand side M x1 + C x2 + f and the step's completion (vector work)
+    kTrackRhs,            // Newmark right-hand side M x1 + C x2 + f and the step's completion (vector work; on the
+                          // second thread with the semi-implicit coupling's column loads)
     kTrackSolve,          // Newmark K_eff solve (CHOLMOD), one per step
     kTrackSolveWait,      // the step waiting for its right-hand side and solve done beside it (second thread)
     kWindowMoves,         // track window moves (model build or reuse, state carry-over, rail arrays)

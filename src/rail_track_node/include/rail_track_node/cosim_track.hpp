@@ -32,6 +32,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <atomic>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -240,9 +241,12 @@ class CosimTrack {
                        rail::core::coupling::WrenchFrame& out) noexcept;
   void addColumnLoads() noexcept;  // finishStep: d = x_b + K_eff^{-1} W f
   // The load-free right-hand side and solve of the next step (stepDisplacement() = K_eff^{-1} rhs_0): on
-  // the second thread (startBaseSolve, then awaitBaseSolve) or here (solveBase).
+  // the second thread (startBaseSolve, then awaitBaseSolve) or here (solveBase). With finish, the second
+  // thread first completes the step (addColumnLoads, completeStep), which finishStep awaits
+  // (awaitCompletion).
   void solveBase() noexcept;
-  void startBaseSolve() noexcept;
+  void startBaseSolve(bool finish) noexcept;
+  void awaitCompletion() noexcept;
   void awaitBaseSolve() noexcept;
   void takeWorkerCost() noexcept;
   void workerLoop() noexcept;
@@ -294,8 +298,13 @@ class CosimTrack {
   std::mutex worker_mutex_;
   std::condition_variable worker_cv_;
   bool worker_job_ = false, worker_done_ = false, worker_stop_ = false;
+  bool worker_finish_ = false;     // the job first completes the step (column loads, Newmark completion)
+  bool worker_completed_ = false;  // ... and has done so
+  // worker_job_, worker_completed_ and worker_done_ as each side spins on them before it sleeps (no lock).
+  std::atomic<bool> worker_posted_{false}, worker_completed_flag_{false}, worker_done_flag_{false};
   rail::core::CostClock worker_cost_;
-  NodalLoads no_loads_{0};  // the base solve's (none)
+  rail::core::CostClock completion_cost_;  // the worker's completion of a step (awaitCompletion takes it)
+  NodalLoads no_loads_{0};                 // the base solve's (none)
 };
 
 }  // namespace track

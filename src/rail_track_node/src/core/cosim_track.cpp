@@ -30,6 +30,36 @@ using rail::core::SceneError;
 
 namespace {
 
+// How long a thread of the step waits awake (spinning) for the other before it sleeps on the condition
+// variable: a futex wake-up costs 10-50 us here, a track step a few hundred. The worker waits for its
+// next job through the Newton solve, and the loop's thread for the base solve after its contacts; both
+// while the vehicle node waits for the track. The loop's thread sleeps while the worker completes a step
+// (the vehicle integrates then: a spin would take a core from one of them).
+constexpr std::chrono::microseconds kJobSpin{400}, kSolveSpin{400};
+
+// Moves the Newmark parts (right-hand side, solve) and the counts of `from` into `to`.
+void addClock(rail::core::CostClock& from, rail::core::CostClock& to) noexcept {
+  for (int p : {rail::core::CostClock::kTrackRhs, rail::core::CostClock::kTrackSolve}) {
+    to.seconds[static_cast<std::size_t>(p)] += from.seconds[static_cast<std::size_t>(p)];
+    to.calls[static_cast<std::size_t>(p)] += from.calls[static_cast<std::size_t>(p)];
+    from.seconds[static_cast<std::size_t>(p)] = 0.0;
+    from.calls[static_cast<std::size_t>(p)] = 0;
+  }
+  for (std::size_t c = 0; c < from.counts.size(); ++c) {
+    to.counts[c] += from.counts[c];
+    from.counts[c] = 0;
+  }
+}
+
+bool awaitFlag(const std::atomic<bool>& flag, bool value, std::chrono::microseconds budget) noexcept {
+  const auto until = std::chrono::steady_clock::now() + budget;
+  for (int i = 1;; ++i) {
+    if (flag.load(std::memory_order_acquire) == value) return true;
+    __builtin_ia32_pause();
+    if (i % 32 == 0 && std::chrono::steady_clock::now() > until) return false;
+  }
+}
+
 // The contact forces' share of a step (Newton, influence columns and their loads): added to the contact
 // clock, when there is one, at the end of the scope.
 class ForcesTime {
@@ -280,7 +310,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
       if (window_) window_->setCostClock(&worker_cost_);
     }
     worker_ = std::thread([this] { workerLoop(); });
-    startBaseSolve();
+    startBaseSolve(false);
   }
 }
 
@@ -298,52 +328,83 @@ CosimTrack::~CosimTrack() {
 void CosimTrack::solveBase() noexcept { integ().solveStep(st(), no_loads_); }
 
 void CosimTrack::workerLoop() noexcept {
-  std::unique_lock<std::mutex> lock(worker_mutex_);
   for (;;) {
+    // The next job usually follows within a Newton solve: wait awake for a while, then asleep.
+    awaitFlag(worker_posted_, true, kJobSpin);
+    std::unique_lock<std::mutex> lock(worker_mutex_);
     worker_cv_.wait(lock, [this] { return worker_job_ || worker_stop_; });
     if (worker_stop_) return;
     worker_job_ = false;
+    worker_posted_.store(false, std::memory_order_relaxed);
+    const bool finish = worker_finish_;
     lock.unlock();
+    if (finish) {
+      // Timed as the completion (track_rhs, beside the step); awaitCompletion takes the clock.
+      if (cost_ != nullptr) integ().setCostClock(&completion_cost_);
+      const auto t0 = std::chrono::steady_clock::now();
+      addColumnLoads();
+      if (cost_ != nullptr)
+        completion_cost_.seconds[rail::core::CostClock::kTrackRhs] +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      integ().completeStep(st());
+      if (cost_ != nullptr) integ().setCostClock(&worker_cost_);
+      lock.lock();
+      worker_completed_ = true;
+      worker_completed_flag_.store(true, std::memory_order_release);
+      lock.unlock();
+      worker_cv_.notify_all();
+    }
     solveBase();
     lock.lock();
     worker_done_ = true;
+    worker_done_flag_.store(true, std::memory_order_release);
+    lock.unlock();
     worker_cv_.notify_all();
   }
 }
 
-void CosimTrack::startBaseSolve() noexcept {
+// finish: the worker first completes the Newmark step (the step's column loads, then the completion)
+// and says so, then solves the next base step.
+void CosimTrack::startBaseSolve(bool finish) noexcept {
   {
     std::lock_guard<std::mutex> lock(worker_mutex_);
     worker_done_ = false;
+    worker_done_flag_.store(false, std::memory_order_relaxed);
+    worker_completed_ = false;
+    worker_completed_flag_.store(false, std::memory_order_relaxed);
+    worker_finish_ = finish;
     worker_job_ = true;
+    worker_posted_.store(true, std::memory_order_release);
   }
   worker_cv_.notify_all();
   base_ = BaseSolve::kRunning;
+}
+
+// Waits (asleep) for the worker's completion of the step.
+void CosimTrack::awaitCompletion() noexcept {
+  rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolveWait);
+  {
+    std::unique_lock<std::mutex> lock(worker_mutex_);
+    worker_cv_.wait(lock, [this] { return worker_completed_; });
+  }
+  if (cost_ != nullptr) addClock(completion_cost_, *cost_);
 }
 
 void CosimTrack::awaitBaseSolve() noexcept {
   if (base_ != BaseSolve::kRunning) return;
   {
     rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolveWait);
+    awaitFlag(worker_done_flag_, true, kSolveSpin);
     std::unique_lock<std::mutex> lock(worker_mutex_);
     worker_cv_.wait(lock, [this] { return worker_done_; });
   }
   base_ = BaseSolve::kReady;
+  takeWorkerCost();
 }
 
 // Adds the worker's clock to cost_; called while the worker waits for its next job.
 void CosimTrack::takeWorkerCost() noexcept {
-  if (cost_ == nullptr || !solve_beside_) return;
-  for (int p : {rail::core::CostClock::kTrackRhs, rail::core::CostClock::kTrackSolve}) {
-    cost_->seconds[static_cast<std::size_t>(p)] += worker_cost_.seconds[static_cast<std::size_t>(p)];
-    cost_->calls[static_cast<std::size_t>(p)] += worker_cost_.calls[static_cast<std::size_t>(p)];
-    worker_cost_.seconds[static_cast<std::size_t>(p)] = 0.0;
-    worker_cost_.calls[static_cast<std::size_t>(p)] = 0;
-  }
-  for (std::size_t c = 0; c < worker_cost_.counts.size(); ++c) {
-    cost_->counts[c] += worker_cost_.counts[c];
-    worker_cost_.counts[c] = 0;
-  }
+  if (cost_ != nullptr && solve_beside_) addClock(worker_cost_, *cost_);
 }
 
 // The rails as the contact search sees them: the FE rail beams of feMesh(), nodes equally spaced in s. At a
@@ -532,16 +593,20 @@ void CosimTrack::finishStep() noexcept {
         integ().step(st(), *loads_);
         break;
       case CosimCoupling::kSemiImplicit:
-        addColumnLoads();
-        integ().completeStep(st());
-        takeWorkerCost();  // its solve and this completion, timed on the worker's clock
+        if (solve_beside_) {
+          startBaseSolve(true);  // the worker completes this step, then solves the next base step
+          awaitCompletion();
+        } else {
+          addColumnLoads();
+          integ().completeStep(st());
+        }
         break;
     }
     if (window_) window_->finishStep();  // the window's own rail arrays and step count
     ++newmark_steps_;
     fillDeformation();
   }
-  if (solve_beside_ && base_ == BaseSolve::kNone) startBaseSolve();
+  if (solve_beside_ && base_ == BaseSolve::kNone) startBaseSolve(false);
 }
 
 // x = K_eff^{-1} e_dof into im.column and its window (trimColumn).
@@ -1015,7 +1080,8 @@ void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFr
 // d = x_b + K_eff^{-1} W f: the step's nodal loads, summed per influence column by applyLinkForces.
 void CosimTrack::addColumnLoads() noexcept {
   if (!implicit_) return;
-  ForcesTime timing(contact_cost_);  // part of the contact forces' cost, as in the step
+  // Part of the contact forces' cost in the step; on the worker, part of the completion (track_rhs).
+  ForcesTime timing(solve_beside_ ? nullptr : contact_cost_);
   Implicit& im = *implicit_;
   Eigen::VectorXd& d_new = integ().stepDisplacement();
   for (const int col : im.used_columns) {
