@@ -932,16 +932,19 @@ void CosimTrack::solveLinkForces() noexcept {
   constexpr double kDu = 1e-11;  // m, difference step of the law Jacobian (rail velocity step 2 kDu / h)
   bool converged = false;
   Implicit::LawOut lo, lp;
-  auto residuals = [&](bool jacobian) {
+  // known: F_wheel already holds the law at u (the line search's accepted trial): only the Jacobian is new.
+  auto residuals = [&](bool jacobian, bool known = false) {
     double merit = 0.0;
     for (int c = 0; c < m; ++c) {
       Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
-      im.law(*contact_model_, h, Lc, Lc.u, lo);
-      Lc.F_wheel = lo.F_wheel;
+      if (!known) {
+        im.law(*contact_model_, h, Lc, Lc.u, lo);
+        Lc.F_wheel = lo.F_wheel;
+      }
       if (jacobian)
         for (int k = 0; k < 3; ++k) {
           im.law(*contact_model_, h, Lc, Lc.u + kDu * Eigen::Vector3d::Unit(k), lp);
-          Lc.J.col(k) = (lp.F_wheel - lo.F_wheel) / kDu;
+          Lc.J.col(k) = (lp.F_wheel - Lc.F_wheel) / kDu;
         }
     }
     for (int c = 0; c < m; ++c) {
@@ -1020,7 +1023,7 @@ void CosimTrack::solveLinkForces() noexcept {
       if (trial <= (1.0 - 1e-4 * alpha) * merit) break;
       alpha *= 0.5;
     }
-    merit = residuals(true);
+    merit = residuals(true, true);  // u is the last trial's
   }
   if (!converged) ++im.unconverged;
   for (int c = 0; c < m; ++c) {
