@@ -64,9 +64,12 @@ FLOOR_AMPLITUDE = 0.5           # [m/s^2]
 
 # Pad forces (flexible run): sleepers every 0.6 m from s_rear - 3 m to s_front + 3 m; every pad pressed by
 # PAD_BASE; at t = PAD_PEAK_T the right pad of the sleeper nearest PAD_PEAK_S pressed by PAD_PEAK and the
-# right rail there displaced by RAIL_PEAK (z down, y out).
+# right rail there displaced by RAIL_PEAK (z down, y out). Each sleeper presses the ballast with both pads'
+# compression and SLEEPER_WEIGHT (ballast=False: no ballast forces, as a bag of an older build).
 PAD_BASE, PAD_PEAK = 30e3, 55e3   # [N] compression (pad force z = -compression)
 PAD_PEAK_T, PAD_PEAK_S = 8.0, 170.0
+SLEEPER_WEIGHT = 2.9e3           # [N] added to both pads' compression in each sleeper's ballast force
+BALLAST_PEAK = PAD_BASE + PAD_PEAK + SLEEPER_WEIGHT
 RAIL_BASE = 0.5e-3
 RAIL_PEAK = (0.0, -0.3e-3, -1.2e-3)   # [m]; magnitude 1.2369 mm
 
@@ -162,7 +165,7 @@ def write_floor(bag):
         bag.write("/floor_accelerations", m, _stamp(ti))
 
 
-def write_pads(bag):
+def write_pads(bag, ballast=True):
     t = _times(PAD_RATE)
     s = arc_lengths(t)
     for i, ti in enumerate(t):
@@ -177,6 +180,9 @@ def write_pads(bag):
             m.right_pad_force.append(Vector3(0.0, 0.0, -(PAD_PEAK if k == k_peak else PAD_BASE)))
             m.left_rail_displacement.append(Vector3(0.0, 0.0, -RAIL_BASE))
             m.right_rail_displacement.append(Vector3(*RAIL_PEAK) if k == k_peak else Vector3(0.0, 0.0, -RAIL_BASE))
+            if ballast:
+                pads = PAD_BASE + (PAD_PEAK if k == k_peak else PAD_BASE)
+                m.ballast_force.append(Vector3(0.0, 0.0, -(pads + SLEEPER_WEIGHT)))
         bag.write("/pad_forces", m, _stamp(ti))
 
 
@@ -195,9 +201,10 @@ def write_vehicle(directory):
         yaml.safe_dump({"name": "synthetic", "gravity": [0.0, 0.0, -GRAVITY], "bodies": bodies}, f)
 
 
-def write_run(directory, name, floor=None, pads=None):
+def write_run(directory, name, floor=None, pads=None, ballast=True):
     """Writes <name>.bag (+ .track.bag for rigid_fe/flexible) and <name>.scene.yaml; floor (default: only for
-    standalone) adds /floor_accelerations, pads (default: only for flexible) adds /pad_forces."""
+    standalone) adds /floor_accelerations, pads (default: only for flexible) adds /pad_forces (ballast: with the
+    sleepers' ballast forces)."""
     os.makedirs(directory, exist_ok=True)
     write_vehicle(directory)
     model = {"standalone": "rigid", "rigid_fe": "rigid_fe", "flexible": "flexible"}.get(name, "rigid")
@@ -214,7 +221,7 @@ def write_run(directory, name, floor=None, pads=None):
         with rosbag.Bag(os.path.join(directory, name + ".track.bag"), "w") as bag:
             write_points(bag)
             if pads:
-                write_pads(bag)
+                write_pads(bag, ballast)
     with open(os.path.join(directory, name + ".scene.yaml"), "w") as f:
         yaml.safe_dump(scene_dict(model), f)
 

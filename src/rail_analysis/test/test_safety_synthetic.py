@@ -275,6 +275,19 @@ class SafetySynthetic(unittest.TestCase):
         self.assertLess(abs(r.s - syn.PAD_PEAK_S), 0.3 + 1e-9)  # nearest sleeper, 0.6 m spacing
         r = row(ev, "rail displacement")
         self.assertAlmostEqual(r.value, float(np.linalg.norm(syn.RAIL_PEAK)), delta=1e-12)
+        r = row(ev, "ballast force")
+        self.assertAlmostEqual(r.value, syn.BALLAST_PEAK, delta=1e-6)
+        self.assertAlmostEqual(r.t, syn.PAD_PEAK_T, delta=1e-6)
+        self.assertLess(abs(r.s - syn.PAD_PEAK_S), 0.3 + 1e-9)
+        self.assertEqual(r.status, safety.INFO)
+        # A bag recorded before /pad_forces carried the ballast says so; the pad rows stay.
+        d = os.path.join(self.work, "noballast")
+        syn.write_run(d, "flexible", ballast=False)
+        ev = safety.evaluate(safety.load_run_dir(d, "flexible"), self.settings)
+        self.assertEqual(row(ev, "ballast force").status, safety.NOT_AVAILABLE)
+        self.assertEqual(row(ev, "ballast force").note,
+                         "the bag's /pad_forces has no ballast forces (recorded by an older build)")
+        self.assertAlmostEqual(row(ev, "pad compression").value, syn.PAD_PEAK, delta=1e-6)
 
     def test_missing_topics_are_not_available_with_the_setting(self):
         text = ("needs /floor_accelerations: set effects.floor_acceleration_output: true and add "

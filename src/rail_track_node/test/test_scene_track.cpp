@@ -196,7 +196,7 @@ TEST(TrackSimulator, LoadsAreStaticallyEquivalent) {
   EXPECT_NEAR(sum.z(), -150000.0, 1e-6);
 }
 
-// Pad forces (PadForceProbe) in the static equilibrium under gravity and a 100 kN load on each rail: the
+// Pad and ballast forces (PadForceProbe) in the static equilibrium under gravity and a 100 kN load on each rail: the
 // rails rest on the pads alone (the end dashpots carry nothing at rest), so the pads' vertical forces on
 // the sleepers add up to the load plus the rails' weight (the z part of f_g at the rail nodes), to the
 // static solve's round-off (1e-6 of the total); each rail's largest pad force is at the sleeper nearest the
@@ -247,6 +247,23 @@ TEST(PadForceProbe, PadsCarryTheLoadAndTheRailWeightAtRest) {
                   .z(),
               0.0);
   }
+  // The ballast carries the whole track at rest: the sleepers' forces on the ballast add up to the loads
+  // plus the weight of everything above the ballast elements (the z part of f_g at every free DOF: rails,
+  // sleepers and the ballast masses lumped at the sleepers), to the same round-off; none lifts off.
+  double track_weight = 0.0;
+  for (std::size_t node = 0; node < m.nodes.size(); ++node) {
+    const int i = m.dofIndex(static_cast<int>(node), 2);
+    if (i >= 0) track_weight -= t.model.system.f_gravity(i);
+  }
+  EXPECT_GT(track_weight, rail_weight);
+  double ballast_z = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d& f = out[static_cast<std::size_t>(k)].ballast_force_in_track;
+    EXPECT_LT(f.z(), 0.0) << "sleeper " << k;
+    ballast_z += f.z();
+  }
+  const double expected_ballast = -(2.0 * 100000.0 + track_weight);
+  EXPECT_NEAR(ballast_z, expected_ballast, 1e-6 * std::abs(expected_ballast));
   // A sub-range returns the sleepers inside it only, in order of s.
   const int n_sub =
       probe.evaluate(m, t.geometry, sim.state().d, sim.state().v, nullptr, 8.95, 10.25, out.data(), m.n_sleepers);

@@ -15,7 +15,7 @@ Quantities and limits (formulas as the standards write them; sources beside the 
   |SumY_2m| <= alpha (10 kN + P/3), P = 2 Q0            Prud'homme (EN 14363: alpha (10 + 2 Q0/3) kN)
   Q_max <= Q_lim(V), Q_qst <= 145 kN                    vertical wheel force, EN 14363 track loading
   Tgamma = sum over the wheel's contacts |Tx nu_x| + |Ty nu_y|   [N = J/m], informative (no limit)
-  pad compression, rail displacement (flexible track)   informative
+  pad compression, ballast force, rail displacement    informative (flexible track)
 _2m: sliding mean over 2 m of track (centred window over the wheel's arc length).
 """
 import math
@@ -226,14 +226,17 @@ def load_floor(path):
 
 def load_pads(path):
     """/pad_forces: list per message of dict arc_length [m] (K,), left_pad, right_pad [N] (K, 3),
-    left_disp, right_disp [m] (K, 3) (track frame), and t [s] (N,)."""
+    left_disp, right_disp [m] (K, 3), ballast [N] (K, 3) (track frame; None in a bag recorded before the
+    message had it), and t [s] (N,)."""
     msgs = loading._messages(path, "/pad_forces", "pad forces")
     frames = []
     vec = lambda vs: np.array([[v.x, v.y, v.z] for v in vs]).reshape(-1, 3)
     for m in msgs:
         frames.append({"arc_length": np.array(m.arc_length, dtype=float),
                        "left_pad": vec(m.left_pad_force), "right_pad": vec(m.right_pad_force),
-                       "left_disp": vec(m.left_rail_displacement), "right_disp": vec(m.right_rail_displacement)})
+                       "left_disp": vec(m.left_rail_displacement), "right_disp": vec(m.right_rail_displacement),
+                       "ballast": (vec(m.ballast_force) if len(getattr(m, "ballast_force", ())) == len(m.arc_length)
+                                   else None)})
     t = np.array([m.header.stamp.to_sec() for m in msgs])
     order = np.argsort(t, kind="stable")
     return {"t": t[order], "frames": [frames[i] for i in order]}
@@ -578,7 +581,7 @@ def evaluate(run, settings=None):
             note = "not applicable: track_model %s (pad forces exist on the flexible track only)" % run.track_model()
         else:
             note = not_available_text("/pad_forces")
-        for q, u in (("pad compression (max)", "N"), ("rail displacement (max)", "m")):
+        for q, u in (("pad compression (max)", "N"), ("ballast force (max)", "N"), ("rail displacement (max)", "m")):
             rows.append(Row(q, u, status=NOT_AVAILABLE, note=note))
     else:
         ev.pads = pad_extremes(run.pads, st.t_discard)
@@ -586,6 +589,12 @@ def evaluate(run, settings=None):
         rows.append(Row("pad compression (max)", "N", p["compression"], None, p["compression_s"], p["compression_t"],
                         None, INFO, "-z of the rail-on-sleeper pad force, %s rail" % p["compression_rail"],
                         side=p["compression_side"]))
+        if p["ballast"] is None:
+            rows.append(Row("ballast force (max)", "N", status=NOT_AVAILABLE,
+                            note="the bag's /pad_forces has no ballast forces (recorded by an older build)"))
+        else:
+            rows.append(Row("ballast force (max)", "N", p["ballast"], None, p["ballast_s"], p["ballast_t"], None,
+                            INFO, "-z of the sleeper-on-ballast force, summed over the sleeper"))
         rows.append(Row("rail displacement (max)", "m", p["displacement"], None, p["displacement_s"],
                         p["displacement_t"], None, INFO, "magnitude of the rail centre displacement, %s rail"
                         % p["displacement_rail"], side=p["displacement_side"]))
@@ -619,13 +628,21 @@ def tgamma_series(contacts, kin, wheelsets, t_discard=0.0):
 
 
 def pad_extremes(pads, t_discard=0.0):
-    """Largest pad compression (-z of the pad force) [N] and largest rail displacement magnitude [m] over the
-    sleepers and instants from t_discard on, with where (arc length, time, rail)."""
-    best = {"compression": -np.inf, "displacement": -np.inf}
+    """Largest pad compression (-z of the pad force) [N], largest ballast force (-z of the sleeper-on-ballast
+    force) [N] and largest rail displacement magnitude [m] over the sleepers and instants from t_discard on,
+    with where (arc length, time, rail); ballast None when the frames have no ballast forces."""
+    best = {"compression": -np.inf, "displacement": -np.inf, "ballast": -np.inf}
     out = {}
+    ballast = None
     for t, fr in zip(pads["t"], pads["frames"]):
         if t < t_discard or fr["arc_length"].size == 0:
             continue
+        if fr.get("ballast") is not None:
+            comp = -fr["ballast"][:, 2]
+            j = int(np.argmax(comp))
+            if comp[j] > best["ballast"]:
+                best["ballast"] = comp[j]
+                ballast = {"ballast": float(comp[j]), "ballast_s": float(fr["arc_length"][j]), "ballast_t": float(t)}
         for side, rail in ((0, "left"), (1, "right")):
             comp = -fr[rail + "_pad"][:, 2]
             j = int(np.argmax(comp))
@@ -643,6 +660,7 @@ def pad_extremes(pads, t_discard=0.0):
         out = {"compression": None, "compression_s": None, "compression_t": None, "compression_rail": "-",
                "compression_side": None, "displacement": None, "displacement_s": None, "displacement_t": None,
                "displacement_rail": "-", "displacement_side": None}
+    out.update(ballast or {"ballast": None, "ballast_s": None, "ballast_t": None})
     return out
 
 

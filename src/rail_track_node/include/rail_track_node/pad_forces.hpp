@@ -1,5 +1,5 @@
-// Rail-pad forces and rail displacements at the sleepers of an FE track mesh (rail_msgs/RailPadForces,
-// effects.pad_force_output). ROS-free.
+// Rail-pad forces, sleeper-on-ballast forces and rail displacements at the sleepers of an FE track mesh
+// (rail_msgs/RailPadForces, effects.pad_force_output). ROS-free.
 #pragma once
 
 #include <Eigen/Core>
@@ -21,13 +21,16 @@ struct PadForceSample {
   double arc_length = 0.0;                                    ///< s of the sleeper, m
   std::array<Eigen::Vector3d, 2> force_in_track;              ///< rail on sleeper through the pad, N (z < 0 presses)
   std::array<Eigen::Vector3d, 2> rail_displacement_in_track;  ///< rail centre-line node at the sleeper, m
+  Eigen::Vector3d
+      ballast_force_in_track;  ///< sleeper on the ballast, summed over its ballast elements, N (z < 0 presses)
 };
 
 /// Indexes a mesh's pads once (set-up, allocates); evaluate() then reads forces from a state without
 /// allocating. The pad is the 6-DOF spring-damper between the rail node (a) and the sleeper's seat node
 /// (b) acting at the rail seat P (springDamperMatrix): with the relative motion of b's point P with
 /// respect to a's, Delta = (u_b + theta_b x r_bP) - (u_a + theta_a x r_aP) in the element frame R, the
-/// force on the sleeper is -R (k .* R^T Delta + c .* R^T Delta_dot).
+/// force on the sleeper is -R (k .* R^T Delta + c .* R^T Delta_dot). A ballast element is the same
+/// spring-damper between a sleeper node (a) and its foundation node (b): the force on the ballast.
 class PadForceProbe {
  public:
   explicit PadForceProbe(const TrackMesh& mesh);
@@ -44,6 +47,8 @@ class PadForceProbe {
 
  private:
   std::vector<std::array<int, 2>> pad_;  ///< per sleeper, per rail: index into mesh.springs
+  std::vector<int> ballast_start_;       ///< per sleeper k: its ballast elements are ballast_[start_k .. start_k+1)
+  std::vector<int> ballast_;             ///< indices into mesh.springs
 };
 
 }  // namespace track

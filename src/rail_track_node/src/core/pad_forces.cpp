@@ -27,6 +27,23 @@ PadForceProbe::PadForceProbe(const TrackMesh& mesh) {
       throw std::runtime_error("pad forces: sleeper " + std::to_string(k) + " has no pad on each rail");
     }
   }
+  // Ballast elements by the sleeper of their node a.
+  std::vector<int> sleeper_of(mesh.nodes.size(), -1);
+  for (std::size_t k = 0; k < mesh.sleeper_nodes.size(); ++k)
+    for (const int node : mesh.sleeper_nodes[k]) sleeper_of[static_cast<std::size_t>(node)] = static_cast<int>(k);
+  std::vector<std::vector<int>> by_sleeper(pad_.size());
+  for (std::size_t i = 0; i < mesh.springs.size(); ++i) {
+    const SpringDamperElement& e = mesh.springs[i];
+    if (e.kind != SpringKind::Ballast) continue;
+    const int k = sleeper_of[static_cast<std::size_t>(e.node_a)];
+    if (k >= 0 && k < static_cast<int>(by_sleeper.size()))
+      by_sleeper[static_cast<std::size_t>(k)].push_back(static_cast<int>(i));
+  }
+  ballast_start_.assign(1, 0);
+  for (const std::vector<int>& b : by_sleeper) {
+    ballast_.insert(ballast_.end(), b.begin(), b.end());
+    ballast_start_.push_back(static_cast<int>(ballast_.size()));
+  }
 }
 
 namespace {
@@ -50,6 +67,21 @@ Eigen::Vector3d pointMotion(const TrackMesh& mesh, int node, const Eigen::Vector
   return u + theta.cross(p - mesh.nodes[static_cast<std::size_t>(node)].p_in_world);
 }
 
+// Force of spring-damper e on its node b (world), translational part (see PadForceProbe).
+Eigen::Vector3d forceOnB(const TrackMesh& mesh, const SpringDamperElement& e, const Eigen::VectorXd& d,
+                         const Eigen::VectorXd& v, const Eigen::VectorXd* d_static) {
+  const Eigen::Vector3d& P = e.p_point_in_world;
+  Eigen::Vector3d delta = -pointMotion(mesh, e.node_a, P, d, d_static);
+  Eigen::Vector3d delta_dot = -pointMotion(mesh, e.node_a, P, v, nullptr);
+  if (e.node_b >= 0) {
+    delta += pointMotion(mesh, e.node_b, P, d, d_static);
+    delta_dot += pointMotion(mesh, e.node_b, P, v, nullptr);
+  }
+  const Eigen::Vector3d local = e.R_local_to_world.transpose() * delta;
+  const Eigen::Vector3d local_dot = e.R_local_to_world.transpose() * delta_dot;
+  return e.R_local_to_world * -(e.k.head<3>().cwiseProduct(local) + e.c.head<3>().cwiseProduct(local_dot));
+}
+
 }  // namespace
 
 int PadForceProbe::evaluate(const TrackMesh& mesh, const rail::contact::TrackGeometry& geometry,
@@ -68,19 +100,17 @@ int PadForceProbe::evaluate(const TrackMesh& mesh, const rail::contact::TrackGeo
     for (int r = 0; r < 2; ++r) {
       const SpringDamperElement& e =
           mesh.springs[static_cast<std::size_t>(pad_[static_cast<std::size_t>(k)][static_cast<std::size_t>(r)])];
-      const Eigen::Vector3d& P = e.p_point_in_world;
-      const Eigen::Vector3d delta =
-          pointMotion(mesh, e.node_b, P, d, d_static) - pointMotion(mesh, e.node_a, P, d, d_static);
-      const Eigen::Vector3d delta_dot =
-          pointMotion(mesh, e.node_b, P, v, nullptr) - pointMotion(mesh, e.node_a, P, v, nullptr);
-      const Eigen::Vector3d local = e.R_local_to_world.transpose() * delta;
-      const Eigen::Vector3d local_dot = e.R_local_to_world.transpose() * delta_dot;
-      const Eigen::Vector3d f_local = -(e.k.head<3>().cwiseProduct(local) + e.c.head<3>().cwiseProduct(local_dot));
-      o.force_in_track[static_cast<std::size_t>(r)] = tp.R_track_to_world.transpose() * (e.R_local_to_world * f_local);
+      o.force_in_track[static_cast<std::size_t>(r)] =
+          tp.R_track_to_world.transpose() * forceOnB(mesh, e, d, v, d_static);
       Eigen::Vector3d u, theta;
       nodeMotion(mesh, e.node_a, d, d_static, u, theta);
       o.rail_displacement_in_track[static_cast<std::size_t>(r)] = tp.R_track_to_world.transpose() * u;
     }
+    Eigen::Vector3d ballast = Eigen::Vector3d::Zero();
+    for (int b = ballast_start_[static_cast<std::size_t>(k)]; b < ballast_start_[static_cast<std::size_t>(k) + 1]; ++b)
+      ballast +=
+          forceOnB(mesh, mesh.springs[static_cast<std::size_t>(ballast_[static_cast<std::size_t>(b)])], d, v, d_static);
+    o.ballast_force_in_track = tp.R_track_to_world.transpose() * ballast;
   }
   return n;
 }

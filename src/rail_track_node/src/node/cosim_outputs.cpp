@@ -39,7 +39,7 @@ CosimTrackOutputs::CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, 
   pad_samples_.resize(pads_ ? static_cast<std::size_t>(track.sleeperCount()) : 0u);
   pads_msg_.header.frame_id = "track";
   for (auto* v : {&pads_msg_.left_pad_force, &pads_msg_.right_pad_force, &pads_msg_.left_rail_displacement,
-                  &pads_msg_.right_rail_displacement}) {
+                  &pads_msg_.right_rail_displacement, &pads_msg_.ballast_force}) {
     v->reserve(pad_samples_.size());
   }
   pads_msg_.arc_length.reserve(pad_samples_.size());
@@ -109,6 +109,7 @@ void CosimTrackOutputs::publish(const ros::Time& stamp, const core::coupling::Wh
     pads_msg_.right_pad_force.resize(size);
     pads_msg_.left_rail_displacement.resize(size);
     pads_msg_.right_rail_displacement.resize(size);
+    pads_msg_.ballast_force.resize(size);
     for (std::size_t k = 0; k < size; ++k) {
       const PadForceSample& p = pad_samples_[k];
       pads_msg_.arc_length[k] = p.arc_length;
@@ -116,6 +117,7 @@ void CosimTrackOutputs::publish(const ros::Time& stamp, const core::coupling::Wh
       fill(pads_msg_.right_pad_force[k], p.force_in_track[kRightRail]);
       fill(pads_msg_.left_rail_displacement[k], p.rail_displacement_in_track[kLeftRail]);
       fill(pads_msg_.right_rail_displacement[k], p.rail_displacement_in_track[kRightRail]);
+      fill(pads_msg_.ballast_force[k], p.ballast_force_in_track);
     }
     pads_pub_.publish(pads_msg_);
     if (rec_pads_ && bag_.isOpen()) {
