@@ -8,6 +8,7 @@ through rosunit (JUnit XML; --gtest_output=xml:... is handled by rosunit)."""
 import csv
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -305,6 +306,26 @@ class SafetySynthetic(unittest.TestCase):
         ev = safety.evaluate(safety.load_run_dir(d, "flexible"), self.settings)
         self.assertEqual(row(ev, "pad compression").note, "needs /pad_forces: set effects.pad_force_output: true and "
                          "add pad_forces to output.topics (flexible track only: effects.track_model: flexible)")
+
+    @unittest.skipUnless(os.geteuid() == 0, "needs root (mount a small tmpfs), as CI has")
+    def test_full_output_disk_is_one_line_and_exit_9(self):
+        # --out on a 16 kB tmpfs: the first figure does not fit. One line naming the file and the system's
+        # reason, exit 9, no traceback, and the file that failed is not left half-written.
+        mnt = tempfile.mkdtemp(prefix="rail_safety_full_")
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=16k", "tmpfs", mnt], check=True)
+        try:
+            proc = run_tool([self.dir, "--out", os.path.join(mnt, "report")])
+            self.assertEqual(proc.returncode, 9, proc.stderr)
+            self.assertNotIn("Traceback", proc.stderr)
+            lines = proc.stderr.strip().splitlines()
+            self.assertEqual(len(lines), 1, proc.stderr)
+            self.assertRegex(lines[0], r"^railsim_safety: cannot write %s/report/\S+\.png( \(partial file removed\))?: "
+                                       r"No space left on device$" % re.escape(mnt))
+            failed = re.search(r"cannot write (\S+)", lines[0]).group(1)
+            self.assertFalse(os.path.exists(failed))
+        finally:
+            subprocess.run(["umount", "-l", mnt])
+            os.rmdir(mnt)
 
     def test_command_line_prints_and_writes_the_csv(self):
         out = os.path.join(self.work, "report")

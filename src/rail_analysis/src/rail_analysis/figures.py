@@ -80,8 +80,11 @@ def _interp_extrap(x, xp, fp):
 
 def _finish(fig, out_dir, name):
     path = os.path.join(out_dir, name)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        with loading.writing(path):
+            fig.savefig(path, dpi=110)
+    finally:
+        plt.close(fig)
     return name
 
 

@@ -10,6 +10,8 @@ A run directory holds, per run name (standalone, rigid_fe, flexible):
 Times are the messages' header stamps (simulated time, s). Lengths in m, forces in N, angles in rad.
 Every loader returns plain numpy arrays; a bag without the topic asked for raises MissingTopicError.
 """
+import contextlib
+import errno
 import os
 
 import numpy as np
@@ -42,6 +44,39 @@ def flange_contact_mask(points):
     if angle is not None and np.isfinite(angle).any():
         return points["active"] & (angle >= FLANGE_CONTACT_ANGLE)
     return points["active"] & (points["kind"] == KIND_FLANGE)
+
+
+# Exit code of an analysis tool whose output could not be written (disk full, read-only): the nodes' code 9.
+EXIT_WRITE_FAILED = 9
+_WRITE_ERRNOS = (errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EFBIG)
+
+
+@contextlib.contextmanager
+def writing(path):
+    """Names `path` in an OSError raised while writing it (a write that fails after the open carries no
+    file name)."""
+    try:
+        yield
+    except OSError as e:
+        if e.filename is None:
+            e.filename = path
+        raise
+
+
+def write_failure(error, where):
+    """One line for an OSError that means an output cannot be written (disk full, quota, read-only file
+    system, file too large), naming the file (else `where`) and the system's reason, after removing the
+    partial file; None for any other error (the caller re-raises)."""
+    if not isinstance(error, OSError) or error.errno not in _WRITE_ERRNOS:
+        return None
+    name = error.filename or where
+    if error.filename and os.path.isfile(error.filename):
+        try:
+            os.remove(error.filename)
+            name += " (partial file removed)"
+        except OSError:
+            pass
+    return "cannot write %s: %s" % (name, error.strerror or os.strerror(error.errno))
 
 
 class AnalysisInputError(RuntimeError):

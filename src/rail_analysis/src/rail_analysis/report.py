@@ -11,6 +11,7 @@ from . import analysis, figures, loading
 EXIT_OK = 0
 EXIT_BAD_INPUT = 2
 EXIT_TOO_SHORT = 3  # a run too short for the analysis (one line on stderr)
+EXIT_WRITE_FAILED = loading.EXIT_WRITE_FAILED  # an output could not be written (one line on stderr)
 
 
 def _fmt(x, spec="%.3g"):
@@ -139,7 +140,7 @@ def write_report(runs, skipped, run_dir, out_dir, t_discard, figure_list, checks
         L.append("")
         L.append("![%s](%s)" % (caption, name))
     L.append("")
-    with open(path, "w") as f:
+    with loading.writing(path), open(path, "w") as f:
         f.write("\n".join(L))
     return path
 
@@ -187,5 +188,11 @@ def main(argv=None):
         sys.stderr.write("railsim_analyze: %s\n" % str(e).replace("\n", " "))
         # A run too short for the analysis is not a bad input: the runner says so and keeps the run's code.
         return EXIT_TOO_SHORT if type(e).__name__ == "AnalysisTooShortError" else EXIT_BAD_INPUT
+    except OSError as e:
+        msg = loading.write_failure(e, a.out or a.run_dir)
+        if msg is None:
+            raise
+        sys.stderr.write("railsim_analyze: %s\n" % msg)
+        return EXIT_WRITE_FAILED
     print("report: %s" % os.path.abspath(path))
     return EXIT_OK

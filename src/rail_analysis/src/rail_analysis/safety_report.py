@@ -19,6 +19,7 @@ CSV_COLUMNS = ("run", "quantity", "unit", "maximum", "wheel_id", "wheelset", "si
 EXIT_OK = 0          # done (limits exceeded or not: see the status column)
 EXIT_BAD_INPUT = 2   # an input refused (one line on stderr)
 EXIT_TOO_SHORT = 3   # a run too short for the analysis (one line on stderr)
+EXIT_WRITE_FAILED = loading.EXIT_WRITE_FAILED  # an output could not be written (one line on stderr)
 
 SOURCES = [
     "Y/Q: Nadal's limit (tan g - mu)/(1 + mu tan g) (J. Nadal, Annales des Mines, 1896), g = the wheel "
@@ -62,7 +63,7 @@ def csv_rows(run_name, rows):
 
 def write_csv(path, run_name, rows):
     """Writes the rows of one run as CSV (CSV_COLUMNS). Returns the path."""
-    with open(path, "w", newline="") as f:
+    with loading.writing(path), open(path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=CSV_COLUMNS)
         w.writeheader()
         for rec in csv_rows(run_name, rows):
@@ -247,8 +248,12 @@ def figures(evals, out_dir, prefix="safety"):
 
 def _save(plt, fig, out_dir, name):
     fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, name), dpi=110)
-    plt.close(fig)
+    path = os.path.join(out_dir, name)
+    try:
+        with loading.writing(path):
+            fig.savefig(path, dpi=110)
+    finally:
+        plt.close(fig)
     return name
 
 
@@ -411,6 +416,18 @@ def main(argv=None):
     except safety.AnalysisInputError as e:
         sys.stderr.write("railsim_safety: %s\n" % str(e).replace("\n", " "))
         return EXIT_TOO_SHORT if isinstance(e, safety.AnalysisTooShortError) else EXIT_BAD_INPUT
+    try:
+        return _write_outputs(a, runs, evals)
+    except OSError as e:
+        msg = loading.write_failure(e, a.out or a.input)
+        if msg is None:
+            raise
+        sys.stderr.write("railsim_safety: %s\n" % msg)
+        return loading.EXIT_WRITE_FAILED
+
+
+def _write_outputs(a, runs, evals):
+    """The summary tables, the CSV beside each bag and (with --out) safety.md and its figures."""
     incomplete = {n: _incomplete(r.bag) for n, r in runs.items()}
     for n, ev in evals.items():
         if incomplete[n]:
@@ -429,7 +446,7 @@ def main(argv=None):
         if marks:
             lines[1:1] = [""] + marks
         path = os.path.join(a.out, "safety.md")
-        with open(path, "w") as f:
+        with loading.writing(path), open(path, "w") as f:
             f.write("\n".join(lines))
         print("report: %s" % os.path.abspath(path))
     return EXIT_OK
