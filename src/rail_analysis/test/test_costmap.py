@@ -15,6 +15,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -224,6 +225,27 @@ class GridAndResume(unittest.TestCase):
         r = {"name": case.name, "settings_hash": case.settings_hash, "status": "ok"}
         r.update(fields)
         costmap.write_yaml_atomic(os.path.join(d, costmap.RESULT), r)
+
+    @unittest.skipUnless(os.geteuid() == 0, "needs root (mount a small tmpfs), as CI has")
+    def test_a_full_output_disk_is_one_line_and_exit_9(self):
+        # The map's table on an 8 kB tmpfs after a (recorded) failed case: one line naming the file and the
+        # system's reason, exit 9, no traceback.
+        g = self.grid("scene: scene.yaml\nreference: {name: ref}\ncases: [{name: a, overrides: {a.b: 1}}]\n")
+        self.prepopulate(g, g.cases[0], case_id=g.cases[0].case_id, status="failed", exit_code=4,
+                         log_tail="x" * 20000)
+        mnt = tempfile.mkdtemp(prefix="rail_costmap_full_")
+        subprocess.run(["mount", "-t", "tmpfs", "-o", "size=8k", "tmpfs", mnt], check=True)
+        try:
+            proc = run_tool([os.path.join(self.work, "grid.yaml"), "--report-only", "--cases",
+                             os.path.join(self.work, "cases"), "--out", os.path.join(mnt, "map")], timeout=120)
+            self.assertEqual(proc.returncode, 9, proc.stdout + proc.stderr)
+            self.assertNotIn("Traceback", proc.stderr)
+            self.assertRegex(proc.stderr.strip(), r"^railsim_map: cannot write %s/map/\S+( \(partial file removed\))?: "
+                                                  r"No space left on device$" % re.escape(mnt))
+            self.assertFalse(os.path.exists(re.search(r"cannot write (\S+)", proc.stderr).group(1)))
+        finally:
+            subprocess.run(["umount", "-l", mnt])
+            os.rmdir(mnt)
 
     def test_resume_skips_current_results_and_reruns_stale_failed_and_missing_ones(self):
         g = self.grid("scene: scene.yaml\nreference: {name: ref, overrides: {a.b: 0}}\n"

@@ -47,6 +47,7 @@ import time
 import numpy as np
 import yaml
 
+from rail_analysis import loading
 from rail_analysis.runner import BAG, DEFAULT_TIMEOUT, read_cost, run_case, stop_all
 
 DEFAULT_DISCARD = 0.1            # s of simulated time skipped at the start (settling of the initial state)
@@ -310,7 +311,7 @@ class Grid(object):
 def write_yaml_atomic(path, data, header=""):
     """Writes a YAML file through a temporary file in the same directory and a rename (atomic on POSIX)."""
     tmp = "%s.tmp.%d.%d" % (path, os.getpid(), threading.get_ident())
-    with open(tmp, "w") as f:
+    with loading.writing(tmp), open(tmp, "w") as f:
         f.write(header)
         yaml.safe_dump(data, f, default_flow_style=False, sort_keys=False)
         f.flush()
@@ -607,7 +608,7 @@ def _cost_value(r, who, comp):
 def write_csv(rows, path):
     cols = (["case", "case_id", "reference", "settings", "status", "exit_code", "wall_time", "loop_wall_time"]
             + list(METRIC_NAMES) + ["%s_%s" % wc for wc in COST_COLUMNS])
-    with open(path, "w", newline="") as f:
+    with loading.writing(path), open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(cols)
         for r in rows:
@@ -656,7 +657,7 @@ def write_markdown(grid, rows, path, front_names):
                   "", "```", r.get("log_tail", ""), "```"]
     if grid.duplicates:
         lines += [""] + ["%s has the settings of %s and is not run again." % d for d in grid.duplicates]
-    with open(path, "w") as f:
+    with loading.writing(path), open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
 
 
@@ -703,8 +704,11 @@ def plot_pareto(grid, rows, path, front_names):
     if fr or ref:
         ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        with loading.writing(path):
+            fig.savefig(path, dpi=110)
+    finally:
+        plt.close(fig)
 
 
 def report(grid, cases_dir, out_dir):
@@ -721,6 +725,17 @@ def report(grid, cases_dir, out_dir):
 # ------------------------------------------------------------------------------------------------- main
 
 USAGE_EXIT = 2
+
+
+def _write_failed(error, where):
+    """An output that cannot be written (disk full, read-only): one line and the nodes' exit code 9; any
+    other OSError is raised."""
+    msg = loading.write_failure(error, where)
+    if msg is None:
+        raise error
+    stop_all()
+    print("railsim_map: %s" % msg, file=sys.stderr)
+    return loading.EXIT_WRITE_FAILED
 
 
 def main(argv=None):
@@ -776,7 +791,12 @@ def main(argv=None):
         stop_all()
         print("railsim_map: interrupted; finished cases keep their result.yaml, a rerun resumes", file=sys.stderr)
         return 130
-    rows = report(grid, cases_dir, out)
+    except OSError as e:
+        return _write_failed(e, cases_dir)
+    try:
+        rows = report(grid, cases_dir, out)
+    except OSError as e:
+        return _write_failed(e, out)
     ok = sum(1 for r in rows if r.get("status") == "ok")
     print("map: %d case(s) ok, %d failed, %d without a result; table %s" % (
         ok, len(rows) - ok, len(grid.cases) - len(rows), os.path.join(out, "map.md")), flush=True)
