@@ -37,6 +37,12 @@ void TrackDefects::evaluate(RailSide side, double s, double& z, double& dz_ds) c
       const double alpha = 0.5 * d.dip_angle;
       z -= alpha * (half - std::abs(x));
       dz_ds += x < 0.0 ? -alpha : alpha;
+      const double u = 0.5 * d.gap - std::abs(x);  // from the rail end the wheel pivots on
+      if (u > 0.0 && d.wheel_radius > u) {
+        const double root = std::sqrt(d.wheel_radius * d.wheel_radius - u * u);
+        z -= d.wheel_radius - root;
+        dz_ds += (x < 0.0 ? -u : u) / root;
+      }
     } else {
       const double k = 2.0 * kPi / d.length;
       z += 0.5 * d.height * (1.0 + std::cos(k * x));

@@ -494,6 +494,63 @@ TEST(TrackGeometry, LocalDefectsAddTheirAnalyticShapeAlongTheRailNormal) {
   }
 }
 
+// A joint with a 20 mm gap bridged by wheels of radius 0.46 m: beside the V of the dip, within 10 mm of
+// the joint the rail is lowered by the drop of the wheel centre pivoting on the rail end behind it (then on
+// the one ahead), r - sqrt(r^2 - u^2) with u = g/2 - |x| (109 um at the joint, 0 at the rail ends), its
+// slope -/+ u / sqrt(r^2 - u^2) (21.7 mrad at the joint: the kink the wheel meets); the slope agrees with
+// central differences; beyond the gap the plain V.
+TEST(TrackGeometry, JointGapLowersTheRailByTheBridgingWheelsDrop) {
+  rc::GeometrySpec spec;
+  spec.segments = {straight(100.0)};
+  spec.table_step = 0.5;
+  rc::RailDefect joint;
+  joint.shape = rc::DefectShape::kDippedJoint;
+  joint.s_centre = 40.0;
+  joint.length = 2.0;
+  joint.dip_angle = 0.01;
+  joint.gap = 0.02;
+  joint.wheel_radius = 0.46;
+  rc::RailDefect closed = joint;
+  closed.gap = 0.0;
+  const rc::TrackGeometry plain(spec);
+  const rc::TrackGeometry with_gap(spec, rc::Irregularities(), rc::TrackDefects({joint}));
+  const rc::TrackGeometry without(spec, rc::Irregularities(), rc::TrackDefects({closed}));
+  auto height = [&](const rc::TrackGeometry& g, double s, double& z, double& slope) {
+    rc::RailPoint a, b;
+    plain.rail(rc::RailSide::kRight, s, a);
+    g.rail(rc::RailSide::kRight, s, b);
+    z = (b.p_origin_in_world - a.p_origin_in_world).dot(a.R_rail_to_world.col(2));
+    slope = (b.dp_origin_ds - a.dp_origin_ds).dot(a.R_rail_to_world.col(2));
+  };
+  const double r = 0.46, alpha = 0.005;
+  for (const double x : {-0.0099, -0.006, -1e-6, 1e-6, 0.003, 0.0095}) {
+    SCOPED_TRACE(x);
+    const double u = 0.01 - std::abs(x), root = std::sqrt(r * r - u * u);
+    double z = 0.0, slope = 0.0;
+    height(with_gap, 40.0 + x, z, slope);
+    EXPECT_NEAR(z, -alpha * (1.0 - std::abs(x)) - (r - root), 1e-13);
+    EXPECT_NEAR(slope, (x < 0.0 ? -1.0 : 1.0) * (alpha + u / root), 1e-12);
+    if (std::abs(x) > 1e-4) {
+      double zp = 0.0, zm = 0.0, unused = 0.0;
+      const double ds = 1e-7;
+      height(with_gap, 40.0 + x + ds, zp, unused);
+      height(with_gap, 40.0 + x - ds, zm, unused);
+      EXPECT_NEAR((zp - zm) / (2.0 * ds), slope, 1e-6 * (1.0 + std::abs(slope)));
+    }
+  }
+  double z_centre = 0.0, unused = 0.0;
+  height(with_gap, 40.0, z_centre, unused);
+  EXPECT_NEAR(z_centre, -alpha - (r - std::sqrt(r * r - 1e-4)), 1e-13);
+  EXPECT_NEAR(r - std::sqrt(r * r - 1e-4), 1.087e-4, 1e-7);  // the figure the comment gives
+  for (const double s : {39.98, 40.011, 40.5}) {             // beyond the gap: the closed joint to the last bit
+    double z1 = 0.0, s1 = 0.0, z0 = 0.0, s0 = 0.0;
+    height(with_gap, s, z1, s1);
+    height(without, s, z0, s0);
+    EXPECT_EQ(z1, z0) << s;
+    EXPECT_EQ(s1, s0) << s;
+  }
+}
+
 TEST(TrackGeometry, OutOfRangeThrowsWithValue) {
   rc::GeometrySpec spec;
   spec.s_start = 10.0;

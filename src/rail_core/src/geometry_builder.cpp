@@ -94,7 +94,10 @@ std::vector<DefectOutline> defectOutlines(const Scene& scene, const rc::TrackGeo
   if (scene.effects.track_defects) {
     for (const rc::RailDefect& d : scene.track.defects) {
       if (d.shape == rc::DefectShape::kDippedJoint) {
-        std::snprintf(text, sizeof(text), "dipped joint %.1f mrad", d.dip_angle * 1e3);
+        if (d.gap > 0.0)
+          std::snprintf(text, sizeof(text), "dipped joint %.1f mrad, gap %.0f mm", d.dip_angle * 1e3, d.gap * 1e3);
+        else
+          std::snprintf(text, sizeof(text), "dipped joint %.1f mrad", d.dip_angle * 1e3);
       } else {
         std::snprintf(text, sizeof(text), "weld %+.2f mm", d.height * 1e3);
       }
@@ -224,7 +227,11 @@ rc::TrackGeometry buildTrackGeometry(const Scene& scene) {
   const rc::Irregularities irr = buildIrregularities(scene);
   if (!irr.empty()) spec.table_step = std::min(spec.table_step, irr.shortestWavelength() / 8.0);
   rc::TrackDefects defects;
-  if (scene.effects.track_defects) defects = rc::TrackDefects(scene.track.defects);
+  if (scene.effects.track_defects) {
+    std::vector<rc::RailDefect> list = scene.track.defects;
+    for (rc::RailDefect& d : list) d.wheel_radius = scene.has_vehicle ? scene.vehicle.nominal_radius : 0.0;
+    defects = rc::TrackDefects(std::move(list));
+  }
   try {
     return rc::TrackGeometry(spec, irr, std::move(defects));
   } catch (const std::exception& e) {

@@ -137,6 +137,7 @@ std::string toYaml(const Scene& s) {
       num(e, "length", d.length);
       kv(e, "rail", toString(d.left && d.right ? LoadRail::kBoth : d.left ? LoadRail::kLeft : LoadRail::kRight));
       if (d.shape == contact::DefectShape::kDippedJoint) num(e, "dip_angle", d.dip_angle);
+      if (d.gap > 0.0) num(e, "gap", d.gap);
       if (d.shape == contact::DefectShape::kWeld) num(e, "height", d.height);
       e << YAML::EndMap;
     }
@@ -328,8 +329,10 @@ std::string describe(const Scene& s, Role role) {
             : d.left          ? "left rail"
                               : "right rail")
         << ", " << fixed(d.length, 3) << " m long, "
-        << (d.shape == contact::DefectShape::kDippedJoint ? "total angle " + fixed(d.dip_angle * 1e3, 1) + " mrad"
-                                                          : "height " + fixed(d.height * 1e3, 2) + " mm")
+        << (d.shape == contact::DefectShape::kDippedJoint
+                ? "total angle " + fixed(d.dip_angle * 1e3, 1) + " mrad" +
+                      (d.gap > 0.0 ? ", gap " + fixed(d.gap * 1e3, 1) + " mm" : std::string())
+                : "height " + fixed(d.height * 1e3, 2) + " mm")
         << "\n";
     }
   }

@@ -222,6 +222,10 @@ void readDefects(MapReader& r, Track& t, const Context& ctx) {
       dr.require("dip_angle");
       dr.number("dip_angle", d.dip_angle);
       inRange(dr, "dip_angle", d.dip_angle, 1e-4, 0.1, "rad (the total angle between the two ramps)");
+      dr.number("gap", d.gap);
+      if (!(d.gap >= 0.0 && d.gap <= std::min(0.05, d.length)))
+        dr.fail("gap", "must be >= 0 and at most 0.05 m and the joint's length (" + formatNumber(d.length) + " m)" +
+                           got(d.gap));
     } else {
       dr.require("height");
       dr.number("height", d.height);
@@ -708,6 +712,10 @@ void checkConsistency(MapReader& root, Scene& s, const YAML::Node& doc) {
   if (s.effects.track_defects && s.track.defects.empty()) {
     failScene(file, "effects.track_defects", "is on but track.defects lists none", line_of("effects", "track_defects"));
   }
+  for (std::size_t i = 0; i < s.track.defects.size() && !s.has_vehicle; ++i)
+    if (s.track.defects[i].gap > 0.0)
+      failScene(file, "track.defects[" + std::to_string(i) + "].gap",
+                "needs a vehicle in the scene (the gap is what its wheels bridge)", line_of("track", "defects"));
   if (s.effects.support_variation && s.track.support.empty()) {
     failScene(file, "effects.support_variation", "is on but track.support lists no zone",
               line_of("effects", "support_variation"));

@@ -263,6 +263,16 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
                 "  data: track_data.yaml\n  defects: [{type: dipped_joint, s: 40, length: 2.0, dip_angle: 0.5}]\n"),
        "scene.yaml: track.defects[0].dip_angle: must be between 0.0001 and 0.1 rad (the total angle between the two "
        "ramps), got 0.5 (line 5)"},
+      {"joint gap wider than allowed",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  defects: [{type: dipped_joint, s: 40, length: 2.0, dip_angle: 0.01, "
+                "gap: 0.08}]\n"),
+       "scene.yaml: track.defects[0].gap: must be >= 0 and at most 0.05 m and the joint's length (2 m), got 0.08 "
+       "(line 5)"},
+      {"gap on a weld",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  defects: [{type: weld, s: 40, length: 0.2, height: 0.001, gap: 0.01}]\n"),
+       "scene.yaml: track.defects[0].gap: unknown key (known here: height, length, rail, s, type) (line 5)"},
       {"weld of no height",
        replaced(kBase, "  data: track_data.yaml\n",
                 "  data: track_data.yaml\n  defects: [{type: weld, s: 40, length: 0.2, height: 0}]\n"),
@@ -336,10 +346,12 @@ TEST(Scene, TrackDefectsRoundTripAndAreSummarised) {
       replaced(replaced(kBase, "  data: track_data.yaml\n",
                         "  data: track_data.yaml\n  defects:\n"
                         "    - {type: dipped_joint, s: 30.0, length: 1.0, dip_angle: 0.01, rail: left}\n"
-                        "    - {type: weld, s: 45.0, length: 0.2, height: -0.0003}\n"),
+                        "    - {type: weld, s: 45.0, length: 0.2, height: -0.0003}\n"
+                        "    - {type: dipped_joint, s: 60.0, length: 1.0, dip_angle: 0.008, gap: 0.012}\n"),
                "track_model: rigid_fe", "track_model: rigid_fe\n  track_defects: true");
   const Scene s = load(text);
-  ASSERT_EQ(s.track.defects.size(), 2u);
+  ASSERT_EQ(s.track.defects.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.track.defects[2].gap, 0.012);
   EXPECT_TRUE(s.track.defects[0].left);
   EXPECT_FALSE(s.track.defects[0].right);
   EXPECT_DOUBLE_EQ(s.track.defects[1].height, -0.0003);
@@ -352,13 +364,19 @@ TEST(Scene, TrackDefectsRoundTripAndAreSummarised) {
   EXPECT_NE(summary.find("  defect 1: weld at s = 45.00 m, both rails, 0.200 m long, height -0.30 mm\n"),
             std::string::npos)
       << summary;
+  EXPECT_NE(summary.find("  defect 2: dipped_joint at s = 60.00 m, both rails, 1.000 m long, total angle 8.0 mrad, "
+                         "gap 12.0 mm\n"),
+            std::string::npos)
+      << summary;
   EXPECT_NE(summary.find("effects on: track_model=rigid_fe, track_defects"), std::string::npos) << summary;
   const Scene off = load(replaced(text, "  track_defects: true", "  track_defects: false"));
-  EXPECT_EQ(off.track.defects.size(), 2u);
+  EXPECT_EQ(off.track.defects.size(), 3u);
   EXPECT_NE(off.hash, s.hash);
   EXPECT_EQ(describe(off, Role::kValidator).find("defect 0"), std::string::npos);
   // The geometry the contact sees carries them only with the effect on (off: nothing to evaluate).
-  EXPECT_EQ(buildTrackGeometry(s).defects().defects().size(), 2u);
+  EXPECT_EQ(buildTrackGeometry(s).defects().defects().size(), 3u);
+  // The gap's bridging wheels are the vehicle's.
+  EXPECT_DOUBLE_EQ(buildTrackGeometry(s).defects().defects()[2].wheel_radius, s.vehicle.nominal_radius);
   EXPECT_TRUE(buildTrackGeometry(off).defects().empty());
 }
 

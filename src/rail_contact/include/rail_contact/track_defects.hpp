@@ -1,8 +1,8 @@
 // Local vertical defects of the rails, placed by arc length: a dipped rail joint (a V of total angle
-// 2 alpha whose ramps meet at the joint) and a weld (a cosine bump or dip). Each adds a height z(s) to a
-// rail's surface along the rail frame's b axis. Built once from the scene's track.defects (when
-// effects.track_defects is on), constant afterwards; TrackGeometry::rail adds them, so the contact on the
-// rigid and on the deformed rails sees them alike. doc/geometry.md, "Local defects", has the shapes.
+// 2 alpha whose ramps meet at the joint, optionally with an open gap between the rail ends) and a weld (a
+// cosine bump or dip). Each adds a height z(s) to a rail's surface along the rail frame's b axis. Built once from the
+// scene's track.defects (when effects.track_defects is on), constant afterwards; TrackGeometry::rail adds them, so the
+// contact on the rigid and on the deformed rails sees them alike. doc/geometry.md, "Local defects", has the shapes.
 #pragma once
 
 #include <vector>
@@ -12,18 +12,22 @@ namespace rail::contact {
 enum class RailSide;
 
 enum class DefectShape {
-  kDippedJoint,  // z = -alpha (L/2 - |x|) for |x| <= L/2, x = s - s_centre, alpha = dip_angle / 2
+  kDippedJoint,  // z = -alpha (L/2 - |x|) for |x| <= L/2, x = s - s_centre, alpha = dip_angle / 2; with a
+                 // gap g, also -(r - sqrt(r^2 - (g/2 - |x|)^2)) for |x| <= g/2: the drop of a wheel of
+                 // radius r bridging the gap, pivoting on one rail end and then on the other
   kWeld,         // z = height (1 + cos(2 pi x / L)) / 2 for |x| <= L/2
 };
 
 struct RailDefect {
   DefectShape shape = DefectShape::kDippedJoint;
-  double s_centre = 0.0;   // m, the joint or the weld's centre
-  double length = 0.0;     // m, extent L (a joint: both ramps together)
-  double dip_angle = 0.0;  // rad, a joint's total angle 2 alpha between its two ramps (> 0)
-  double height = 0.0;     // m, a weld's height at its centre (> 0 a bump, < 0 a dip)
-  bool left = true;        // on the left rail
-  bool right = true;       // on the right rail
+  double s_centre = 0.0;      // m, the joint or the weld's centre
+  double length = 0.0;        // m, extent L (a joint: both ramps together)
+  double dip_angle = 0.0;     // rad, a joint's total angle 2 alpha between its two ramps (> 0)
+  double height = 0.0;        // m, a weld's height at its centre (> 0 a bump, < 0 a dip)
+  double gap = 0.0;           // m, a joint's open gap between the rail ends (0: closed)
+  double wheel_radius = 0.0;  // m, radius of the wheels that bridge the gap (the vehicle's nominal radius)
+  bool left = true;           // on the left rail
+  bool right = true;          // on the right rail
 };
 
 class TrackDefects {
