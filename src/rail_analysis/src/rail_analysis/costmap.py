@@ -704,11 +704,7 @@ def plot_pareto(grid, rows, path, front_names):
     if fr or ref:
         ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
-    try:
-        with loading.writing(path):
-            fig.savefig(path, dpi=110)
-    finally:
-        plt.close(fig)
+    loading.save_figure(fig, path)
 
 
 def report(grid, cases_dir, out_dir):
@@ -728,14 +724,10 @@ USAGE_EXIT = 2
 
 
 def _write_failed(error, where):
-    """An output that cannot be written (disk full, read-only): one line and the nodes' exit code 9; any
-    other OSError is raised."""
-    msg = loading.write_failure(error, where)
-    if msg is None:
-        raise error
+    """An output that cannot be written (disk full, read-only): the running cases stopped, one line and the
+    nodes' exit code 9; any other OSError is raised."""
     stop_all()
-    print("railsim_map: %s" % msg, file=sys.stderr)
-    return loading.EXIT_WRITE_FAILED
+    return loading.exit_write_failed("railsim_map", error, where)
 
 
 def main(argv=None):

@@ -79,12 +79,7 @@ def _interp_extrap(x, xp, fp):
 
 
 def _finish(fig, out_dir, name):
-    path = os.path.join(out_dir, name)
-    try:
-        with loading.writing(path):
-            fig.savefig(path, dpi=110)
-    finally:
-        plt.close(fig)
+    loading.save_figure(fig, os.path.join(out_dir, name))
     return name
 
 

@@ -13,6 +13,7 @@ Every loader returns plain numpy arrays; a bag without the topic asked for raise
 import contextlib
 import errno
 import os
+import sys
 
 import numpy as np
 import yaml
@@ -61,6 +62,26 @@ def writing(path):
         if e.filename is None:
             e.filename = path
         raise
+
+
+def save_figure(fig, path):
+    """Writes a matplotlib figure to path (110 dpi) and closes it, naming path in a write error."""
+    import matplotlib.pyplot as plt
+    try:
+        with writing(path):
+            fig.savefig(path, dpi=110)
+    finally:
+        plt.close(fig)
+
+
+def exit_write_failed(prog, error, where):
+    """For an OSError that means an output cannot be written: its one line on stderr (write_failure) and
+    EXIT_WRITE_FAILED to return; any other error is raised again."""
+    msg = write_failure(error, where)
+    if msg is None:
+        raise error
+    sys.stderr.write("%s: %s\n" % (prog, msg))
+    return EXIT_WRITE_FAILED
 
 
 def write_failure(error, where):

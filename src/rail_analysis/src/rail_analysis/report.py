@@ -189,10 +189,6 @@ def main(argv=None):
         # A run too short for the analysis is not a bad input: the runner says so and keeps the run's code.
         return EXIT_TOO_SHORT if type(e).__name__ == "AnalysisTooShortError" else EXIT_BAD_INPUT
     except OSError as e:
-        msg = loading.write_failure(e, a.out or a.run_dir)
-        if msg is None:
-            raise
-        sys.stderr.write("railsim_analyze: %s\n" % msg)
-        return EXIT_WRITE_FAILED
+        return loading.exit_write_failed("railsim_analyze", e, a.out or a.run_dir)
     print("report: %s" % os.path.abspath(path))
     return EXIT_OK

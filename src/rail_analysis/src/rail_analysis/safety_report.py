@@ -178,7 +178,7 @@ def figures(evals, out_dir, prefix="safety"):
     axes[0].legend(fontsize=7)
     axes[1].set_xlabel("arc length of the leading wheelset s [m]")
     axes[0].set_title("Flange-climb ratio Y/Q, leading wheelset (faint: instantaneous)")
-    out.append(("Y/Q of the leading wheels", _save(plt, fig, out_dir, prefix + "_yq.png")))
+    out.append(("Y/Q of the leading wheels", _save(fig, out_dir, prefix + "_yq.png")))
     # SumY.
     fig, ax = plt.subplots(figsize=(9, 4))
     for k, n in enumerate(names):
@@ -195,7 +195,7 @@ def figures(evals, out_dir, prefix="safety"):
     ax.set_title("Track-shift force (leading wheelset solid, others faint)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    out.append(("Track-shift force SumY", _save(plt, fig, out_dir, prefix + "_sumy.png")))
+    out.append(("Track-shift force SumY", _save(fig, out_dir, prefix + "_sumy.png")))
     # Tgamma.
     fig, ax = plt.subplots(figsize=(9, 4))
     any_tg = False
@@ -218,7 +218,7 @@ def figures(evals, out_dir, prefix="safety"):
     ax.grid(alpha=0.3)
     if any_tg:
         ax.legend(fontsize=7)
-    out.append(("Wear index Tgamma", _save(plt, fig, out_dir, prefix + "_tgamma.png")))
+    out.append(("Wear index Tgamma", _save(fig, out_dir, prefix + "_tgamma.png")))
     # Comfort.
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
     any_c = False
@@ -242,18 +242,13 @@ def figures(evals, out_dir, prefix="safety"):
                      ha="center", fontsize=8)
     axes[2].set_xlabel("t [s]")
     axes[0].set_title("Weighted carbody floor accelerations (EN 12299)")
-    out.append(("Weighted floor accelerations", _save(plt, fig, out_dir, prefix + "_comfort.png")))
+    out.append(("Weighted floor accelerations", _save(fig, out_dir, prefix + "_comfort.png")))
     return out
 
 
-def _save(plt, fig, out_dir, name):
+def _save(fig, out_dir, name):
     fig.tight_layout()
-    path = os.path.join(out_dir, name)
-    try:
-        with loading.writing(path):
-            fig.savefig(path, dpi=110)
-    finally:
-        plt.close(fig)
+    loading.save_figure(fig, os.path.join(out_dir, name))
     return name
 
 
@@ -419,11 +414,7 @@ def main(argv=None):
     try:
         return _write_outputs(a, runs, evals)
     except OSError as e:
-        msg = loading.write_failure(e, a.out or a.input)
-        if msg is None:
-            raise
-        sys.stderr.write("railsim_safety: %s\n" % msg)
-        return loading.EXIT_WRITE_FAILED
+        return loading.exit_write_failed("railsim_safety", e, a.out or a.input)
 
 
 def _write_outputs(a, runs, evals):
