@@ -130,6 +130,11 @@ std::vector<DefectOutline> defectOutlines(const Scene& scene, const rc::TrackGeo
       factor("pad damping", z.pad_damping);
       factor("ballast", z.ballast_stiffness);
       factor("ballast damping", z.ballast_damping);
+      if (z.hanging) {
+        std::snprintf(text, sizeof(text), "%shanging sleepers, gap %.1f mm", label.empty() ? "" : ", ",
+                      z.sleeper_gap * 1e3);
+        label += text;
+      }
       o.label = label.empty() ? "support zone" : label;
       const int n = samples(z.s_from, z.s_to, 1.0);
       rc::TrackPoint tp;

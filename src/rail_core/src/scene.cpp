@@ -154,6 +154,7 @@ std::string toYaml(const Scene& s) {
       num(e, "pad_damping", z.pad_damping);
       num(e, "ballast_stiffness", z.ballast_stiffness);
       num(e, "ballast_damping", z.ballast_damping);
+      if (z.hanging) num(e, "sleeper_gap", z.sleeper_gap);
       e << YAML::EndMap;
     }
     e << YAML::EndSeq;
@@ -342,7 +343,7 @@ std::string describe(const Scene& s, Role role) {
       o << "  support zone " << i << ": s = " << fixed(z.s_from, 2) << " .. " << fixed(z.s_to, 2) << " m, ramps "
         << fixed(z.ramp, 2) << " m; pads x" << fixed(z.pad_stiffness, 2) << " stiffness, x" << fixed(z.pad_damping, 2)
         << " damping; ballast x" << fixed(z.ballast_stiffness, 2) << " stiffness, x" << fixed(z.ballast_damping, 2)
-        << " damping\n";
+        << " damping" << (z.hanging ? "; hanging sleepers, gap " + fixed(z.sleeper_gap * 1e3, 2) + " mm" : "") << "\n";
     }
   }
   if (s.has_vehicle) {

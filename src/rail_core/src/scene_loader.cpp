@@ -262,6 +262,18 @@ void readSupport(MapReader& r, Track& t, const Context& ctx) {
       zr.number(key, *value);
       inRange(zr, key, *value, 0.01, 100.0, "(a factor on the track data's value)");
     }
+    if (zr.has("sleeper_gap")) {
+      z.hanging = true;
+      zr.number("sleeper_gap", z.sleeper_gap);
+      inRange(zr, "sleeper_gap", z.sleeper_gap, 0.0, 0.02, "m (the void under each sleeper of the zone)");
+      // Sleepers lie at start_arc_length + k sleeper_spacing: the zone must hold one.
+      const double a = t.sleeper_spacing;
+      const double k_first = std::ceil((z.s_from - t.start_arc_length) / a - 1e-9);
+      if (!(t.start_arc_length + k_first * a <= z.s_to + 1e-9))
+        zr.fail("sleeper_gap", "the zone " + formatNumber(z.s_from) + " .. " + formatNumber(z.s_to) +
+                                   " m holds no sleeper (every " + formatNumber(a) +
+                                   " m from s = " + formatNumber(t.start_arc_length) + " m)");
+    }
     zr.finish();
     t.support.push_back(z);
   });

@@ -46,6 +46,7 @@
 #include <rail_core/coupling/frames.hpp>
 #include <rail_core/scene.hpp>
 
+#include "rail_track_node/hanging_support.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/pad_forces.hpp"
 #include "rail_track_node/rail_probe.hpp"
@@ -203,6 +204,9 @@ class CosimTrack {
   /// counted from d_s. With a track window: over the window, w being already relative to d_s
   /// (TrackWindow::dynamicEnergy). Returns false (zeros) with rigid_fe. No allocation.
   bool energy(double& kinetic, double& potential) const noexcept;
+  /// The hanging sleepers of the integrated mesh (full track or current window), or nullptr when it has
+  /// none (rigid_fe, no hanging zone).
+  const HangingSupports* hanging() const;
   /// Sleepers of the integrated mesh (full track or window; 0 with rigid_fe): enough capacity for padForces.
   int sleeperCount() const;
   /// Same for any displacement vector d over the FE free DOFs (flexible full-length; e.g. a static
@@ -249,6 +253,8 @@ class CosimTrack {
   void awaitCompletion() noexcept;
   void awaitBaseSolve() noexcept;
   void takeWorkerCost() noexcept;
+  void fillHangingLoads() noexcept;
+  void sizeHangingLoads();  // set-up and window moves
   void workerLoop() noexcept;
   int ensureNodeColumns(int rail, int node) noexcept;
   void solveColumn(int dof, int& lo, int& len) noexcept;
@@ -304,7 +310,10 @@ class CosimTrack {
   std::atomic<bool> worker_posted_{false}, worker_completed_flag_{false}, worker_done_flag_{false};
   rail::core::CostClock worker_cost_;
   rail::core::CostClock completion_cost_;  // the worker's completion of a step (awaitCompletion takes it)
-  NodalLoads no_loads_{0};                 // the base solve's (none)
+  // Hanging sleepers of the full-length track (null without; a window holds its own) and the loads of
+  // the step being solved (the base solve's, or the explicit step's beside the contact loads).
+  std::unique_ptr<HangingSupports> hanging_;
+  NodalLoads hanging_loads_{0};
 };
 
 }  // namespace track

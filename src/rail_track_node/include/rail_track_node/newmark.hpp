@@ -32,6 +32,7 @@ class NodalLoads {
     return true;
   }
   int size() const { return count_; }
+  int capacity() const { return static_cast<int>(index_.size()); }
   int index(int k) const { return index_[k]; }
   double value(int k) const { return value_[k]; }
 
@@ -74,14 +75,15 @@ class NewmarkIntegrator {
   /// M a0 = f - C v0 - K d0 with f = gravity (if included) + loads. Allocates: call at set-up.
   NewmarkState initialState(const Eigen::VectorXd& d0, const NodalLoads* loads = nullptr) const;
 
-  /// Advances state by dt with the external loads at the end of the step (t + dt). No allocation.
-  /// Same as solveStep(state, loads) then completeStep(state).
-  void step(NewmarkState& state, const NodalLoads& loads);
+  /// Advances state by dt with the external loads at the end of the step (t + dt), plus `more` when not
+  /// null (e.g. HangingSupports' loads). No allocation. Same as solveStep(state, loads, more) then
+  /// completeStep(state).
+  void step(NewmarkState& state, const NodalLoads& loads, const NodalLoads* more = nullptr);
 
   /// First half of step(): solves K_eff d_{n+1} = f_{n+1} + M (c0 d + c1 v + a) + C (c2 d + v) into
   /// stepDisplacement() without changing state. A caller may then correct stepDisplacement() (e.g. by the
   /// response K_eff^{-1} f to extra loads f found after the solve) before completeStep(). No allocation.
-  void solveStep(const NewmarkState& state, const NodalLoads& loads);
+  void solveStep(const NewmarkState& state, const NodalLoads& loads, const NodalLoads* more = nullptr);
   /// d_{n+1} of the last solveStep() (m, rad over the free DOFs), writable.
   Eigen::VectorXd& stepDisplacement() { return d_new_; }
   /// Second half of step(): a_{n+1}, v_{n+1} from stepDisplacement() and state; state becomes t + dt.

@@ -23,6 +23,9 @@ struct PadForceSample {
   std::array<Eigen::Vector3d, 2> rail_displacement_in_track;  ///< rail centre-line node at the sleeper, m
   Eigen::Vector3d
       ballast_force_in_track;  ///< sleeper on the ballast, summed over its ballast elements, N (z < 0 presses)
+  /// Hanging sleeper: the open void between it and the ballast, mean over its ballast elements, m (0 where
+  /// it bears, and under every sleeper that does not hang).
+  double ballast_gap = 0.0;
 };
 
 /// Indexes a mesh's pads once (set-up, allocates); evaluate() then reads forces from a state without
@@ -30,7 +33,8 @@ struct PadForceSample {
 /// (b) acting at the rail seat P (springDamperMatrix): with the relative motion of b's point P with
 /// respect to a's, Delta = (u_b + theta_b x r_bP) - (u_a + theta_a x r_aP) in the element frame R, the
 /// force on the sleeper is -R (k .* R^T Delta + c .* R^T Delta_dot). A ballast element is the same
-/// spring-damper between a sleeper node (a) and its foundation node (b): the force on the ballast.
+/// spring-damper between a sleeper node (a) and its foundation node (b): the force on the ballast; under a
+/// hanging sleeper (SpringDamperElement::unilateral) its local z part only presses, once the void has closed.
 class PadForceProbe {
  public:
   explicit PadForceProbe(const TrackMesh& mesh);

@@ -54,6 +54,10 @@ struct SpringDamperElement {
   Eigen::Vector3d p_point_in_world;  ///< point where the element acts, m
   Eigen::Matrix3d R_local_to_world;  ///< element frame (directions of k and c)
   Vector6d k, c;                     ///< N/m and N m/rad; N s/m and N m s/rad
+  /// Ballast of a hanging sleeper: along local z it bears only in compression, once the void `gap` (m)
+  /// between the sleeper and the ballast has closed (HangingSupports). K and C hold it as if closed.
+  bool unilateral = false;
+  double gap = 0.0;
 };
 
 /// Lumped mass on the translations of a node, kg.

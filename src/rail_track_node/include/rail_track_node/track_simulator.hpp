@@ -18,6 +18,7 @@
 
 #include <rail_core/scene.hpp>
 
+#include "rail_track_node/hanging_support.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/rail_probe.hpp"
 #include "rail_track_node/track_mesh.hpp"
@@ -96,6 +97,7 @@ class TrackSimulator {
   double head_arm_ = 0.0;
   NewmarkIntegrator integrator_;
   NewmarkState state_;
+  HangingSupports hanging_;  // hanging sleepers of the mesh (their loads join loads_ in each step)
   NodalLoads loads_;
   long steps_ = 0, end_steps_ = 0;
   std::vector<Section> sections_;

@@ -33,6 +33,7 @@
 #include <rail_contact/track_geometry.hpp>
 #include <rail_core/scene.hpp>
 
+#include "rail_track_node/hanging_support.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_model.hpp"
@@ -99,9 +100,13 @@ class TrackWindow {
   /// The clock of the Newmark integrators of this window and of the windows built at later moves.
   void setCostClock(rail::core::CostClock* cost);
 
-  /// One Newmark step t -> t + dt of w with the external loads (built on mesh(), at t + dt); then the rail
-  /// nodal arrays of railDeformation() hold d_g + w and w' of the new state. No allocation, no exception.
+  /// One Newmark step t -> t + dt of w with the external loads (built on mesh(), at t + dt) and the loads of
+  /// the window's hanging sleepers (hanging()); then the rail nodal arrays of railDeformation() hold d_g + w
+  /// and w' of the new state. No allocation, no exception.
   void step(const NodalLoads& loads) noexcept;
+  /// The hanging sleepers of the current window (their loads relative to staticState()), or nullptr when it
+  /// has none. Changes at a move. A caller stepping through integrator() adds their loads itself.
+  const HangingSupports* hanging() const;
 
   /// For a coupling that splits the step (e.g. a semi-implicit contact correcting the solved displacement
   /// before the step completes): the current window's integrator over w and the state it advances. The
@@ -132,7 +137,8 @@ class TrackWindow {
   const TrackMesh& mesh() const { return model().mesh; }
   /// Dynamic part w (m, rad; m/s, ...) over the current window's free DOFs; t is the time since set-up.
   const NewmarkState& state() const { return state_; }
-  /// Self-weight static state d_g over the current window's free DOFs (zero when include_gravity is off).
+  /// Self-weight static state d_g over the current window's free DOFs (zero when include_gravity is off);
+  /// with hanging sleepers that of the piecewise-linear track.
   const Eigen::VectorXd& staticState() const;
   /// The rails for the contact search over the current window: nodal d_g + w and w' (world axes). The
   /// object stays the same across moves (its layout is rebuilt in place at a move).
@@ -194,6 +200,7 @@ class TrackWindow {
   void setRails();
   void fillRails() noexcept;
   void placeSections();
+  void sizeHangingLoads();  // hanging_loads_ capacity for the current window (set-up, moves)
   void placeSection(Section& sec) const;
 
   TrackWindowSettings settings_;
@@ -216,6 +223,7 @@ class TrackWindow {
   std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
   std::vector<Section> sections_;
   TrackWindowStats stats_;
+  NodalLoads hanging_loads_{0};  // step(): the hanging sleepers' loads
 };
 
 /// Distance (m) from the first to the last load of a moving-load set (largest minus smallest offset).

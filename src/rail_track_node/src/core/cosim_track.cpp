@@ -1,5 +1,6 @@
 // Track side of the co-simulation (see cosim_track.hpp).
 #include "rail_track_node/cosim_track.hpp"
+#include "rail_track_node/hanging_support.hpp"
 
 #include <Eigen/Geometry>
 
@@ -225,9 +226,23 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     integrator_ =
         std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity,
                                             options.cost, countEndDashpots(model.mesh), options.factor_layout);
+    // With hanging sleepers the start is the piecewise-linear track's static state (HangingSupports).
+    auto hanging = std::make_unique<HangingSupports>(model.mesh);
     Eigen::VectorXd d0 =
         options.include_gravity ? staticGravityDeflection(model.system) : Eigen::VectorXd::Zero(model.system.size());
-    state_ = integrator_->initialState(d0);
+    if (!hanging->empty()) {
+      d0 = hanging->solveStatic(
+          model.system, options.include_gravity ? model.system.f_gravity : Eigen::VectorXd::Zero(model.system.size()));
+      hanging_ = std::move(hanging);
+    }
+    if (hanging_) {
+      NodalLoads at_rest(hanging_->loadCapacity());
+      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(d0.size());
+      hanging_->addLoads(d0, zero, nullptr, 0.0, at_rest);
+      state_ = integrator_->initialState(d0, &at_rest);
+    } else {
+      state_ = integrator_->initialState(d0);
+    }
     d_static_ = d0;  // the zero of energy(): the self-weight equilibrium
     energy_scratch_.resize(d0.size());
     energy_dd_.resize(d0.size());
@@ -235,6 +250,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   const TrackMesh& mesh = feMesh();
   // Two contacts per wheel, each spread over the 12 DOFs of one rail element.
   loads_ = std::make_unique<NodalLoads>(24 * n_wheels + 1);
+  sizeHangingLoads();
   buildRails();
   fillDeformation();
 
@@ -325,7 +341,25 @@ CosimTrack::~CosimTrack() {
   }
 }
 
-void CosimTrack::solveBase() noexcept { integ().solveStep(st(), no_loads_); }
+void CosimTrack::solveBase() noexcept {
+  fillHangingLoads();
+  integ().solveStep(st(), hanging_loads_);
+}
+
+const HangingSupports* CosimTrack::hanging() const { return window_ ? window_->hanging() : hanging_.get(); }
+
+// The hanging sleepers' loads of the next step from the state at its start (predicted to its end).
+void CosimTrack::fillHangingLoads() noexcept {
+  hanging_loads_.clear();
+  if (const HangingSupports* h = hanging())
+    h->addLoads(st().d, st().v, window_ ? &window_->staticState() : nullptr, integ().dt(), hanging_loads_);
+}
+
+void CosimTrack::sizeHangingLoads() {
+  const HangingSupports* h = hanging();
+  const int need = h != nullptr ? h->loadCapacity() : 0;
+  if (hanging_loads_.capacity() < need) hanging_loads_ = NodalLoads(need);
+}
 
 void CosimTrack::workerLoop() noexcept {
   for (;;) {
@@ -417,6 +451,7 @@ void CosimTrack::buildRails() { buildRailLayout(feMesh(), rail_dofs_, deformatio
 // exact for its local node; a move that refactorised drops them all (they are solved again when a wheel
 // needs them). Allocates.
 void CosimTrack::onWindowMove() {
+  sizeHangingLoads();
   buildRails();
   fillDeformation();
   const int rebuilds = window_->stats().rebuilds;
@@ -590,7 +625,8 @@ void CosimTrack::finishStep() noexcept {
   if (integrate) {
     switch (coupling_) {
       case CosimCoupling::kExplicit:
-        integ().step(st(), *loads_);
+        fillHangingLoads();
+        integ().step(st(), *loads_, &hanging_loads_);
         break;
       case CosimCoupling::kSemiImplicit:
         if (solve_beside_) {

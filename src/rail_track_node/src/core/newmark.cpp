@@ -96,12 +96,12 @@ NewmarkState NewmarkIntegrator::initialState(const Eigen::VectorXd& d0, const No
   return st;
 }
 
-void NewmarkIntegrator::step(NewmarkState& st, const NodalLoads& loads) {
-  solveStep(st, loads);
+void NewmarkIntegrator::step(NewmarkState& st, const NodalLoads& loads, const NodalLoads* more) {
+  solveStep(st, loads, more);
   completeStep(st);
 }
 
-void NewmarkIntegrator::solveStep(const NewmarkState& st, const NodalLoads& loads) {
+void NewmarkIntegrator::solveStep(const NewmarkState& st, const NodalLoads& loads, const NodalLoads* more) {
   const double h = dt_;
   const double c0 = 4.0 / (h * h), c1 = 4.0 / h, c2 = 2.0 / h;
   {
@@ -144,6 +144,8 @@ void NewmarkIntegrator::solveStep(const NewmarkState& st, const NodalLoads& load
       }
     }
     for (int k = 0; k < loads.size(); ++k) rhs_(loads.index(k)) += loads.value(k);
+    if (more != nullptr)
+      for (int k = 0; k < more->size(); ++k) rhs_(more->index(k)) += more->value(k);
   }
   rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolve);
   factor_->solve(rhs_, d_new_);

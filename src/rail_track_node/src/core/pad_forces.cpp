@@ -79,7 +79,21 @@ Eigen::Vector3d forceOnB(const TrackMesh& mesh, const SpringDamperElement& e, co
   }
   const Eigen::Vector3d local = e.R_local_to_world.transpose() * delta;
   const Eigen::Vector3d local_dot = e.R_local_to_world.transpose() * delta_dot;
-  return e.R_local_to_world * -(e.k.head<3>().cwiseProduct(local) + e.c.head<3>().cwiseProduct(local_dot));
+  Eigen::Vector3d f_local = -(e.k.head<3>().cwiseProduct(local) + e.c.head<3>().cwiseProduct(local_dot));
+  if (e.unilateral) {
+    // Hanging sleeper: local(2) = -z is the sleeper point's drop; the ballast bears once it exceeds the gap.
+    const double bearing = e.k(2) * (local(2) - e.gap) + e.c(2) * local_dot(2);
+    f_local(2) = bearing > 0.0 ? -bearing : 0.0;
+  }
+  return e.R_local_to_world * f_local;
+}
+
+// Open void between a unilateral element's point on the sleeper and the ballast, m (0 bearing).
+double openGap(const TrackMesh& mesh, const SpringDamperElement& e, const Eigen::VectorXd& d,
+               const Eigen::VectorXd* d_static) {
+  const double drop =
+      -(e.R_local_to_world.transpose() * pointMotion(mesh, e.node_a, e.p_point_in_world, d, d_static))(2);
+  return e.gap - drop > 0.0 ? e.gap - drop : 0.0;
 }
 
 }  // namespace
@@ -107,10 +121,19 @@ int PadForceProbe::evaluate(const TrackMesh& mesh, const rail::contact::TrackGeo
       o.rail_displacement_in_track[static_cast<std::size_t>(r)] = tp.R_track_to_world.transpose() * u;
     }
     Eigen::Vector3d ballast = Eigen::Vector3d::Zero();
-    for (int b = ballast_start_[static_cast<std::size_t>(k)]; b < ballast_start_[static_cast<std::size_t>(k) + 1]; ++b)
-      ballast +=
-          forceOnB(mesh, mesh.springs[static_cast<std::size_t>(ballast_[static_cast<std::size_t>(b)])], d, v, d_static);
+    double gap_sum = 0.0;
+    int gaps = 0;
+    for (int b = ballast_start_[static_cast<std::size_t>(k)]; b < ballast_start_[static_cast<std::size_t>(k) + 1];
+         ++b) {
+      const SpringDamperElement& e = mesh.springs[static_cast<std::size_t>(ballast_[static_cast<std::size_t>(b)])];
+      ballast += forceOnB(mesh, e, d, v, d_static);
+      if (e.unilateral) {
+        gap_sum += openGap(mesh, e, d, d_static);
+        ++gaps;
+      }
+    }
     o.ballast_force_in_track = tp.R_track_to_world.transpose() * ballast;
+    o.ballast_gap = gaps > 0 ? gap_sum / gaps : 0.0;
   }
   return n;
 }

@@ -205,8 +205,9 @@ TrackMesh buildTrackMesh(const TrackData& data, const MeshOptions& options, cons
       const int fn = foundation_nodes[k][q];
       mesh.springs.push_back(SpringDamperElement{SpringKind::Ballast, sn, fn, mesh.nodes[fn].p_in_world,
                                                  sleeper_frames[k].R_track_to_world, f.ballast_stiffness * k_bal,
-                                                 f.ballast_damping * c_bal});
-      mesh.masses.push_back(PointMass{sn, data.ballast.mass});
+                                                 f.ballast_damping * c_bal, f.hanging, f.sleeper_gap});
+      // The ballast under a void stays on the ground: a hanging sleeper does not carry its mass.
+      if (!f.hanging) mesh.masses.push_back(PointMass{sn, data.ballast.mass});
     }
   }
 

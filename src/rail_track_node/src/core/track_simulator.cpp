@@ -35,7 +35,8 @@ TrackSimulator::TrackSimulator(const TrackModel& model, const SimulatorSettings&
       settings_(settings),
       integrator_(model.system, settings.track_step, settings.include_gravity, settings.cost,
                   countEndDashpots(model.mesh)),
-      loads_(loadCapacity(settings.loads)) {
+      hanging_(model.mesh),
+      loads_(loadCapacity(settings.loads) + hanging_.loadCapacity()) {
   if (!(settings.t_end >= 0.0) || !std::isfinite(settings.t_end)) {
     std::ostringstream os;
     os << "TrackSimulator: end time must be finite and >= 0, got " << settings.t_end;
@@ -49,7 +50,13 @@ TrackSimulator::TrackSimulator(const TrackModel& model, const SimulatorSettings&
   Eigen::VectorXd f = Eigen::VectorXd::Zero(model.system.size());
   if (settings.include_gravity) f += model.system.f_gravity;
   for (int k = 0; k < loads_.size(); ++k) f(loads_.index(k)) += loads_.value(k);
-  state_ = integrator_.initialState(solveStatic(model.system, f), &loads_);
+  if (hanging_.empty()) {
+    state_ = integrator_.initialState(solveStatic(model.system, f), &loads_);
+  } else {
+    const Eigen::VectorXd d0 = hanging_.solveStatic(model.system, f);
+    hanging_.addLoads(d0, Eigen::VectorXd::Zero(d0.size()), nullptr, 0.0, loads_);
+    state_ = integrator_.initialState(d0, &loads_);
+  }
   wall_start_ = last_report_ = Clock::now();
 }
 
@@ -96,6 +103,7 @@ void TrackSimulator::advanceTo(double t) {
   while (steps_ < target) {
     const double t_next = static_cast<double>(steps_ + 1) * settings_.track_step;
     loadsAt(t_next, loads_);
+    hanging_.addLoads(state_.d, state_.v, nullptr, settings_.track_step, loads_);
     integrator_.step(state_, loads_);
     ++steps_;
     if (progress_ && steps_ % kClockCheckEvery == 0) {

@@ -18,6 +18,7 @@
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_track_node/elements.hpp"
+#include "rail_track_node/hanging_support.hpp"
 
 namespace rail {
 namespace track {
@@ -58,7 +59,7 @@ bool sameShape(const TrackMesh& a, const TrackMesh& b) {
   for (std::size_t i = 0; i < a.springs.size(); ++i) {
     const SpringDamperElement &p = a.springs[i], &q = b.springs[i];
     if (p.kind != q.kind || p.node_a != q.node_a || p.node_b != q.node_b || p.k != q.k || p.c != q.c ||
-        !near(p.R_local_to_world, q.R_local_to_world) ||
+        p.unilateral != q.unilateral || p.gap != q.gap || !near(p.R_local_to_world, q.R_local_to_world) ||
         !near(p.p_point_in_world - a.nodes[p.node_a].p_in_world, q.p_point_in_world - b.nodes[q.node_a].p_in_world))
       return false;
     if (p.node_b >= 0 &&
@@ -82,6 +83,7 @@ struct TrackWindow::Window {
   TrackModel model;
   std::unique_ptr<NewmarkIntegrator> integrator;
   Eigen::VectorXd d_static;
+  std::unique_ptr<HangingSupports> hanging;  // hanging sleepers in the window (baseline d_static), or null
 };
 
 double movingLoadsLength(const rail::core::MovingLoads& loads) {
@@ -176,6 +178,7 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
   state_.a = Eigen::VectorXd::Zero(n);
   state_.t = 0.0;
   energy_scratch_.setZero(n);
+  sizeHangingLoads();
   setRails();
   fillRails();
 }
@@ -222,8 +225,18 @@ std::unique_ptr<TrackWindow::Window> TrackWindow::buildWindow(int first_sleeper)
   }
   w->integrator = std::make_unique<NewmarkIntegrator>(w->model.system, track_step_, false, settings_.cost,
                                                       countEndDashpots(mesh), settings_.factor_layout);
-  w->d_static = settings_.include_gravity ? staticGravityDeflection(w->model.system)
-                                          : Eigen::VectorXd::Zero(w->model.system.size());
+  // The self-weight state of a window with hanging sleepers is that of the piecewise-linear track; w then
+  // integrates from it, with the hanging loads relative to it.
+  auto hanging = std::make_unique<HangingSupports>(mesh);
+  const Eigen::VectorXd f_g =
+      settings_.include_gravity ? w->model.system.f_gravity : Eigen::VectorXd::Zero(w->model.system.size());
+  if (hanging->empty()) {
+    w->d_static = settings_.include_gravity ? staticGravityDeflection(w->model.system) : f_g;
+  } else {
+    w->d_static = hanging->solveStatic(w->model.system, f_g);
+    hanging->setBaseline(w->d_static);
+    w->hanging = std::move(hanging);
+  }
   return w;
 }
 
@@ -414,6 +427,7 @@ void TrackWindow::moveTo(int first_sleeper) {
   }
   if (settings_.entering_static) extrapolateEntering(carried, next_state);
   state_ = std::move(next_state);
+  sizeHangingLoads();
   setRails();
   fillRails();
   placeSections();
@@ -481,8 +495,21 @@ bool TrackWindow::follow(double s_rear, double s_front) {
 }
 
 void TrackWindow::step(const NodalLoads& loads) noexcept {
-  window_->integrator->step(state_, loads);
+  if (window_->hanging) {
+    hanging_loads_.clear();
+    window_->hanging->addLoads(state_.d, state_.v, &window_->d_static, track_step_, hanging_loads_);
+    window_->integrator->step(state_, loads, &hanging_loads_);
+  } else {
+    window_->integrator->step(state_, loads);
+  }
   finishStep();
+}
+
+const HangingSupports* TrackWindow::hanging() const { return window_->hanging.get(); }
+
+void TrackWindow::sizeHangingLoads() {
+  const int need = window_->hanging ? window_->hanging->loadCapacity() : 0;
+  if (hanging_loads_.capacity() < need) hanging_loads_ = NodalLoads(need);
 }
 
 NewmarkIntegrator& TrackWindow::integrator() { return *window_->integrator; }
@@ -496,7 +523,13 @@ void TrackWindow::setStaticState(const NodalLoads& loads) {
   const LinearSystem& sys = window_->model.system;
   Eigen::VectorXd f = Eigen::VectorXd::Zero(sys.size());
   for (int k = 0; k < loads.size(); ++k) f(loads.index(k)) += loads.value(k);
-  state_.d = solveStatic(sys, f);
+  if (window_->hanging) {
+    // The piecewise-linear track: d_g + w its static state under self-weight and the loads.
+    if (settings_.include_gravity) f += sys.f_gravity;
+    state_.d = window_->hanging->solveStatic(sys, f) - window_->d_static;
+  } else {
+    state_.d = solveStatic(sys, f);
+  }
   state_.v.setZero();
   state_.a.setZero();
   fillRails();
@@ -655,7 +688,7 @@ int TrackWindow::addSection(double s, double static_half_length) {
     rc::TrackPoint tp;
     geometry_.centre(s, tp);
     makeRailProbes(piece.mesh, tp.R_track_to_world, s, probes);
-    evalRailProbes(probes, staticGravityDeflection(piece.system), sec.static_value);
+    evalRailProbes(probes, solveStaticWithSupports(piece.mesh, piece.system, piece.system.f_gravity), sec.static_value);
   }
   placeSection(sec);
   sections_.push_back(sec);
