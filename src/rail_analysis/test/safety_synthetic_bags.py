@@ -70,6 +70,7 @@ PAD_BASE, PAD_PEAK = 30e3, 55e3   # [N] compression (pad force z = -compression)
 PAD_PEAK_T, PAD_PEAK_S = 8.0, 170.0
 SLEEPER_WEIGHT = 2.9e3           # [N] added to both pads' compression in each sleeper's ballast force
 BALLAST_PEAK = PAD_BASE + PAD_PEAK + SLEEPER_WEIGHT
+VOID_S, VOID_OPEN, VOID_PEAK, VOID_PEAK_T = 283 * 0.6, 0.4e-3, 1.1e-3, 8.0  # a hanging sleeper's void [m, m, m, s]
 RAIL_BASE = 0.5e-3
 RAIL_PEAK = (0.0, -0.3e-3, -1.2e-3)   # [m]; magnitude 1.2369 mm
 
@@ -183,6 +184,9 @@ def write_pads(bag, ballast=True):
             if ballast:
                 pads = PAD_BASE + (PAD_PEAK if k == k_peak else PAD_BASE)
                 m.ballast_force.append(Vector3(0.0, 0.0, -(pads + SLEEPER_WEIGHT)))
+                # The hanging sleeper's void: open by VOID_OPEN, widest at VOID_PEAK_T.
+                open_gap = VOID_PEAK if abs(ti - VOID_PEAK_T) < 1e-9 else VOID_OPEN
+                m.ballast_gap.append(open_gap if abs(sl[k] - VOID_S) < 1e-9 else 0.0)
         bag.write("/pad_forces", m, _stamp(ti))
 
 

@@ -22,6 +22,7 @@ sys.path.insert(0, PKG_SRC)
 sys.path.insert(0, HERE)
 
 import numpy as np  # noqa: E402
+import yaml  # noqa: E402
 
 import safety_synthetic_bags as syn  # noqa: E402
 from rail_analysis import comfort, safety, safety_report  # noqa: E402
@@ -289,6 +290,37 @@ class SafetySynthetic(unittest.TestCase):
         self.assertEqual(row(ev, "ballast force").note,
                          "the bag's /pad_forces has no ballast forces (recorded by an older build)")
         self.assertAlmostEqual(row(ev, "pad compression").value, syn.PAD_PEAK, delta=1e-6)
+
+    def test_sleeper_void_row(self):
+        # No hanging sleepers in the scene: not applicable, even though the bag has the field.
+        r = row(self.evals["flexible"], "sleeper void")
+        self.assertEqual(r.status, safety.NOT_AVAILABLE)
+        self.assertEqual(r.note, "not applicable: no hanging sleepers (track.support sleeper_gap)")
+        # A scene that hangs sleepers: the widest open void, where and when.
+        d = os.path.join(self.work, "hanging")
+        syn.write_run(d, "flexible")
+        path = os.path.join(d, "flexible.scene.yaml")
+        with open(path) as f:
+            scene = yaml.safe_load(f)
+        scene["effects"]["support_variation"] = True
+        scene["track"]["support"] = [{"s_from": 169.7, "s_to": 169.9, "sleeper_gap": 0.0015}]
+        with open(path, "w") as f:
+            yaml.safe_dump(scene, f)
+        ev = safety.evaluate(safety.load_run_dir(d, "flexible"), self.settings)
+        r = row(ev, "sleeper void")
+        self.assertEqual(r.status, safety.INFO)
+        self.assertAlmostEqual(r.value, syn.VOID_PEAK, delta=1e-15)
+        self.assertAlmostEqual(r.s, syn.VOID_S, delta=1e-9)
+        self.assertAlmostEqual(r.t, syn.VOID_PEAK_T, delta=1e-6)
+        # The same scene with a bag recorded before the message had the voids.
+        d = os.path.join(self.work, "hanging_old")
+        syn.write_run(d, "flexible", ballast=False)
+        path = os.path.join(d, "flexible.scene.yaml")
+        with open(path, "w") as f:
+            yaml.safe_dump(scene, f)
+        r = row(safety.evaluate(safety.load_run_dir(d, "flexible"), self.settings), "sleeper void")
+        self.assertEqual(r.status, safety.NOT_AVAILABLE)
+        self.assertEqual(r.note, "the bag's /pad_forces has no sleeper voids (recorded by an older build)")
 
     def test_missing_topics_are_not_available_with_the_setting(self):
         text = ("needs /floor_accelerations: set effects.floor_acceleration_output: true and add "

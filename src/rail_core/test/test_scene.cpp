@@ -319,6 +319,16 @@ TEST(Scene, MalformedScenesAreRefusedWithOneMessageNamingFileAndField) {
                 "  data: track_data.yaml\n  support: [{s_from: 40, s_to: 50, pad_stiffness: 0}]\n"),
        "scene.yaml: track.support[0].pad_stiffness: must be between 0.01 and 100 (a factor on the track data's "
        "value), got 0 (line 5)"},
+      {"hanging sleepers with too large a void",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  support: [{s_from: 59.9, s_to: 60.1, sleeper_gap: 0.05}]\n"),
+       "scene.yaml: track.support[0].sleeper_gap: must be between 0 and 0.02 m (the void under each sleeper of the "
+       "zone), got 0.05 (line 5)"},
+      {"hanging sleepers in a zone without a sleeper",
+       replaced(kBase, "  data: track_data.yaml\n",
+                "  data: track_data.yaml\n  support: [{s_from: 60.1, s_to: 60.4, sleeper_gap: 0.001}]\n"),
+       "scene.yaml: track.support[0].sleeper_gap: the zone 60.1 .. 60.4 m holds no sleeper (every 0.6 m from s = 0 "
+       "m) (line 5)"},
       {"support variation without the FE track",
        replaced(replaced(kBase, "  data: track_data.yaml\n",
                          "  data: track_data.yaml\n  support: [{s_from: 40, s_to: 50, pad_stiffness: 2}]\n"),

@@ -16,6 +16,7 @@ Quantities and limits (formulas as the standards write them; sources beside the 
   Q_max <= Q_lim(V), Q_qst <= 145 kN                    vertical wheel force, EN 14363 track loading
   Tgamma = sum over the wheel's contacts |Tx nu_x| + |Ty nu_y|   [N = J/m], informative (no limit)
   pad compression, ballast force, rail displacement    informative (flexible track)
+  sleeper void (max open)                               informative (hanging sleepers)
 _2m: sliding mean over 2 m of track (centred window over the wheel's arc length).
 """
 import math
@@ -226,8 +227,8 @@ def load_floor(path):
 
 def load_pads(path):
     """/pad_forces: list per message of dict arc_length [m] (K,), left_pad, right_pad [N] (K, 3),
-    left_disp, right_disp [m] (K, 3), ballast [N] (K, 3) (track frame; None in a bag recorded before the
-    message had it), and t [s] (N,)."""
+    left_disp, right_disp [m] (K, 3), ballast [N] (K, 3) (track frame), gap [m] (K,) (the hanging sleepers'
+    open void; ballast and gap None in a bag recorded before the message had them), and t [s] (N,)."""
     msgs = loading._messages(path, "/pad_forces", "pad forces")
     frames = []
     vec = lambda vs: np.array([[v.x, v.y, v.z] for v in vs]).reshape(-1, 3)
@@ -236,7 +237,9 @@ def load_pads(path):
                        "left_pad": vec(m.left_pad_force), "right_pad": vec(m.right_pad_force),
                        "left_disp": vec(m.left_rail_displacement), "right_disp": vec(m.right_rail_displacement),
                        "ballast": (vec(m.ballast_force) if len(getattr(m, "ballast_force", ())) == len(m.arc_length)
-                                   else None)})
+                                   else None),
+                       "gap": (np.array(m.ballast_gap, dtype=float)
+                               if len(getattr(m, "ballast_gap", ())) == len(m.arc_length) else None)})
     t = np.array([m.header.stamp.to_sec() for m in msgs])
     order = np.argsort(t, kind="stable")
     return {"t": t[order], "frames": [frames[i] for i in order]}
@@ -286,6 +289,12 @@ class SafetyRun(object):
         self.notes = []
         self.bag = None
         self.track_bag = None
+
+    def hanging_sleepers(self):
+        """True when the scene hangs sleepers over a void (a track.support zone with sleeper_gap, applied)."""
+        if not (self.scene.get("effects") or {}).get("support_variation"):
+            return False
+        return any(isinstance(z, dict) and "sleeper_gap" in z for z in (self.scene.get("track") or {}).get("support") or ())
 
     def track_model(self):
         return str((self.scene.get("effects") or {}).get("track_model", ""))
@@ -581,7 +590,8 @@ def evaluate(run, settings=None):
             note = "not applicable: track_model %s (pad forces exist on the flexible track only)" % run.track_model()
         else:
             note = not_available_text("/pad_forces")
-        for q, u in (("pad compression (max)", "N"), ("ballast force (max)", "N"), ("rail displacement (max)", "m")):
+        for q, u in (("pad compression (max)", "N"), ("ballast force (max)", "N"), ("rail displacement (max)", "m"),
+                     ("sleeper void (max open)", "m")):
             rows.append(Row(q, u, status=NOT_AVAILABLE, note=note))
     else:
         ev.pads = pad_extremes(run.pads, st.t_discard)
@@ -598,6 +608,15 @@ def evaluate(run, settings=None):
         rows.append(Row("rail displacement (max)", "m", p["displacement"], None, p["displacement_s"],
                         p["displacement_t"], None, INFO, "magnitude of the rail centre displacement, %s rail"
                         % p["displacement_rail"], side=p["displacement_side"]))
+        if not run.hanging_sleepers():
+            rows.append(Row("sleeper void (max open)", "m", status=NOT_AVAILABLE,
+                            note="not applicable: no hanging sleepers (track.support sleeper_gap)"))
+        elif p["gap"] is None:
+            rows.append(Row("sleeper void (max open)", "m", status=NOT_AVAILABLE,
+                            note="the bag's /pad_forces has no sleeper voids (recorded by an older build)"))
+        else:
+            rows.append(Row("sleeper void (max open)", "m", p["gap"], None, p["gap_s"], p["gap_t"], None, INFO,
+                            "open void between a hanging sleeper and the ballast, mean over its ballast elements"))
     ev.rows = rows
     return ev
 
@@ -629,14 +648,20 @@ def tgamma_series(contacts, kin, wheelsets, t_discard=0.0):
 
 def pad_extremes(pads, t_discard=0.0):
     """Largest pad compression (-z of the pad force) [N], largest ballast force (-z of the sleeper-on-ballast
-    force) [N] and largest rail displacement magnitude [m] over the sleepers and instants from t_discard on,
-    with where (arc length, time, rail); ballast None when the frames have no ballast forces."""
+    force) [N], largest rail displacement magnitude [m] and largest open sleeper void [m] over the sleepers
+    and instants from t_discard on, with where (arc length, time, rail); ballast and gap None when the frames
+    have no ballast forces or voids."""
     best = {"compression": -np.inf, "displacement": -np.inf, "ballast": -np.inf}
     out = {}
     ballast = None
+    gap = None
     for t, fr in zip(pads["t"], pads["frames"]):
         if t < t_discard or fr["arc_length"].size == 0:
             continue
+        if fr.get("gap") is not None:
+            j = int(np.argmax(fr["gap"]))
+            if gap is None or fr["gap"][j] > gap["gap"]:
+                gap = {"gap": float(fr["gap"][j]), "gap_s": float(fr["arc_length"][j]), "gap_t": float(t)}
         if fr.get("ballast") is not None:
             comp = -fr["ballast"][:, 2]
             j = int(np.argmax(comp))
@@ -661,6 +686,7 @@ def pad_extremes(pads, t_discard=0.0):
                "compression_side": None, "displacement": None, "displacement_s": None, "displacement_t": None,
                "displacement_rail": "-", "displacement_side": None}
     out.update(ballast or {"ballast": None, "ballast_s": None, "ballast_t": None})
+    out.update(gap or {"gap": None, "gap_s": None, "gap_t": None})
     return out
 
 

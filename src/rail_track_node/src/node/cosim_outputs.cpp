@@ -43,6 +43,7 @@ CosimTrackOutputs::CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, 
     v->reserve(pad_samples_.size());
   }
   pads_msg_.arc_length.reserve(pad_samples_.size());
+  pads_msg_.ballast_gap.reserve(pad_samples_.size());
   energy_msg_.header.frame_id = "track";
 
   marker_frame_ = pnh.param<std::string>("frame_id", "world");
@@ -110,6 +111,7 @@ void CosimTrackOutputs::publish(const ros::Time& stamp, const core::coupling::Wh
     pads_msg_.left_rail_displacement.resize(size);
     pads_msg_.right_rail_displacement.resize(size);
     pads_msg_.ballast_force.resize(size);
+    pads_msg_.ballast_gap.resize(size);
     for (std::size_t k = 0; k < size; ++k) {
       const PadForceSample& p = pad_samples_[k];
       pads_msg_.arc_length[k] = p.arc_length;
@@ -118,6 +120,7 @@ void CosimTrackOutputs::publish(const ros::Time& stamp, const core::coupling::Wh
       fill(pads_msg_.left_rail_displacement[k], p.rail_displacement_in_track[kLeftRail]);
       fill(pads_msg_.right_rail_displacement[k], p.rail_displacement_in_track[kRightRail]);
       fill(pads_msg_.ballast_force[k], p.ballast_force_in_track);
+      pads_msg_.ballast_gap[k] = p.ballast_gap;
     }
     pads_pub_.publish(pads_msg_);
     if (rec_pads_ && bag_.isOpen()) {
