@@ -295,7 +295,7 @@ class SafetySynthetic(unittest.TestCase):
         # No hanging sleepers in the scene: not applicable, even though the bag has the field.
         r = row(self.evals["flexible"], "sleeper void")
         self.assertEqual(r.status, safety.NOT_AVAILABLE)
-        self.assertEqual(r.note, "not applicable: no hanging sleepers (track.support sleeper_gap)")
+        self.assertEqual(r.note, "no hanging sleepers in the scene (track.support sleeper_gap)")
         # A scene that hangs sleepers: the widest open void, where and when.
         d = os.path.join(self.work, "hanging")
         syn.write_run(d, "flexible")

@@ -610,7 +610,7 @@ def evaluate(run, settings=None):
                         % p["displacement_rail"], side=p["displacement_side"]))
         if not run.hanging_sleepers():
             rows.append(Row("sleeper void (max open)", "m", status=NOT_AVAILABLE,
-                            note="not applicable: no hanging sleepers (track.support sleeper_gap)"))
+                            note="no hanging sleepers in the scene (track.support sleeper_gap)"))
         elif p["gap"] is None:
             rows.append(Row("sleeper void (max open)", "m", status=NOT_AVAILABLE,
                             note="the bag's /pad_forces has no sleeper voids (recorded by an older build)"))
