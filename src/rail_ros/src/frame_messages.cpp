@@ -58,6 +58,22 @@ Result checkIncoming(std::uint64_t step, const ros::Time& stamp, std::size_t cou
   return {};
 }
 
+// The message's header from a frame whose time and ids fit the wire, then each wheel through
+// fill(frame.wheels[i], items[i]); items are resized within their reserved capacity (no allocation).
+template <class Frame, class Msg, class Items, class Fill>
+Result writeFrame(const Frame& frame, Msg& msg, Items& items, Fill fill) {
+  ros::Time stamp;
+  if (!stampOf(frame.time, stamp)) return badTime(frame.time);
+  for (std::uint32_t i = 0; i < frame.count; ++i)
+    if (frame.wheels[i].id > 255u) return badId(frame.wheels[i].id);
+  msg.header.stamp = stamp;
+  msg.step = frame.step;
+  msg.scene_hash = frame.scene_hash;
+  items.resize(frame.count);
+  for (std::uint32_t i = 0; i < frame.count; ++i) fill(frame.wheels[i], items[i]);
+  return {};
+}
+
 }  // namespace
 
 void reserveMessage(rail_msgs::WheelStates& msg, int capacity) {
@@ -71,17 +87,7 @@ void reserveMessage(rail_msgs::ContactWrenches& msg, int capacity) {
 }
 
 Result toMessage(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates& msg) {
-  ros::Time stamp;
-  if (!stampOf(frame.time, stamp)) return badTime(frame.time);
-  for (std::uint32_t i = 0; i < frame.count; ++i)
-    if (frame.wheels[i].id > 255u) return badId(frame.wheels[i].id);
-  msg.header.stamp = stamp;
-  msg.step = frame.step;
-  msg.scene_hash = frame.scene_hash;
-  msg.wheels.resize(frame.count);  // within the reserved capacity: no allocation
-  for (std::uint32_t i = 0; i < frame.count; ++i) {
-    const coupling::WheelState& w = frame.wheels[i];
-    rail_msgs::WheelState& m = msg.wheels[i];
+  return writeFrame(frame, msg, msg.wheels, [](const coupling::WheelState& w, rail_msgs::WheelState& m) {
     m.wheel_id = static_cast<std::uint8_t>(w.id);
     m.wheelset = static_cast<std::uint8_t>(w.id / 2);
     m.side = static_cast<std::uint8_t>(w.id % 2 ? rail_msgs::WheelState::SIDE_RIGHT : rail_msgs::WheelState::SIDE_LEFT);
@@ -96,27 +102,15 @@ Result toMessage(const coupling::WheelStateFrame& frame, rail_msgs::WheelStates&
     m.orientation.w = q.w();
     put(w.v_wheel_in_world, m.linear_velocity);
     put(w.omega_wheelset_in_world, m.angular_velocity);
-  }
-  return {};
+  });
 }
 
 Result toMessage(const coupling::WrenchFrame& frame, rail_msgs::ContactWrenches& msg) {
-  ros::Time stamp;
-  if (!stampOf(frame.time, stamp)) return badTime(frame.time);
-  for (std::uint32_t i = 0; i < frame.count; ++i)
-    if (frame.wheels[i].id > 255u) return badId(frame.wheels[i].id);
-  msg.header.stamp = stamp;
-  msg.step = frame.step;
-  msg.scene_hash = frame.scene_hash;
-  msg.wrenches.resize(frame.count);
-  for (std::uint32_t i = 0; i < frame.count; ++i) {
-    const coupling::WheelWrench& w = frame.wheels[i];
-    rail_msgs::ContactWrench& m = msg.wrenches[i];
+  return writeFrame(frame, msg, msg.wrenches, [](const coupling::WheelWrench& w, rail_msgs::ContactWrench& m) {
     m.wheel_id = static_cast<std::uint8_t>(w.id);
     put(w.f_wheel_in_world, m.force);
     put(w.n_wheel_in_world, m.moment);
-  }
-  return {};
+  });
 }
 
 void makeCloseMarker(rail_msgs::WheelStates& msg) {
@@ -129,45 +123,46 @@ void makeCloseMarker(rail_msgs::ContactWrenches& msg) {
   msg.wrenches.clear();
 }
 
-Result fromMessage(const rail_msgs::WheelStates& msg, double track_step, coupling::WheelStateFrame& frame,
-                   const char* source) {
-  Result r = checkIncoming(msg.step, msg.header.stamp, msg.wheels.size(), frame.capacity(), track_step, source);
+namespace {
+
+// The frame's header from a checked message, then each item through fill(item, frame.wheels[i]).
+template <class Msg, class Items, class Frame, class Fill>
+Result readFrame(const Msg& msg, const Items& items, double track_step, Frame& frame, const char* source, Fill fill) {
+  Result r = checkIncoming(msg.step, msg.header.stamp, items.size(), frame.capacity(), track_step, source);
   if (!r) return r;
   frame.step = msg.step;
   frame.time = static_cast<double>(msg.step) * track_step;
   frame.scene_hash = msg.scene_hash;
-  frame.count = static_cast<std::uint32_t>(msg.wheels.size());
-  for (std::uint32_t i = 0; i < frame.count; ++i) {
-    const rail_msgs::WheelState& m = msg.wheels[i];
-    coupling::WheelState& w = frame.wheels[i];
-    w.id = m.wheel_id;
-    w.arc_length = m.arc_length;
-    w.p_wheel_in_world = Eigen::Vector3d(m.position.x, m.position.y, m.position.z);
-    // Eigen's (w, x, y, z) constructor; stored as given (no normalisation), so the bits survive.
-    w.R_wheelset_to_world = coupling::orientationFromWire(
-        Eigen::Quaterniond(m.orientation.w, m.orientation.x, m.orientation.y, m.orientation.z));
-    get(m.linear_velocity, w.v_wheel_in_world);
-    get(m.angular_velocity, w.omega_wheelset_in_world);
-  }
+  frame.count = static_cast<std::uint32_t>(items.size());
+  for (std::uint32_t i = 0; i < frame.count; ++i) fill(items[i], frame.wheels[i]);
   return {};
+}
+
+}  // namespace
+
+Result fromMessage(const rail_msgs::WheelStates& msg, double track_step, coupling::WheelStateFrame& frame,
+                   const char* source) {
+  return readFrame(msg, msg.wheels, track_step, frame, source,
+                   [](const rail_msgs::WheelState& m, coupling::WheelState& w) {
+                     w.id = m.wheel_id;
+                     w.arc_length = m.arc_length;
+                     w.p_wheel_in_world = Eigen::Vector3d(m.position.x, m.position.y, m.position.z);
+                     // Eigen's (w, x, y, z) constructor; stored as given (no normalisation), so the bits survive.
+                     w.R_wheelset_to_world = coupling::orientationFromWire(
+                         Eigen::Quaterniond(m.orientation.w, m.orientation.x, m.orientation.y, m.orientation.z));
+                     get(m.linear_velocity, w.v_wheel_in_world);
+                     get(m.angular_velocity, w.omega_wheelset_in_world);
+                   });
 }
 
 Result fromMessage(const rail_msgs::ContactWrenches& msg, double track_step, coupling::WrenchFrame& frame,
                    const char* source) {
-  Result r = checkIncoming(msg.step, msg.header.stamp, msg.wrenches.size(), frame.capacity(), track_step, source);
-  if (!r) return r;
-  frame.step = msg.step;
-  frame.time = static_cast<double>(msg.step) * track_step;
-  frame.scene_hash = msg.scene_hash;
-  frame.count = static_cast<std::uint32_t>(msg.wrenches.size());
-  for (std::uint32_t i = 0; i < frame.count; ++i) {
-    const rail_msgs::ContactWrench& m = msg.wrenches[i];
-    coupling::WheelWrench& w = frame.wheels[i];
-    w.id = m.wheel_id;
-    get(m.force, w.f_wheel_in_world);
-    get(m.moment, w.n_wheel_in_world);
-  }
-  return {};
+  return readFrame(msg, msg.wrenches, track_step, frame, source,
+                   [](const rail_msgs::ContactWrench& m, coupling::WheelWrench& w) {
+                     w.id = m.wheel_id;
+                     get(m.force, w.f_wheel_in_world);
+                     get(m.moment, w.n_wheel_in_world);
+                   });
 }
 
 }  // namespace rail::ros_glue

@@ -8,6 +8,8 @@
 
 #include <ros/init.h>
 
+#include <rail_contact/format.hpp>
+
 #include "rail_core/coupling/transport.hpp"
 
 namespace rail::ros_glue::detail {
@@ -41,3 +43,16 @@ inline std::string nodeLabel(const std::string& node, coupling::Role peer) {
 std::string serviceProvider(const std::string& service);
 
 }  // namespace rail::ros_glue::detail
+
+// The names both transports' sources use unqualified.
+namespace rail::ros_glue {
+using contact::formatNumber;
+using coupling::Clock;
+using coupling::Deadline;
+using coupling::Result;
+using coupling::Role;
+using coupling::Status;
+using detail::interrupted;
+using detail::nodeLabel;
+using detail::sliceEnd;
+}  // namespace rail::ros_glue

@@ -16,16 +16,6 @@ namespace rail::ros_glue {
 
 namespace coupling = rail::core::coupling;
 
-using contact::formatNumber;
-using coupling::Clock;
-using coupling::Deadline;
-using coupling::Result;
-using coupling::Role;
-using coupling::Status;
-using detail::interrupted;
-using detail::nodeLabel;
-using detail::sliceEnd;
-
 namespace {
 
 Deadline after(double seconds) {

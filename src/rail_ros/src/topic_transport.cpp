@@ -13,15 +13,6 @@ namespace rail::ros_glue {
 
 namespace coupling = rail::core::coupling;
 
-using contact::formatNumber;
-using coupling::Clock;
-using coupling::Deadline;
-using coupling::Result;
-using coupling::Role;
-using coupling::Status;
-using detail::interrupted;
-using detail::nodeLabel;
-
 namespace {
 
 ros::WallDuration wall(Clock::duration d) {

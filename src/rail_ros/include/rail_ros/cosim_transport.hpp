@@ -48,6 +48,18 @@ inline std::string shmRunId(ros::NodeHandle& pnh) {
   return buf;
 }
 
+// The options both ROS transports take from the scene.
+inline void setRosTransportOptions(const rail::core::Scene& scene, rail::core::coupling::Role role,
+                                   const std::string& peer_node, const std::atomic<bool>* interrupt,
+                                   ros_glue::RosTransportOptions& o) {
+  o.role = role;
+  o.track_step = scene.solver.track_step;
+  o.wheel_capacity = scene.wheelCount();
+  o.attach_timeout = scene.solver.handshake_timeout;
+  o.peer_node = peer_node;
+  o.interrupt = interrupt;
+}
+
 // Opens this end of the scene's transport. peer_node: the peer's node name from the handshake. Waits up to
 // solver.handshake_timeout for the peer. Throws rail::core::coupling::CouplingError (timeout, refused) or
 // std::runtime_error (bad options).
@@ -77,23 +89,13 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> makeTransport(const
     }
     case Transport::kService: {
       ros_glue::ServiceTransportOptions o;
-      o.role = role;
-      o.track_step = scene.solver.track_step;
-      o.wheel_capacity = scene.wheelCount();
-      o.attach_timeout = scene.solver.handshake_timeout;
-      o.peer_node = peer_node;
-      o.interrupt = interrupt;
+      setRosTransportOptions(scene, role, peer_node, interrupt, o);
       o.reply_timeout = scene.solver.exchange_timeout;
       return std::make_unique<ros_glue::ServiceTransport>(nh, o);
     }
     case Transport::kTopic: {
       ros_glue::TopicTransportOptions o;
-      o.role = role;
-      o.track_step = scene.solver.track_step;
-      o.wheel_capacity = scene.wheelCount();
-      o.attach_timeout = scene.solver.handshake_timeout;
-      o.peer_node = peer_node;
-      o.interrupt = interrupt;
+      setRosTransportOptions(scene, role, peer_node, interrupt, o);
       return std::make_unique<ros_glue::TopicTransport>(nh, o);
     }
   }
