@@ -168,15 +168,7 @@ class Grid(object):
 
     def __init__(self, path, workspace=None):
         self.path = os.path.abspath(path)
-        try:
-            with open(self.path) as f:
-                data = yaml.load(f, Loader=_Loader)
-        except OSError as e:
-            raise GridError("%s: cannot read: %s" % (path, e.strerror))
-        except yaml.YAMLError as e:
-            mark = getattr(e, "problem_mark", None)
-            where = ":%d" % (mark.line + 1) if mark is not None else ""
-            raise GridError("%s%s: not valid YAML: %s" % (path, where, getattr(e, "problem", e)))
+        data = loading.read_yaml(path, _Loader, GridError)
         if not isinstance(data, dict):
             raise GridError("%s: expected a mapping at the top level" % path)
         here = os.path.dirname(self.path)

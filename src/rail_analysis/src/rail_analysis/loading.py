@@ -270,17 +270,24 @@ def load_contact_wrenches(path):
     return {"t": t[order], "wheel_id": np.array(ids), "force": force[order], "moment": moment[order]}
 
 
-def load_yaml(path, required=()):
-    """A YAML mapping from a file; required: keys that must be present. Raises AnalysisInputError."""
+def read_yaml(path, loader=yaml.SafeLoader, error=None):
+    """The YAML document of a file, read with loader. An unreadable file or invalid YAML raises error (an
+    exception class, AnalysisInputError by default) with the file, the line and the reason."""
+    error = error or AnalysisInputError
     try:
         with open(path) as f:
-            data = yaml.safe_load(f)
+            return yaml.load(f, Loader=loader)
     except OSError as e:
-        raise AnalysisInputError("%s: cannot read: %s" % (path, e.strerror))
+        raise error("%s: cannot read: %s" % (path, e.strerror))
     except yaml.YAMLError as e:
         mark = getattr(e, "problem_mark", None)
         where = ":%d" % (mark.line + 1) if mark is not None else ""
-        raise AnalysisInputError("%s%s: not valid YAML: %s" % (path, where, getattr(e, "problem", e)))
+        raise error("%s%s: not valid YAML: %s" % (path, where, getattr(e, "problem", e)))
+
+
+def load_yaml(path, required=()):
+    """A YAML mapping from a file; required: keys that must be present. Raises AnalysisInputError."""
+    data = read_yaml(path)
     if not isinstance(data, dict):
         raise AnalysisInputError("%s: expected a mapping at the top level, got %s" % (path, type(data).__name__))
     for k in required:
