@@ -202,7 +202,9 @@ class CosimTrack {
   /// Mechanical energy of the FE track (J) relative to its self-weight equilibrium d_s (K d_s = f_g): kinetic
   /// 1/2 v' M v and potential 1/2 (d - d_s)' K (d - d_s), which is the strain energy plus the work of gravity
   /// counted from d_s. With a track window: over the window, w being already relative to d_s
-  /// (TrackWindow::dynamicEnergy). Returns false (zeros) with rigid_fe. No allocation.
+  /// (TrackWindow::dynamicEnergy). With hanging sleepers K holds their ballast as closed, so where a void is
+  /// open the potential is not the track's (indicative only). Returns false (zeros) with rigid_fe. No
+  /// allocation.
   bool energy(double& kinetic, double& potential) const noexcept;
   /// The hanging sleepers of the integrated mesh (full track or current window), or nullptr when it has
   /// none (rigid_fe, no hanging zone).
