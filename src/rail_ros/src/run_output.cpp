@@ -216,4 +216,16 @@ int reportStop(const std::string& node, const MasterWatch& master_watch, double 
   return exit_code;
 }
 
+MarkerParams markerParams(const ros::NodeHandle& pnh) {
+  MarkerParams m;
+  m.frame_id = pnh.param<std::string>("frame_id", m.frame_id);
+  m.scale = pnh.param("marker_scale", m.scale);
+  m.colour_range = pnh.param("marker_colour_range", m.colour_range);
+  m.rate = pnh.param("marker_rate", m.rate);
+  m.force_scale = pnh.param("force_scale", m.force_scale);
+  return m;
+}
+
+double MarkerParams::period(double output_rate) const { return 1.0 / std::min(output_rate, rate); }
+
 }  // namespace rail::ros_glue

@@ -127,6 +127,18 @@ class NodeRun {
   long long irregularity_stations0_ = 0;
 };
 
+// The node-private marker parameters (documented in launch/cosim.launch and the README), read in one place
+// with their defaults.
+struct MarkerParams {
+  std::string frame_id = "world";           // ~frame_id: the frame of the track's markers
+  double scale = 200.0;                     // ~marker_scale: magnification of the rail deflection
+  double colour_range = 1.0e-3;             // ~marker_colour_range: deflection (m) at full colour
+  double rate = 25.0;                       // ~marker_rate: markers per simulated second (at most output.rate)
+  double force_scale = 1e-5;                // ~force_scale: vehicle's contact-force arrows, m per N
+  double period(double output_rate) const;  // simulated seconds between marker updates
+};
+MarkerParams markerParams(const ros::NodeHandle& pnh);
+
 // The console's progress line of a long run, at most once per `period_s` of wall time: simulated time, per
 // cent of the expected end, real-time factor and ETA. Starts its wall clock when built.
 class ProgressLine {

@@ -46,17 +46,17 @@ CosimTrackOutputs::CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, 
   pads_msg_.ballast_gap.reserve(pad_samples_.size());
   energy_msg_.header.frame_id = "track";
 
-  marker_frame_ = pnh.param<std::string>("frame_id", "world");
-  marker_scale_ = pnh.param("marker_scale", 200.0);
-  marker_colour_range_ = pnh.param("marker_colour_range", 1.0e-3);
+  marker_params_ = rail::ros_glue::markerParams(pnh);
   if (markers_on_) {
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("/markers", 2, true);
-    if (track.trackWindow() == nullptr) {
-      markers_ =
-          std::make_unique<TrackMarkers>(track.sceneTrack()->model, marker_frame_, marker_scale_, marker_colour_range_);
-    }
-    marker_period_ = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
+    if (track.trackWindow() == nullptr) markers_ = makeMarkers(track.sceneTrack()->model);
+    marker_period_ = marker_params_.period(scene.output.rate);
   }
+}
+
+std::unique_ptr<TrackMarkers> CosimTrackOutputs::makeMarkers(const TrackModel& model) const {
+  const rail::ros_glue::MarkerParams& m = marker_params_;
+  return std::make_unique<TrackMarkers>(model, m.frame_id, m.scale, m.colour_range);
 }
 
 bool CosimTrackOutputs::openBag(const std::string& node, ros::NodeHandle& pnh) {
@@ -151,7 +151,7 @@ void CosimTrackOutputs::publishMarkers(const ros::Time& stamp) {
   }
   if (track_.windowMoves() != marker_window_moves_) {  // a new mesh: rebuild (allocates; rare)
     marker_window_moves_ = track_.windowMoves();
-    markers_ = std::make_unique<TrackMarkers>(window->model(), marker_frame_, marker_scale_, marker_colour_range_);
+    markers_ = makeMarkers(window->model());
     d_total_.resize(window->staticState().size());
   }
   d_total_ = window->staticState() + window->state().d;

@@ -68,8 +68,8 @@ class CosimTrackOutputs {
   // Markers: on a moving window they follow the window's mesh (rebuilt after each move) and show its total
   // displacement d_g + w.
   std::unique_ptr<TrackMarkers> markers_;
-  std::string marker_frame_;
-  double marker_scale_, marker_colour_range_;
+  rail::ros_glue::MarkerParams marker_params_;
+  std::unique_ptr<TrackMarkers> makeMarkers(const TrackModel& model) const;
   double marker_period_ = 0.0, next_marker_ = 0.0;
   int marker_window_moves_ = -1;
   Eigen::VectorXd d_total_;

@@ -80,10 +80,9 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
   double marker_period = 0.0;
   if (scene.effects.rviz_markers) {
     marker_pub = nh.advertise<visualization_msgs::MarkerArray>("/markers", 2, true);
-    markers =
-        std::make_unique<TrackMarkers>(model, pnh.param<std::string>("frame_id", "world"),
-                                       pnh.param("marker_scale", 200.0), pnh.param("marker_colour_range", 1.0e-3));
-    marker_period = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
+    const ros_glue::MarkerParams m = ros_glue::markerParams(pnh);
+    markers = std::make_unique<TrackMarkers>(model, m.frame_id, m.scale, m.colour_range);
+    marker_period = m.period(scene.output.rate);
   }
 
   ros_glue::OutputBag bag;

@@ -293,9 +293,9 @@ VehicleOutputs::VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const 
   // rviz markers (effects.rviz_markers): built only when on, published at ~marker_rate (default 25 Hz).
   if (scene.effects.rviz_markers) {
     pub_markers_ = nh.advertise<visualization_msgs::MarkerArray>("/vehicle_markers", 2);
-    markers_ =
-        std::make_unique<VehicleMarkers>(sim, scene, scene.vehicle.nominal_radius, pnh.param("force_scale", 1e-5));
-    marker_period_ = 1.0 / std::min(scene.output.rate, pnh.param("marker_rate", 25.0));
+    const rail::ros_glue::MarkerParams m = rail::ros_glue::markerParams(pnh);
+    markers_ = std::make_unique<VehicleMarkers>(sim, scene, scene.vehicle.nominal_radius, m.force_scale);
+    marker_period_ = m.period(scene.output.rate);
   }
 }
 
