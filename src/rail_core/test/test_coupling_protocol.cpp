@@ -201,7 +201,7 @@ TEST(CouplingProtocol, LoopbackThousandStepsInOrder) {
 
 // The track refuses a frame with another scene hash, a skipped step and a repeated step.
 TEST(CouplingProtocol, TrackRefusesWrongHashAndStep) {
-  const CouplingConfig c = config(2, 0.5);
+  const CouplingConfig c = config(2, 0.005);
   auto frame = [&](std::uint64_t step, std::uint64_t hash) {
     WheelStateFrame f(2);
     f.step = step;
@@ -253,19 +253,19 @@ TEST(CouplingProtocol, TrackRefusesWrongHashAndStep) {
     LoopbackLink link(2);
     TrackCoupling track(c, link.trackEnd());
     WheelStateFrame f = frame(0, kHash);
-    f.time = 0.25;
+    f.time = 0.0025;
     ASSERT_TRUE(link.vehicleEnd().sendStates(f, soon));
     const Result r = track.receive();
     EXPECT_EQ(r.status, Status::kRefused);
     EXPECT_EQ(r.message,
-              "track: wheel states from the vehicle refused at step 0: time 0.25 s received, 0 s expected "
-              "(step 0 x track_step 0.5 s)");
+              "track: wheel states from the vehicle refused at step 0: time 0.0025 s received, 0 s expected "
+              "(step 0 x track_step 0.005 s)");
   }
 }
 
 // The vehicle refuses wrenches of another step or scene.
 TEST(CouplingProtocol, VehicleRefusesWrongAnswer) {
-  const CouplingConfig c = config(2, 0.5);
+  const CouplingConfig c = config(2, 0.005);
   const Deadline soon = Clock::now() + std::chrono::seconds(5);
   LoopbackLink link(2);
   VehicleCoupling v(c, link.vehicleEnd());
@@ -346,7 +346,7 @@ TEST(CouplingProtocol, NonPhysicalConfigIsRefused) {
     VehicleCoupling v(c, link.vehicleEnd());
     FAIL() << "no exception";
   } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "coupling: solver.track_step must be > 0 s (got -1e-05)");
+    EXPECT_STREQ(e.what(), "coupling: solver.track_step must be between 1e-07 and 0.01 s, got -1e-05");
   }
   c = config(2);
   c.exchange_timeout = 0.0;

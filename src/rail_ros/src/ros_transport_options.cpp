@@ -5,6 +5,7 @@
 #include <string>
 
 #include <rail_contact/format.hpp>
+#include <rail_core/scene_loader.hpp>
 
 #include <ros/master.h>
 #include <ros/this_node.h>
@@ -18,8 +19,8 @@ namespace rail::ros_glue {
 using contact::formatNumber;
 
 void checkOptions(const RosTransportOptions& o, const char* what) {
-  if (!(o.track_step > 0.0) || !std::isfinite(o.track_step))
-    throw std::runtime_error(std::string(what) + ": track_step must be > 0 s (got " + formatNumber(o.track_step) + ")");
+  if (const std::string why = core::trackStepRule(o.track_step); !why.empty())
+    throw std::runtime_error(std::string(what) + ": track_step " + why);
   if (o.wheel_capacity < 1 || o.wheel_capacity > 256)
     throw std::runtime_error(std::string(what) + ": wheel_capacity must be in 1..256 (got " +
                              std::to_string(o.wheel_capacity) + ")");

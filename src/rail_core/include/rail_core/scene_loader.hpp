@@ -16,6 +16,13 @@ class SceneError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The rules of the solver settings, stated once: the loader reports a broken one with the file, field and
+// line; a core given settings built in code (not loaded) checks them again through the same function. Each
+// returns "" when the value obeys, else what is wrong ("must be between ..., got ...").
+std::string trackStepRule(double track_step);                                // solver.track_step, s
+std::string vehicleMaxStepRule(double vehicle_max_step, double track_step);  // in co-simulation, s
+std::string windowShiftRule(double shift);                                   // solver.track_window.shift, m
+
 // Changes to a scene applied before it is read, each "dotted.key=value" with a YAML value, e.g.
 // "effects.track_model=flexible", "solver.end={time: 1.5}", "output.bag=run.bag". Keys of maps are
 // created when absent; a key that walks through a non-map (e.g. into a list) is refused; "key=" with

@@ -7,6 +7,8 @@
 
 #include <rail_contact/format.hpp>
 
+#include "rail_core/scene_loader.hpp"
+
 namespace rail::core::coupling {
 
 using contact::formatNumber;
@@ -21,8 +23,8 @@ std::string hex(std::uint64_t v) {
 std::string u64(std::uint64_t v) { return std::to_string(v); }
 
 void checkConfig(const CouplingConfig& c) {
-  if (!(c.track_step > 0.0) || !std::isfinite(c.track_step))
-    throw std::runtime_error("coupling: solver.track_step must be > 0 s (got " + formatNumber(c.track_step) + ")");
+  if (const std::string why = trackStepRule(c.track_step); !why.empty())
+    throw std::runtime_error("coupling: solver.track_step " + why);
   if (!(c.exchange_timeout > 0.0) || !std::isfinite(c.exchange_timeout))
     throw std::runtime_error("coupling: solver.exchange_timeout must be > 0 s (got " +
                              formatNumber(c.exchange_timeout) + ")");

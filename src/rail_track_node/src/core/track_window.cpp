@@ -104,14 +104,15 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
   };
   if (!(S.behind >= 0.0) || !std::isfinite(S.behind)) refuse("behind", "must be finite and >= 0 m", S.behind);
   if (!(S.ahead >= 0.0) || !std::isfinite(S.ahead)) refuse("ahead", "must be finite and >= 0 m", S.ahead);
-  if (!(S.shift > 0.0) || !std::isfinite(S.shift)) refuse("shift", "must be finite and > 0 m", S.shift);
+  if (const std::string why = rail::core::windowShiftRule(S.shift); !why.empty())
+    throw std::runtime_error(scene.file + ": track window: shift " + why);
   if (!(S.vehicle_length >= 0.0) || !std::isfinite(S.vehicle_length))
     refuse("vehicle_length", "must be finite and >= 0 m", S.vehicle_length);
   if (!(S.length >= 0.0) || !std::isfinite(S.length))
     refuse("length", "must be finite and >= 0 m (0: minimum)", S.length);
   track_step_ = S.track_step > 0.0 ? S.track_step : scene.solver.track_step;
-  if (!(track_step_ > 0.0) || !std::isfinite(track_step_))
-    refuse("track_step", "must be finite and > 0 s", track_step_);
+  if (const std::string why = rail::core::trackStepRule(track_step_); !why.empty())
+    throw std::runtime_error(scene.file + ": track window: track_step " + why);
   if (!(s_front >= s_rear) || !std::isfinite(s_rear) || !std::isfinite(s_front)) {
     std::ostringstream os;
     os << scene.file << ": track window: the first wheel (s = " << s_front

@@ -1,6 +1,7 @@
 #include "rail_vehicle_node/cosim_vehicle.hpp"
 
 #include <rail_contact/track_geometry.hpp>
+#include <rail_core/scene_loader.hpp>
 
 #include <algorithm>
 #include <sstream>
@@ -40,12 +41,12 @@ const core::Scene& checkCosimScene(const core::Scene& scene) {
   } else if (scene.effects.track_model == core::TrackModel::kRigid) {
     os << scene.file << ": effects.track_model: rigid runs the vehicle alone; the co-simulated vehicle needs "
        << "rigid_fe or flexible";
-  } else if (!(scene.solver.track_step > 0.0)) {
-    os << scene.file << ": solver.track_step: must be > 0, got " << scene.solver.track_step;
-  } else if (!(scene.solver.vehicle_max_step > 0.0) ||
-             scene.solver.vehicle_max_step > scene.solver.track_step * (1.0 + 1e-12)) {
-    os << scene.file << ": solver.vehicle_max_step: must be in (0, solver.track_step = " << scene.solver.track_step
-       << "] s in co-simulation, got " << scene.solver.vehicle_max_step;
+  } else if (const std::string why = core::trackStepRule(scene.solver.track_step); !why.empty()) {
+    os << scene.file << ": solver.track_step: " << why;
+  } else if (const std::string why_max =
+                 core::vehicleMaxStepRule(scene.solver.vehicle_max_step, scene.solver.track_step);
+             !why_max.empty()) {
+    os << scene.file << ": solver.vehicle_max_step: " << why_max;
   } else {
     return scene;
   }
