@@ -181,6 +181,7 @@ void checkAgainstFull(const Scene& scene, const std::vector<double>& sections, d
   double worst[2] = {0.0, 0.0};
   for (int m = 0; m < 2; ++m) {
     rt::TrackWindowSettings set;
+    set.track_step = scene.solver.track_step;
     set.behind = set.ahead = m == 0 ? small_margin : large_margin;
     set.shift = 3.0;
     const History win = runWindow(scene, set, sections, t_end, every);
@@ -225,6 +226,7 @@ TEST(TrackWindow, CondensedEndsReproduceTheLineStatically) {
   double worst_free = 0.0;
   for (const bool condensed : {true, false}) {
     rt::TrackWindowSettings set;
+    set.track_step = scene.solver.track_step;
     set.behind = set.ahead = 2.0;
     set.shift = 0.6;
     set.include_gravity = false;
@@ -292,6 +294,7 @@ TEST(TrackWindow, CondensedEndsReproduceTheLineStatically) {
 TEST(TrackWindow, RefusesWindowShorterThanVehiclePlusMarginsStatingTheMinimum) {
   const Scene scene = lineScene(kStraight200, 40.0, 0.0, 1e-4);
   rt::TrackWindowSettings set;
+  set.track_step = scene.solver.track_step;
   set.vehicle_length = kCoachLength;
   set.behind = set.ahead = 10.0;
   set.length = 40.0;
@@ -307,8 +310,21 @@ TEST(TrackWindow, RefusesWindowShorterThanVehiclePlusMarginsStatingTheMinimum) {
   rt::TrackWindow w(scene, set, 40.0 - kCoachLength, 40.0);
   EXPECT_EQ(w.bays(), 75);
   EXPECT_NEAR(w.minimumLength(), 45.0, 1e-12);
-  set.shift = 0.0;
-  EXPECT_THROW(rt::TrackWindow(scene, set, 40.0 - kCoachLength, 40.0), std::runtime_error);
+  // The solver rules as the loader states them (rail_core trackStepRule, windowShiftRule).
+  auto refusal = [&](const rt::TrackWindowSettings& bad) {
+    try {
+      rt::TrackWindow refused(scene, bad, 40.0 - kCoachLength, 40.0);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  rt::TrackWindowSettings bad = set;
+  bad.shift = 0.0;
+  EXPECT_EQ(refusal(bad), "w.yaml: track window: shift must be between 0.001 and 10000 m, got 0");
+  bad = set;
+  bad.track_step = 0.0;  // not taken from the scene: a window is given its step
+  EXPECT_EQ(refusal(bad), "w.yaml: track window: track_step must be between 1e-07 and 0.01 s, got 0");
 }
 
 // The window's model is the line's model restricted to the window: every stiffness and mass entry between
@@ -324,6 +340,7 @@ TEST(TrackWindow, WindowIsTheLineModelRestrictedToItsRange) {
   const Scene scene = lineScene(kCurve200, 80.0, 0.0, 1e-4);
   const rt::SceneTrack full = rt::buildSceneTrack(scene);
   rt::TrackWindowSettings set;
+  set.track_step = scene.solver.track_step;
   set.vehicle_length = kCoachLength;
   const rt::TrackWindow win(scene, set, 80.0 - kCoachLength, 80.0);
   const rt::TrackMesh& wm = win.mesh();
@@ -422,6 +439,7 @@ TEST(TrackWindow, MoveCarriesTheStateOfSharedNodes) {
     const bool entering_static = run++ < 2;
     const Scene scene = lineScene(segs, 50.0, 0.0, 1e-4);
     rt::TrackWindowSettings set;
+    set.track_step = scene.solver.track_step;
     set.entering_static = entering_static;
     set.vehicle_length = kCoachLength;
     set.behind = set.ahead = 5.0;
@@ -557,6 +575,7 @@ TEST(TrackWindow, EnergyDoesNotGrowOverManyMoves) {
   const Scene scene = lineScene("    - {type: straight, length: 300.0}", 40.0, 10e3, h);
   const rail::core::MovingLoads& ml = scene.moving_loads;
   rt::TrackWindowSettings set;
+  set.track_step = scene.solver.track_step;
   set.vehicle_length = kCoachLength;
   set.behind = set.ahead = 4.0;
   set.shift = 0.6;
@@ -595,6 +614,7 @@ TEST(TrackWindow, EnergyDoesNotGrowOverManyMoves) {
 TEST(TrackWindow, StepAllocatesNothing) {
   const Scene scene = lineScene(kStraight200, 40.0, 0.0, 1e-4);
   rt::TrackWindowSettings set;
+  set.track_step = scene.solver.track_step;
   set.vehicle_length = kCoachLength;
   rt::TrackWindow win(scene, set, 40.0 - kCoachLength, 40.0);
   rt::NodalLoads loads(200);

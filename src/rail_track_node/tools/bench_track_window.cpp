@@ -90,7 +90,9 @@ void benchFull(const rail::core::Scene& scene, double s_front0, int steps) {
 void benchWindow(const rail::core::Scene& scene, const rt::TrackWindowSettings& set, double s_front0, int steps,
                  double s_from, double s_to) {
   Clock::time_point t0 = Clock::now();
-  rt::TrackWindow win(scene, set, s_front0 - set.vehicle_length, s_front0);
+  rt::TrackWindowSettings own = set;
+  own.track_step = scene.solver.track_step;
+  rt::TrackWindow win(scene, own, s_front0 - set.vehicle_length, s_front0);
   const double t_build = seconds(t0);
   const double h = win.trackStep();
   rt::NodalLoads loads(24 * 4 + 1);

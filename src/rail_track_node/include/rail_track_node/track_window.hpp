@@ -51,7 +51,7 @@ struct TrackWindowSettings {
   /// Window length, m, rounded up to whole sleeper bays; 0 = the minimum,
   /// vehicle_length + behind + ahead + shift. A shorter window is refused.
   double length = 0.0;
-  double track_step = 0.0;  ///< Newmark step h, s; 0 = the scene's solver.track_step
+  double track_step = 0.0;  ///< Newmark step h, s (trackStepRule); the co-simulation sets solver.track_step
   /// Entering nodes start at the static continuation of the carried-over w, w', w'' (K_ee x_e = -K_ec x_c);
   /// false: at rest (x_e = 0).
   bool entering_static = true;

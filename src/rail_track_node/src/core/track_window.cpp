@@ -110,7 +110,7 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
     refuse("vehicle_length", "must be finite and >= 0 m", S.vehicle_length);
   if (!(S.length >= 0.0) || !std::isfinite(S.length))
     refuse("length", "must be finite and >= 0 m (0: minimum)", S.length);
-  track_step_ = S.track_step > 0.0 ? S.track_step : scene.solver.track_step;
+  track_step_ = S.track_step;
   if (const std::string why = rail::core::trackStepRule(track_step_); !why.empty())
     throw std::runtime_error(scene.file + ": track window: track_step " + why);
   if (!(s_front >= s_rear) || !std::isfinite(s_rear) || !std::isfinite(s_front)) {
