@@ -227,7 +227,9 @@ class VehicleSimulator {
   double sumWheelLoads(const Eigen::VectorXd& y);
   RunStatus check();
 
-  core::Scene scene_;
+  // What the run's end needs from the scene (solver.end, the vehicle's start and speed).
+  core::End end_;
+  double start_arc_length_ = 0.0, speed_ = 0.0;
   SimulatorSettings settings_;
   std::unique_ptr<contact::TrackGeometry> track_;
   contact::WheelProfile wheel_profile_;

@@ -237,7 +237,9 @@ VehicleSimulator::~VehicleSimulator() = default;
 void VehicleSimulator::build(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
                              const SimulatorSettings& settings) {
   if (!scene.has_vehicle) throw std::runtime_error(scene.file + ": the scene has no vehicle");
-  scene_ = scene;
+  end_ = scene.solver.end;
+  start_arc_length_ = scene.vehicle.start_arc_length;
+  speed_ = scene.vehicle.speed;
   settings_ = settings;
   const std::string& data_file = scene.vehicle.data.path;
 
@@ -490,15 +492,13 @@ double VehicleSimulator::sumWheelLoads(const Eigen::VectorXd& y) {
 double VehicleSimulator::time() const { return integrator_->time(); }
 
 double VehicleSimulator::endTimeEstimate() const {
-  const core::End& end = scene_.solver.end;
-  if (end.kind == core::EndKind::kTime) return end.value;
-  return scene_.vehicle.speed > 0.0 ? (end.value - scene_.vehicle.start_arc_length) / scene_.vehicle.speed : 0.0;
+  if (end_.kind == core::EndKind::kTime) return end_.value;
+  return speed_ > 0.0 ? (end_.value - start_arc_length_) / speed_ : 0.0;
 }
 
 bool VehicleSimulator::finished() const {
-  const core::End& end = scene_.solver.end;
-  if (end.kind == core::EndKind::kTime) return time() >= end.value - 1e-12;
-  return leading_s_ >= end.value;
+  if (end_.kind == core::EndKind::kTime) return time() >= end_.value - 1e-12;
+  return leading_s_ >= end_.value;
 }
 
 void VehicleSimulator::resetState(const Eigen::VectorXd& y) {
