@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """CI subset of the hard-case suite (hard_cases.py, subset 'ci': the vehicle alone on the rigid track for
-lift-off, two-point contact, standstill, creep speed, derailment and a wheel flat, and the dipped joint on the
-flexible track, each with its refined run): every check of every case must pass. The runs start their own ROS
+lift-off, two-point contact, standstill, creep speed, derailment and a wheel flat, and the dipped joint and
+hanging sleepers on the flexible track, each with its refined run): every check of every case must pass. The runs start their own ROS
 masters (rail_analysis.runner.run_case), so no rostest master is needed. Takes about 3 minutes on two cores.
 
   /usr/bin/python3 test_hard_cases_ci.py [--gtest_output=xml:FILE]
@@ -65,6 +65,9 @@ class HardCasesCi(unittest.TestCase):
 
     def test_wheel_flat_impact(self):
         self._assert_row("wheel_flat_impact")
+
+    def test_hanging_sleepers_closing(self):
+        self._assert_row("hanging_sleepers_closing")
 
     def test_every_ci_case_is_asserted(self):
         asserted = {n[len("test_"):] for n in dir(self) if n.startswith("test_") and n != "test_every_ci_case_is_asserted"}
