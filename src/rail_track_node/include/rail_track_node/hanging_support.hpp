@@ -30,10 +30,9 @@ class HangingSupports {
 
   /// Lift z (m, along the element's local z, up) of element e's point on the sleeper from displacements d
   /// (plus d_static when not null), and the force the ballast puts on the sleeper along local z (N, >= 0):
-  /// max(0, k p + c p'), p = -(z + gap) the closure beyond the void, p' = -z' from velocities v.
+  /// max(0, k p + c p'), p = -(z + gap) the closure beyond the void, p' = -z' (lift() of the velocities).
   double lift(int e, const Eigen::VectorXd& d, const Eigen::VectorXd* d_static) const noexcept;
   double bearingForce(int e, double z, double z_dot) const noexcept;
-  double rate(int e, const Eigen::VectorXd& v) const noexcept;
   double gap(int e) const noexcept { return elements_[static_cast<std::size_t>(e)].gap; }
 
   /// Adds, per element, the nodal loads of (real force - linear force - baseline) along local z, evaluated

@@ -35,8 +35,6 @@ double HangingSupports::lift(int e, const Eigen::VectorXd& d, const Eigen::Vecto
   return z;
 }
 
-double HangingSupports::rate(int e, const Eigen::VectorXd& v) const noexcept { return lift(e, v, nullptr); }
-
 double HangingSupports::bearingForce(int e, double z, double z_dot) const noexcept {
   const Element& el = elements_[static_cast<std::size_t>(e)];
   const double f = -el.k * (z + el.gap) - el.c * z_dot;
@@ -68,13 +66,8 @@ bool HangingSupports::addLoads(const Eigen::VectorXd& d, const Eigen::VectorXd& 
 }
 
 void HangingSupports::setBaseline(const Eigen::VectorXd& d_static) {
-  for (Element& el : elements_) {
-    double z = 0.0;
-    for (int j = 0; j < 6; ++j) {
-      const int i = el.dofs[static_cast<std::size_t>(j)];
-      if (i >= 0) z += el.b(j) * d_static(i);
-    }
-    el.baseline = correction(el, z, 0.0);
+  for (std::size_t e = 0; e < elements_.size(); ++e) {
+    elements_[e].baseline = correction(elements_[e], lift(static_cast<int>(e), d_static, nullptr), 0.0);
   }
 }
 
