@@ -8,26 +8,23 @@
 #include <stdexcept>
 #include <string>
 
+#include "rail_contact/enum_words.hpp"
 #include "rail_contact/format.hpp"
 
 namespace rail {
 namespace contact {
 
-const char* toString(DetectionStatus status) noexcept {
-  switch (status) {
-    case DetectionStatus::kConverged:
-      return "converged";
-    case DetectionStatus::kConvergedAfterSearch:
-      return "converged_after_search";
-    case DetectionStatus::kApproximate:
-      return "approximate";
-    case DetectionStatus::kOutOfBounds:
-      return "out_of_bounds";
-    case DetectionStatus::kInvalidInput:
-      return "invalid_input";
-  }
-  return "unknown";
-}
+namespace {
+constexpr Word<DetectionStatus> kDetectionStatusWords[] = {
+    {"converged", DetectionStatus::kConverged},
+    {"converged_after_search", DetectionStatus::kConvergedAfterSearch},
+    {"approximate", DetectionStatus::kApproximate},
+    {"out_of_bounds", DetectionStatus::kOutOfBounds},
+    {"invalid_input", DetectionStatus::kInvalidInput}};
+static_assert(namesEvery(kDetectionStatusWords, DetectionStatus::kInvalidInput));
+}  // namespace
+
+const char* toString(DetectionStatus status) noexcept { return wordOf(kDetectionStatusWords, status); }
 
 std::string describe(const DetectionCounts& c) {
   std::ostringstream m;

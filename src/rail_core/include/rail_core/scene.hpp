@@ -10,14 +10,16 @@
 #include <string>
 #include <vector>
 
+#include <rail_contact/enum_words.hpp>
 #include <rail_contact/track_defects.hpp>
 #include <rail_contact/wheel_defects.hpp>
 
 #include "rail_core/support_zone.hpp"
 
-#include "rail_core/enum_words.hpp"
-
 namespace rail::core {
+
+using contact::Word;
+using contact::wordOf;
 
 // How the track is represented (effects.track_model).
 enum class TrackModel {
@@ -34,7 +36,7 @@ enum class VehicleMethod { kAuto, kBdf, kAdams };
 enum class EndKind { kTime, kArcLength };
 enum class LoadRail { kBoth, kLeft, kRight };
 
-// The scene file's words for these values (enum_words.hpp): what the loader accepts and toString writes.
+// The scene file's words for these values (rail_contact/enum_words.hpp): what the loader accepts and toString writes.
 inline constexpr Word<TrackModel> kTrackModelWords[] = {
     {"rigid", TrackModel::kRigid}, {"rigid_fe", TrackModel::kRigidFe}, {"flexible", TrackModel::kFlexible}};
 inline constexpr Word<CreepLaw> kCreepLawWords[] = {{"polach", CreepLaw::kPolach}};

@@ -16,9 +16,11 @@
 #include <utility>
 #include <vector>
 
-#include "rail_core/enum_words.hpp"
+#include <rail_contact/enum_words.hpp>
 
 namespace rail::core {
+
+using contact::Word;
 
 // Throws a loader's own exception type with the message (a scene loader throws SceneError, the vehicle
 // loader VehicleFileError). Without one, the reader throws std::runtime_error.
@@ -69,7 +71,7 @@ class MapReader {
   void string(const char* key, std::string& value);
   void numberList(const char* key, std::vector<double>& value);
   void stringList(const char* key, std::vector<std::string>& value);
-  // One of `words` from the first (enum_words.hpp): "must be one of ..., got '...'" otherwise.
+  // One of `words` from the first (rail_contact/enum_words.hpp): "must be one of ..., got '...'" otherwise.
   template <class E, std::size_t N>
   void choice(const char* key, E& value, const Word<E> (&words)[N], std::size_t first = 0);
 

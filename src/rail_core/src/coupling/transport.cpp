@@ -1,28 +1,21 @@
 #include "rail_core/coupling/transport.hpp"
 
+#include <rail_contact/enum_words.hpp>
+
 #include "rail_core/exit_codes.hpp"
 
 namespace rail::core::coupling {
 
+namespace {
+constexpr contact::Word<Status> kStatusWords[] = {
+    {"ok", Status::kOk},           {"timeout", Status::kTimeout},         {"peer closed", Status::kPeerClosed},
+    {"refused", Status::kRefused}, {"interrupted", Status::kInterrupted}, {"error", Status::kError}};
+static_assert(contact::namesEvery(kStatusWords, Status::kError));
+}  // namespace
+
 const char* toString(Role r) { return r == Role::kVehicle ? "vehicle" : "track"; }
 
-const char* toString(Status s) {
-  switch (s) {
-    case Status::kOk:
-      return "ok";
-    case Status::kTimeout:
-      return "timeout";
-    case Status::kPeerClosed:
-      return "peer closed";
-    case Status::kRefused:
-      return "refused";
-    case Status::kInterrupted:
-      return "interrupted";
-    case Status::kError:
-      return "error";
-  }
-  return "unknown";
-}
+const char* toString(Status s) { return contact::wordOf(kStatusWords, s); }
 
 int exitCode(Status s) {
   switch (s) {

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cstdio>
 
+#include <rail_contact/enum_words.hpp>
 #include <rail_core/exit_codes.hpp>
 
 namespace rail::track {
@@ -18,23 +19,18 @@ cc::FrameTransport& timedOrPlain(std::unique_ptr<cc::TimedTransport>& timed, cc:
   return *timed;
 }
 
+constexpr rail::contact::Word<CosimStepStatus> kStepStatusWords[] = {
+    {"accepted", CosimStepStatus::kOk},
+    {"wrong wheel count", CosimStepStatus::kWrongWheelCount},
+    {"bad wheel id", CosimStepStatus::kBadWheelId},
+    {"a wheel is outside the track window (solver.track_window: margins too small?)",
+     CosimStepStatus::kWheelOutsideWindow},
+    {"the track window could not move", CosimStepStatus::kWindowMoveFailed}};
+static_assert(rail::contact::namesEvery(kStepStatusWords, CosimStepStatus::kWindowMoveFailed));
+
 }  // namespace
 
-const char* describe(CosimStepStatus status) {
-  switch (status) {
-    case CosimStepStatus::kOk:
-      return "accepted";
-    case CosimStepStatus::kWrongWheelCount:
-      return "wrong wheel count";
-    case CosimStepStatus::kBadWheelId:
-      return "bad wheel id";
-    case CosimStepStatus::kWheelOutsideWindow:
-      return "a wheel is outside the track window (solver.track_window: margins too small?)";
-    case CosimStepStatus::kWindowMoveFailed:
-      return "the track window could not move";
-  }
-  return "?";
-}
+const char* describe(CosimStepStatus status) { return rail::contact::wordOf(kStepStatusWords, status); }
 
 CosimTrackRun::CosimTrackRun(const core::Scene& scene, CosimTrack& track, cc::FrameTransport& transport,
                              CosimTrackRunOptions options)

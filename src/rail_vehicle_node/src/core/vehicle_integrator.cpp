@@ -259,15 +259,17 @@ struct VehicleIntegrator::Impl {
     std::snprintf(self->last_error.data(), self->last_error.size(), "%s %s: %s", module, function, msg);
   }
 
-  void accumulateCounters() {
-    const IntegratorCounters now = currentCounters();
-    base.steps += now.steps;
-    base.rhs_evals += now.rhs_evals;
-    base.rhs_evals_jacobian += now.rhs_evals_jacobian;
-    base.jacobian_evals += now.jacobian_evals;
-    base.error_test_failures += now.error_test_failures;
-    base.nonlinear_iterations += now.nonlinear_iterations;
-    base.nonlinear_convergence_failures += now.nonlinear_convergence_failures;
+  void accumulateCounters() { addCvodeCounts(currentCounters(), base); }
+
+  // The counts CVODE keeps (steps, evaluations, failures) of `now` added to `to`.
+  static void addCvodeCounts(const IntegratorCounters& now, IntegratorCounters& to) {
+    to.steps += now.steps;
+    to.rhs_evals += now.rhs_evals;
+    to.rhs_evals_jacobian += now.rhs_evals_jacobian;
+    to.jacobian_evals += now.jacobian_evals;
+    to.error_test_failures += now.error_test_failures;
+    to.nonlinear_iterations += now.nonlinear_iterations;
+    to.nonlinear_convergence_failures += now.nonlinear_convergence_failures;
   }
 
   // Counters of CVODE since the last (re-)initialisation.
@@ -528,13 +530,7 @@ IntegratorCounters VehicleIntegrator::counters() const {
   const Impl& s = *impl_;
   const IntegratorCounters now = s.currentCounters();
   IntegratorCounters c = s.base;
-  c.steps += now.steps;
-  c.rhs_evals += now.rhs_evals;
-  c.rhs_evals_jacobian += now.rhs_evals_jacobian;
-  c.jacobian_evals += now.jacobian_evals;
-  c.error_test_failures += now.error_test_failures;
-  c.nonlinear_iterations += now.nonlinear_iterations;
-  c.nonlinear_convergence_failures += now.nonlinear_convergence_failures;
+  Impl::addCvodeCounts(now, c);
   c.rhs_evals_jacobian += s.coloured_jacobian_rhs;
   if (s.pattern != nullptr) {
     // CVODE counts every Jacobian handed to it; the carried ones are not evaluations.

@@ -3,28 +3,21 @@
 #include <algorithm>
 #include <cstdio>
 
+#include <rail_contact/enum_words.hpp>
 #include <rail_core/coupling/transport.hpp>
 #include <rail_core/exit_codes.hpp>
 
 namespace rail::vehicle {
 
-const char* toString(RunStatus status) {
-  switch (status) {
-    case RunStatus::kRunning:
-      return "running";
-    case RunStatus::kFinished:
-      return "finished";
-    case RunStatus::kDerailed:
-      return "derailed";
-    case RunStatus::kNonFinite:
-      return "non-finite state";
-    case RunStatus::kLeftTrack:
-      return "left the track";
-    case RunStatus::kIntegratorFailed:
-      return "integrator failure";
-  }
-  return "?";
-}
+namespace {
+constexpr contact::Word<RunStatus> kRunStatusWords[] = {
+    {"running", RunStatus::kRunning},          {"finished", RunStatus::kFinished},
+    {"derailed", RunStatus::kDerailed},        {"non-finite state", RunStatus::kNonFinite},
+    {"left the track", RunStatus::kLeftTrack}, {"integrator failure", RunStatus::kIntegratorFailed}};
+static_assert(contact::namesEvery(kRunStatusWords, RunStatus::kIntegratorFailed));
+}  // namespace
+
+const char* toString(RunStatus status) { return contact::wordOf(kRunStatusWords, status); }
 
 int exitCodeOf(RunStatus status) {
   switch (status) {
