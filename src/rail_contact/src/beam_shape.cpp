@@ -35,72 +35,52 @@ Hermite hermite(double xi, double L) {
 // DOF columns inside the 12-vector.
 constexpr int kU = 0, kV = 1, kW = 2, kTx = 3, kTy = 4, kTz = 5, kJ = 6;
 
+// Row `row` of a shape matrix: a linear field, a at DOF p of node i and b at p of node j.
+void placeRow(Matrix3x12& N, int row, int p, double a, double b) {
+  N(row, p) = a;
+  N(row, kJ + p) = b;
+}
+
+// A cubic field: a, b at DOFs p (displacement) and q (slope) of node i, c, d at p, q of node j.
+void placeRow(Matrix3x12& N, int row, int p, int q, double a, double b, double c, double d) {
+  N(row, p) = a;
+  N(row, q) = b;
+  N(row, kJ + p) = c;
+  N(row, kJ + q) = d;
+}
+
 }  // namespace
 
 void beamShapeDisplacement(double xi, double L, Matrix3x12& N_u) {
   const Hermite h = hermite(xi, L);
   N_u.setZero();
-  // axial u: linear
-  N_u(0, kU) = 1.0 - xi;
-  N_u(0, kJ + kU) = xi;
-  // v (bending in the x-y plane, slope theta_z)
-  N_u(1, kV) = h.H1;
-  N_u(1, kTz) = h.H2;
-  N_u(1, kJ + kV) = h.H3;
-  N_u(1, kJ + kTz) = h.H4;
-  // w (bending in the x-z plane, slope -theta_y)
-  N_u(2, kW) = h.H1;
-  N_u(2, kTy) = -h.H2;
-  N_u(2, kJ + kW) = h.H3;
-  N_u(2, kJ + kTy) = -h.H4;
+  placeRow(N_u, 0, kU, 1.0 - xi, xi);                   // axial u: linear
+  placeRow(N_u, 1, kV, kTz, h.H1, h.H2, h.H3, h.H4);    // v (x-y plane, slope theta_z)
+  placeRow(N_u, 2, kW, kTy, h.H1, -h.H2, h.H3, -h.H4);  // w (x-z plane, slope -theta_y)
 }
 
 void beamShapeRotation(double xi, double L, Matrix3x12& N_theta) {
   const Hermite h = hermite(xi, L);
   N_theta.setZero();
-  // torsion theta_x: linear
-  N_theta(0, kTx) = 1.0 - xi;
-  N_theta(0, kJ + kTx) = xi;
-  // theta_y = -dw/ds
-  N_theta(1, kW) = -h.dH1;
-  N_theta(1, kTy) = h.dH2;
-  N_theta(1, kJ + kW) = -h.dH3;
-  N_theta(1, kJ + kTy) = h.dH4;
-  // theta_z = dv/ds
-  N_theta(2, kV) = h.dH1;
-  N_theta(2, kTz) = h.dH2;
-  N_theta(2, kJ + kV) = h.dH3;
-  N_theta(2, kJ + kTz) = h.dH4;
+  placeRow(N_theta, 0, kTx, 1.0 - xi, xi);                      // torsion theta_x: linear
+  placeRow(N_theta, 1, kW, kTy, -h.dH1, h.dH2, -h.dH3, h.dH4);  // theta_y = -dw/ds
+  placeRow(N_theta, 2, kV, kTz, h.dH1, h.dH2, h.dH3, h.dH4);    // theta_z = dv/ds
 }
 
 void beamShapeDisplacementDs(double xi, double L, Matrix3x12& dN_u_ds) {
   const Hermite h = hermite(xi, L);
   dN_u_ds.setZero();
-  dN_u_ds(0, kU) = -1.0 / L;
-  dN_u_ds(0, kJ + kU) = 1.0 / L;
-  dN_u_ds(1, kV) = h.dH1;
-  dN_u_ds(1, kTz) = h.dH2;
-  dN_u_ds(1, kJ + kV) = h.dH3;
-  dN_u_ds(1, kJ + kTz) = h.dH4;
-  dN_u_ds(2, kW) = h.dH1;
-  dN_u_ds(2, kTy) = -h.dH2;
-  dN_u_ds(2, kJ + kW) = h.dH3;
-  dN_u_ds(2, kJ + kTy) = -h.dH4;
+  placeRow(dN_u_ds, 0, kU, -1.0 / L, 1.0 / L);
+  placeRow(dN_u_ds, 1, kV, kTz, h.dH1, h.dH2, h.dH3, h.dH4);
+  placeRow(dN_u_ds, 2, kW, kTy, h.dH1, -h.dH2, h.dH3, -h.dH4);
 }
 
 void beamShapeRotationDs(double xi, double L, Matrix3x12& dN_theta_ds) {
   const Hermite h = hermite(xi, L);
   dN_theta_ds.setZero();
-  dN_theta_ds(0, kTx) = -1.0 / L;
-  dN_theta_ds(0, kJ + kTx) = 1.0 / L;
-  dN_theta_ds(1, kW) = -h.ddH1;
-  dN_theta_ds(1, kTy) = h.ddH2;
-  dN_theta_ds(1, kJ + kW) = -h.ddH3;
-  dN_theta_ds(1, kJ + kTy) = h.ddH4;
-  dN_theta_ds(2, kV) = h.ddH1;
-  dN_theta_ds(2, kTz) = h.ddH2;
-  dN_theta_ds(2, kJ + kV) = h.ddH3;
-  dN_theta_ds(2, kJ + kTz) = h.ddH4;
+  placeRow(dN_theta_ds, 0, kTx, -1.0 / L, 1.0 / L);
+  placeRow(dN_theta_ds, 1, kW, kTy, -h.ddH1, h.ddH2, -h.ddH3, h.ddH4);
+  placeRow(dN_theta_ds, 2, kV, kTz, h.ddH1, h.ddH2, h.ddH3, h.ddH4);
 }
 
 Vector12d beamEquivalentNodalLoads(double xi, double L, const Eigen::Vector3d& f, const Eigen::Vector3d& m) {

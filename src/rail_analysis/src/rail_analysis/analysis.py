@@ -167,6 +167,12 @@ def _scene(runs):
     return None
 
 
+def _flexible_deflections(runs):
+    """The flexible run if it recorded rail displacements (else None), and the runs' scene."""
+    flex = runs.get("flexible")
+    return (flex if flex is not None and flex.deflection else None), _scene(runs)
+
+
 def _outer_inner(scene):
     """(outer, inner) side names of the scene's curve: a left curve has its outer rail on the right."""
     d = scene.curve_direction() if scene is not None else None
@@ -299,9 +305,8 @@ def check_rails_outward_in_curve(runs, t_discard):
     title = "Rails pushed outward in the curve"
     paper = ("On the curved segment both rails are displaced to the outer side of the curve, the outer rail more "
              "(Fig. 23).")
-    flex = runs.get("flexible")
-    scene = _scene(runs)
-    if flex is None or not flex.deflection:
+    flex, scene = _flexible_deflections(runs)
+    if flex is None:
         return Check(title, paper, "needs the flexible run's rail displacements", NOT_AVAILABLE)
     sides = _outer_inner(scene)
     if sides is None:
@@ -358,9 +363,8 @@ def check_max_between_bogie_wheels(runs, t_discard, under=None):
     title = "Largest rail displacement between the wheels of a bogie on the straight"
     paper = ("The absolute maximum displacement peaks are observed in-between the front and rear wheel passage of "
              "each bogie (Fig. 22).")
-    flex = runs.get("flexible")
-    scene = _scene(runs)
-    if flex is None or not flex.deflection:
+    flex, scene = _flexible_deflections(runs)
+    if flex is None:
         return Check(title, paper, "needs the flexible run's rail displacements", NOT_AVAILABLE)
     parts, ok_all, n = [], True, 0
     for s, d in flex.deflection.items():

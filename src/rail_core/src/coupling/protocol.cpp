@@ -32,6 +32,15 @@ void checkConfig(const CouplingConfig& c) {
     throw std::runtime_error("coupling: wheel count must be > 0 (got " + std::to_string(c.wheel_count) + ")");
 }
 
+// A frame's header for step k of this run: its time k h, the scene hash and the wheel count.
+template <class Frame>
+void stamp(Frame& frame, std::uint64_t k, const CouplingConfig& c) {
+  frame.step = k;
+  frame.time = static_cast<double>(k) * c.track_step;
+  frame.scene_hash = c.scene_hash;
+  frame.count = static_cast<std::uint32_t>(c.wheel_count);
+}
+
 Deadline deadlineAfter(double seconds) {
   return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
@@ -138,16 +147,12 @@ Result VehicleCoupling::exchangeUntil(Deadline deadline, bool default_deadline) 
   if (failed_) return alreadyFailed(Role::kVehicle);
   const Budget budget = budgetUntil(deadline, config_, default_deadline);
   const std::uint64_t k = next_step_;
-  states_.step = k;
-  states_.time = nextExchangeTime();
-  states_.scene_hash = config_.scene_hash;
-  states_.count = static_cast<std::uint32_t>(config_.wheel_count);
-  Result r = transport_.sendStates(states_, deadline);
-  if (!r) {
+  stamp(states_, k, config_);
+  if (Result r = transport_.sendStates(states_, deadline); !r) {
     failed_ = true;
     return fail(r, Role::kVehicle, "sending the wheel states of", k, budget);
   }
-  r = transport_.receiveWrenches(*incoming_, deadline);
+  Result r = transport_.receiveWrenches(*incoming_, deadline);
   if (!r) {
     failed_ = true;
     return fail(r, Role::kVehicle, "waiting for the contact wrenches of", k, budget);
@@ -243,12 +248,8 @@ Result TrackCoupling::sendUntil(Deadline deadline, bool default_deadline) {
   const Budget budget = budgetUntil(deadline, config_, default_deadline);
   if (!awaiting_send_) return {Status::kError, "track: send() called before receive() for step " + u64(next_step_)};
   const std::uint64_t k = states_.step;
-  wrenches_.step = k;
-  wrenches_.time = static_cast<double>(k) * config_.track_step;
-  wrenches_.scene_hash = config_.scene_hash;
-  wrenches_.count = static_cast<std::uint32_t>(config_.wheel_count);
-  Result r = transport_.sendWrenches(wrenches_, deadline);
-  if (!r) {
+  stamp(wrenches_, k, config_);
+  if (Result r = transport_.sendWrenches(wrenches_, deadline); !r) {
     failed_ = true;
     return fail(r, Role::kTrack, "sending the contact wrenches of", k, budget);
   }
