@@ -51,11 +51,6 @@ const char* const kUsage =
     "exit status: 0 table written (every row left out or incomplete listed on stderr);\n"
     "1 no row solved or bad data; 2 bad option.\n";
 
-[[noreturn]] void usageError(const std::string& what) {
-  std::fprintf(stderr, "contact_geometry: %s (contact_geometry --help lists the options)\n", what.c_str());
-  std::exit(2);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -66,60 +61,49 @@ int main(int argc, char** argv) {
   double y_min = std::nan("");
   double load = 0.0, speed = 0.0, friction = 0.3;
   bool fixed_spin = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) usageError(a + " needs a value");
-      return argv[++i];
-    };
-    auto num = [&]() {
-      const std::string v = next();
-      char* end = nullptr;
-      const double x = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end != '\0' || !std::isfinite(x)) usageError(a + ": not a number (" + v + ")");
-      return x;
-    };
-    if (a == "--out")
-      out = next();
-    else if (a == "--conicity")
-      conicity_out = next();
-    else if (a == "--wheel")
-      wheel_file = next();
-    else if (a == "--rail")
-      rail_file = next();
-    else if (a == "--gauge")
-      gauge = num();
-    else if (a == "--back-to-back")
-      b2b = num();
-    else if (a == "--taping-line")
-      taping = num();
-    else if (a == "--radius")
-      radius = num();
-    else if (a == "--inclination")
-      incl = num();
-    else if (a == "--y-min")
-      y_min = num();
-    else if (a == "--y-max")
-      y_max = num();
-    else if (a == "--dy")
-      dy = num();
-    else if (a == "--yaw")
-      yaw = num();
-    else if (a == "--yaw-per-shift")
-      yaw_per_y = num();
-    else if (a == "--load")
-      load = num();
-    else if (a == "--speed")
-      speed = num();
-    else if (a == "--fixed-spin")
+  rail::tools::Options o(argc, argv, "contact_geometry");
+  while (o.next()) {
+    if (o.is("--out"))
+      out = o.value();
+    else if (o.is("--conicity"))
+      conicity_out = o.value();
+    else if (o.is("--wheel"))
+      wheel_file = o.value();
+    else if (o.is("--rail"))
+      rail_file = o.value();
+    else if (o.is("--gauge"))
+      gauge = o.number();
+    else if (o.is("--back-to-back"))
+      b2b = o.number();
+    else if (o.is("--taping-line"))
+      taping = o.number();
+    else if (o.is("--radius"))
+      radius = o.number();
+    else if (o.is("--inclination"))
+      incl = o.number();
+    else if (o.is("--y-min"))
+      y_min = o.number();
+    else if (o.is("--y-max"))
+      y_max = o.number();
+    else if (o.is("--dy"))
+      dy = o.number();
+    else if (o.is("--yaw"))
+      yaw = o.number();
+    else if (o.is("--yaw-per-shift"))
+      yaw_per_y = o.number();
+    else if (o.is("--load"))
+      load = o.number();
+    else if (o.is("--speed"))
+      speed = o.number();
+    else if (o.is("--fixed-spin"))
       fixed_spin = true;
-    else if (a == "--friction")
-      friction = num();
+    else if (o.is("--friction"))
+      friction = o.number();
     else
-      usageError("unknown option " + a);
+      o.unknown();
   }
   if (std::isnan(y_min)) y_min = -y_max;
-  if (load > 0.0 && !(speed > 0.0)) usageError("--load needs --speed > 0 (the creepages are relative to it)");
+  if (load > 0.0 && !(speed > 0.0)) o.fail("--load needs --speed > 0 (the creepages are relative to it)");
   try {
     const rc::WheelProfile wheel = wheel_file.empty() ? rc::makeS1002() : rc::loadWheelProfile(wheel_file);
     const rc::ProfileCurve rail =

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "rail_contact/tool_args.hpp"
+#include "rail_core/coupling/exchange_bench.hpp"
 #include "rail_core/coupling/loopback_transport.hpp"
 #include "rail_core/coupling/protocol.hpp"
 #include "rail_core/coupling/shm_transport.hpp"
@@ -30,64 +31,13 @@ const char* const kUsage =
 
 namespace {
 
-constexpr int kWheels = 8;
-
-CouplingConfig benchConfig() {
-  CouplingConfig c;
-  c.track_step = 2e-5;
-  c.exchange_timeout = 10.0;
-  c.scene_hash = 0xbe9c000000000001ull;
-  c.wheel_count = kWheels;
-  return c;
-}
-
-// Answers `steps` steps with a wrench made from the states; returns 0 if all went well.
-int trackLoop(FrameTransport& t, long steps) {
-  TrackCoupling track(benchConfig(), t);
-  for (long k = 0; k < steps; ++k) {
-    if (!track.receive()) return 1;
-    for (int i = 0; i < kWheels; ++i) {
-      track.wrenches().wheels[i].f_wheel_in_world = 1e3 * track.states().wheels[i].p_wheel_in_world;
-      track.wrenches().wheels[i].n_wheel_in_world = track.states().wheels[i].omega_wheelset_in_world;
-    }
-    if (!track.send()) return 2;
-  }
-  return 0;
-}
-
-// Times `steps` exchanges (after `warmup` untimed ones); fills round-trip times [s].
-bool vehicleLoop(FrameTransport& t, long warmup, long steps, std::vector<double>& rtt) {
-  VehicleCoupling v(benchConfig(), t);
-  rtt.resize(static_cast<std::size_t>(steps));
-  for (long k = 0; k < warmup + steps; ++k) {
-    for (int i = 0; i < kWheels; ++i) {
-      v.states().wheels[i].p_wheel_in_world = Eigen::Vector3d(1e-3 * k, i, 0.445);
-      v.states().wheels[i].omega_wheelset_in_world = Eigen::Vector3d(0, 60.0, 0);
-    }
-    const auto t0 = Clock::now();
-    const Result r = v.exchange();
-    const auto t1 = Clock::now();
-    if (!r) {
-      std::fprintf(stderr, "%s\n", r.message.c_str());
-      return false;
-    }
-    if (k >= warmup) rtt[static_cast<std::size_t>(k - warmup)] = std::chrono::duration<double>(t1 - t0).count();
-  }
-  return true;
-}
-
-void report(const char* what, std::vector<double>& rtt) {
-  std::sort(rtt.begin(), rtt.end());
-  const auto at = [&](double q) { return rtt[static_cast<std::size_t>(q * static_cast<double>(rtt.size() - 1))]; };
-  double sum = 0;
-  for (double x : rtt) sum += x;
-  std::printf("%-44s n %zu  median %8.2f us  p99 %8.2f us  mean %8.2f us  max %9.1f us\n", what, rtt.size(),
-              1e6 * at(0.5), 1e6 * at(0.99), 1e6 * sum / static_cast<double>(rtt.size()), 1e6 * rtt.back());
-}
+namespace bench = rail::core::coupling::bench;
+constexpr int kWheels = bench::kWheels;
+const CouplingConfig kConfig = bench::config(0xbe9c000000000001ull);
 
 bool benchShm(const char* what, long warmup, long steps, double spin_time, double yield_time) {
   ShmOptions o;
-  o.scene_hash = benchConfig().scene_hash;
+  o.scene_hash = kConfig.scene_hash;
   o.wheel_capacity = kWheels;
   o.run_id = "bench" + std::to_string(getpid());
   o.spin_time = spin_time;
@@ -99,7 +49,7 @@ bool benchShm(const char* what, long warmup, long steps, double spin_time, doubl
     int code = 3;
     try {
       ShmTransport t(track_options);
-      code = trackLoop(t, warmup + steps);
+      code = bench::answerExchanges(t, kConfig, warmup + steps);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "track: %s\n", e.what());
     }
@@ -110,7 +60,7 @@ bool benchShm(const char* what, long warmup, long steps, double spin_time, doubl
   try {
     o.role = Role::kVehicle;
     ShmTransport t(o);
-    ok = vehicleLoop(t, warmup, steps, rtt);
+    ok = bench::timeExchanges(t, kConfig, warmup, steps, rtt);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "vehicle: %s\n", e.what());
   }
@@ -118,19 +68,19 @@ bool benchShm(const char* what, long warmup, long steps, double spin_time, doubl
   if (!ok) kill(child, SIGKILL);
   waitpid(child, &status, 0);
   ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  if (ok) report(what, rtt);
+  if (ok) bench::report(what, 44, rtt);
   return ok;
 }
 
 bool benchLoopback(long warmup, long steps) {
   LoopbackLink link(kWheels);
   int track_code = -1;
-  std::thread track([&] { track_code = trackLoop(link.trackEnd(), warmup + steps); });
+  std::thread track([&] { track_code = bench::answerExchanges(link.trackEnd(), kConfig, warmup + steps); });
   std::vector<double> rtt;
-  const bool ok = vehicleLoop(link.vehicleEnd(), warmup, steps, rtt);
+  const bool ok = bench::timeExchanges(link.vehicleEnd(), kConfig, warmup, steps, rtt);
   if (!ok) link.vehicleEnd().close();
   track.join();
-  if (ok && track_code == 0) report("loopback (2 threads, mutex + condvar)", rtt);
+  if (ok && track_code == 0) bench::report("loopback (2 threads, mutex + condvar)", 44, rtt);
   return ok && track_code == 0;
 }
 

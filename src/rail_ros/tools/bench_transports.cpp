@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -22,6 +23,7 @@
 #include <ros/ros.h>
 
 #include "rail_contact/tool_args.hpp"
+#include "rail_core/coupling/exchange_bench.hpp"
 #include "rail_core/coupling/protocol.hpp"
 #include "rail_core/coupling/shm_transport.hpp"
 #include "rail_ros/service_transport.hpp"
@@ -39,17 +41,10 @@ const char* const kUsage =
 
 namespace {
 
-constexpr int kWheels = 8;
-constexpr double kTrackStep = 2e-5;  // [s]
-
-CouplingConfig benchConfig() {
-  CouplingConfig c;
-  c.track_step = kTrackStep;
-  c.exchange_timeout = 10.0;
-  c.scene_hash = 0xbe9c000000000002ull;
-  c.wheel_count = kWheels;
-  return c;
-}
+namespace bench = rail::core::coupling::bench;
+constexpr int kWheels = bench::kWheels;
+constexpr double kTrackStep = bench::kTrackStep;  // [s]
+const CouplingConfig kConfig = bench::config(0xbe9c000000000002ull);
 
 struct Names {
   std::string prefix;  // "/railsim_bench_<pid>"
@@ -61,7 +56,7 @@ std::unique_ptr<FrameTransport> make(const std::string& kind, Role role, const N
   if (kind == "shm") {
     ShmOptions o;
     o.role = role;
-    o.scene_hash = benchConfig().scene_hash;
+    o.scene_hash = kConfig.scene_hash;
     o.wheel_capacity = kWheels;
     o.run_id = names.run_id;
     return std::make_unique<ShmTransport>(o);
@@ -84,56 +79,6 @@ std::unique_ptr<FrameTransport> make(const std::string& kind, Role role, const N
     return std::make_unique<TopicTransport>(nh, o);
   }
   throw std::runtime_error("unknown transport '" + kind + "' (service, topic or shm)");
-}
-
-// Track end: answers until the vehicle closes; 0 when it did.
-int trackLoop(FrameTransport& t) {
-  TrackCoupling track(benchConfig(), t);
-  for (;;) {
-    const Result r = track.receive();
-    if (r.status == Status::kPeerClosed) return 0;
-    if (!r) {
-      std::fprintf(stderr, "%s\n", r.message.c_str());
-      return 1;
-    }
-    for (int i = 0; i < kWheels; ++i) {
-      track.wrenches().wheels[i].f_wheel_in_world = 1e3 * track.states().wheels[i].p_wheel_in_world;
-      track.wrenches().wheels[i].n_wheel_in_world = track.states().wheels[i].omega_wheelset_in_world;
-    }
-    if (!track.send()) return 2;
-  }
-}
-
-// Vehicle end: times `steps` exchanges after `warmup` untimed ones; round-trip times [s] into rtt.
-bool vehicleLoop(FrameTransport& t, long warmup, long steps, std::vector<double>& rtt) {
-  VehicleCoupling v(benchConfig(), t);
-  rtt.resize(static_cast<std::size_t>(steps));
-  for (long k = 0; k < warmup + steps; ++k) {
-    for (int i = 0; i < kWheels; ++i) {
-      v.states().wheels[i].p_wheel_in_world = Eigen::Vector3d(1e-3 * static_cast<double>(k), i, 0.445);
-      v.states().wheels[i].omega_wheelset_in_world = Eigen::Vector3d(0, 60.0, 0);
-    }
-    const auto t0 = Clock::now();
-    const Result r = v.exchange();
-    const auto t1 = Clock::now();
-    if (!r) {
-      std::fprintf(stderr, "%s\n", r.message.c_str());
-      return false;
-    }
-    if (k >= warmup) rtt[static_cast<std::size_t>(k - warmup)] = std::chrono::duration<double>(t1 - t0).count();
-  }
-  v.close();
-  return true;
-}
-
-void report(const std::string& what, std::vector<double>& rtt) {
-  std::sort(rtt.begin(), rtt.end());
-  const auto at = [&](double q) { return rtt[static_cast<std::size_t>(q * static_cast<double>(rtt.size() - 1))]; };
-  double sum = 0;
-  for (double x : rtt) sum += x;
-  std::printf("%-8s n %zu  median %8.1f us  p99 %8.1f us  mean %8.1f us  max %9.1f us\n", what.c_str(), rtt.size(),
-              1e6 * at(0.5), 1e6 * at(0.99), 1e6 * sum / static_cast<double>(rtt.size()), 1e6 * rtt.back());
-  std::fflush(stdout);
 }
 
 // Remappings from the command line except the node name and log file roslaunch gives (the two
@@ -196,7 +141,7 @@ int main(int argc, char** argv) {
     for (const std::string& kind : kinds) {
       try {
         auto t = make(kind, Role::kTrack, names, nh);
-        code = trackLoop(*t);
+        code = bench::answerExchanges(*t, kConfig, std::numeric_limits<long>::max());
       } catch (const std::exception& e) {
         std::fprintf(stderr, "track (%s): %s\n", kind.c_str(), e.what());
         code = 3;
@@ -228,11 +173,11 @@ int main(int argc, char** argv) {
     bool run_ok = false;
     try {
       auto t = make(kind, Role::kVehicle, names, nh);
-      run_ok = vehicleLoop(*t, warmup, steps, rtt);
+      run_ok = bench::timeExchanges(*t, kConfig, warmup, steps, rtt);
     } catch (const std::exception& e) {
       std::fprintf(stderr, "vehicle (%s): %s\n", kind.c_str(), e.what());
     }
-    if (run_ok) report(kind, rtt);
+    if (run_ok) bench::report(kind.c_str(), 8, rtt);
     ok = ok && run_ok;
     if (!ok) break;
   }

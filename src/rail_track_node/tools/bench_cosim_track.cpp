@@ -28,6 +28,7 @@
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_contact/tool_args.hpp"
+#include "rail_core/testing/fixtures.hpp"
 #include "rail_track_node/cosim_track.hpp"
 
 namespace rt = rail::track;
@@ -43,14 +44,6 @@ const char* const kUsage =
     "of window_steps each). Defaults: 500, 20000, 0 (cost clock off), 1 (the next step's solve on a second\n"
     "thread), 0 (the simplicial factor; 1: CHOLMOD's supernodal solve, the reference).\n";
 }  // namespace
-
-static std::string configDir() {
-#ifdef RAILSIM_CONFIG_DIR
-  return RAILSIM_CONFIG_DIR;
-#else
-  return "config";
-#endif
-}
 
 // First to last wheelset of the paper coach (Table 3), m: the track window's vehicle length.
 constexpr double kCoachWheelSpan = 21.7;
@@ -249,7 +242,8 @@ int main(int argc, char** argv) {
   std::printf("cost clock %s, next solve %s, %s factor\n", g_cost ? "on" : "off",
               g_beside ? "beside (second thread)" : "in the step",
               g_layout == rt::CholeskyLayout::kSimplicial ? "simplicial" : "supernodal");
-  const rail::core::Scene scene = rail::core::loadSceneFile(configDir() + "/scenes/paper_demo.yaml");
+  const rail::core::Scene scene =
+      rail::core::loadSceneFile(rail::core::fixtures::configDir() + "/scenes/paper_demo.yaml");
   run(scene, rail::core::TrackModel::kRigidFe, rt::CosimCoupling::kExplicit, steps);
   run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kSemiImplicit, steps);
   run(scene, rail::core::TrackModel::kFlexible, rt::CosimCoupling::kExplicit, steps);

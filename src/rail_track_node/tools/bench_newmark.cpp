@@ -9,12 +9,14 @@
 #include <vector>
 
 #include "rail_contact/tool_args.hpp"
+#include "rail_core/testing/fixtures.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/track_data.hpp"
 #include "rail_track_node/track_model.hpp"
 
 namespace rt = rail::track;
-using Clock = std::chrono::steady_clock;
+using Clock = rail::tools::BenchClock;
+using rail::tools::secondsSince;
 
 namespace {
 const char* const kUsage =
@@ -23,15 +25,10 @@ const char* const kUsage =
     "times, median step time with moving 100 kN wheel loads. Defaults: config/track/paper_track.yaml, 200.\n";
 }  // namespace
 
-static double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
 int main(int argc, char** argv) {
   if (rail::tools::startTool(argc, argv, kUsage, 2)) return 0;
   std::string path = argc > 1 ? argv[1] : "";
-  if (path.empty()) {
-    const std::string here = __FILE__;
-    path = here.substr(0, here.rfind("/src/rail_track_node/")) + "/config/track/paper_track.yaml";
-  }
+  if (path.empty()) path = rail::core::fixtures::configDir() + "/track/paper_track.yaml";
   const int steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 200, 1, kUsage));
   const double dt = 1e-4;
   rt::TrackData data;
@@ -60,15 +57,14 @@ int main(int argc, char** argv) {
       rt::addRailPointLoad(model.mesh, rt::kRightRail, s, Eigen::Vector3d(0, 0, -1e5), Eigen::Vector3d::Zero(), loads);
       const auto a = Clock::now();
       integ.step(st, loads);
-      times[n] = seconds(a, Clock::now());
+      times[n] = secondsSince(a);
     }
-    std::nth_element(times.begin(), times.begin() + steps / 2, times.end());
     std::printf(
         "%5.0f m: %d free DOFs, nnz(K) = %ld, nnz(L) = %.0f (%s), build+assembly %.3f s, "
         "factorisation of K_eff %.3f s, median step %.3f ms\n",
         length, model.system.size(), static_cast<long>(model.system.K.nonZeros()), integ.factor().factorNonZeros(),
-        integ.factor().isSupernodal() ? "supernodal" : "simplicial", seconds(t0, t1), seconds(t1, t2),
-        1e3 * times[steps / 2]);
+        integ.factor().isSupernodal() ? "supernodal" : "simplicial", secondsSince(t0, t1), secondsSince(t1, t2),
+        1e3 * rail::tools::median(times));
   }
   return 0;
 }

@@ -12,11 +12,13 @@
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_contact/tool_args.hpp"
+#include "rail_core/testing/fixtures.hpp"
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
 
 namespace rt = rail::track;
-using Clock = std::chrono::steady_clock;
+using Clock = rail::tools::BenchClock;
+using rail::tools::secondsSince;
 
 namespace {
 const char* const kUsage =
@@ -26,13 +28,6 @@ const char* const kUsage =
 }  // namespace
 
 namespace {
-
-double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-
-std::string configDir() {
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config";
-}
 
 // Compressed-column storage of a sparse matrix: values (8 B) and row indices (4 B) per entry, column starts.
 double sparseBytes(const Eigen::SparseMatrix<double>& A) {
@@ -65,7 +60,8 @@ int main(int argc, char** argv) {
         std::to_string(0.25 * L) +
         "\n  speed: 30.0\n  loads:\n    - {offset: 0.0, rail: both, vertical: 100000.0}\n"
         "solver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
-    const rail::core::Scene scene = rail::core::loadSceneText(text, "bench.yaml", configDir() + "/scenes");
+    const rail::core::Scene scene =
+        rail::core::loadSceneText(text, "bench.yaml", rail::core::fixtures::configDir() + "/scenes");
     const auto t0 = Clock::now();
     const rt::SceneTrack track = rt::buildSceneTrack(scene);
     const auto t1 = Clock::now();
@@ -83,15 +79,15 @@ int main(int argc, char** argv) {
     for (int n = 0; n < steps[c]; ++n) {
       const auto a = Clock::now();
       sim.advanceTo((n + 1) * dt);
-      times[n] = seconds(a, Clock::now());
+      times[n] = secondsSince(a);
     }
-    std::nth_element(times.begin(), times.begin() + steps[c] / 2, times.end());
     const rt::LinearSystem& sys = track.model.system;
     const double nnz_L = only_factor.factor().factorNonZeros();
     std::printf("%6.0f m %9d %10ld %10.0f %12.1f %11.1f %9.2f %11.2f %11.3f   (%s factor, %d steps)\n", L, sys.size(),
                 static_cast<long>(sys.K.nonZeros()), nnz_L, 8.0 * nnz_L / 1e6,
-                (sparseBytes(sys.M) + sparseBytes(sys.C) + sparseBytes(sys.K)) / 1e6, seconds(t0, t1), seconds(t2, t3),
-                1e3 * times[steps[c] / 2], only_factor.factor().isSupernodal() ? "supernodal" : "simplicial", steps[c]);
+                (sparseBytes(sys.M) + sparseBytes(sys.C) + sparseBytes(sys.K)) / 1e6, secondsSince(t0, t1),
+                secondsSince(t2, t3), 1e3 * rail::tools::median(times),
+                only_factor.factor().isSupernodal() ? "supernodal" : "simplicial", steps[c]);
     std::fflush(stdout);
   }
   return 0;

@@ -15,13 +15,16 @@
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_contact/tool_args.hpp"
+#include "rail_core/testing/fixtures.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/scene_track.hpp"
 #include "rail_track_node/track_simulator.hpp"
 #include "rail_track_node/track_window.hpp"
 
 namespace rt = rail::track;
-using Clock = std::chrono::steady_clock;
+using Clock = rail::tools::BenchClock;
+using rail::tools::median;
+using rail::tools::secondsSince;
 
 namespace {
 const char* const kUsage =
@@ -32,24 +35,8 @@ const char* const kUsage =
 
 namespace {
 
-std::string configDir() {
-#ifdef RAILSIM_CONFIG_DIR
-  return RAILSIM_CONFIG_DIR;
-#else
-  return "config";
-#endif
-}
-
 constexpr double kOffsets[4] = {0.0, 2.7, 19.0, 21.7};  // m behind the leading wheelset (paper Table 3)
 constexpr double kWheelLoad = 72.9e3;                   // N per wheel
-
-double seconds(Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); }
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 void placeCoach(const rt::TrackMesh& mesh, const rt::TrackData& data, double s_front, rt::NodalLoads& loads) {
   loads.clear();
@@ -63,11 +50,11 @@ void placeCoach(const rt::TrackMesh& mesh, const rt::TrackData& data, double s_f
 void benchFull(const rail::core::Scene& scene, double s_front0, int steps) {
   Clock::time_point t0 = Clock::now();
   const rt::SceneTrack track = rt::buildSceneTrack(scene);
-  const double t_build = seconds(t0);
+  const double t_build = secondsSince(t0);
   const double h = scene.solver.track_step;
   t0 = Clock::now();
   rt::NewmarkIntegrator integrator(track.model.system, h, true);
-  const double t_factor = seconds(t0);
+  const double t_factor = secondsSince(t0);
   const int n = track.model.system.size();
   rt::NewmarkState st;
   st.d = Eigen::VectorXd::Zero(n);
@@ -79,7 +66,7 @@ void benchFull(const rail::core::Scene& scene, double s_front0, int steps) {
     const Clock::time_point a = Clock::now();
     placeCoach(track.model.mesh, track.model.data, s_front0 + scene.vehicle.speed * k * h, loads);
     integrator.step(st, loads);
-    times.push_back(seconds(a));
+    times.push_back(secondsSince(a));
   }
   std::printf("  full    %7.0f m  free DOFs %7d  build %6.2f s  factorise %6.2f s  step median %8.3f ms  (%d steps)\n",
               track.model.mesh.n_sleepers * track.model.mesh.sleeper_spacing, n, t_build, t_factor, 1e3 * median(times),
@@ -93,7 +80,7 @@ void benchWindow(const rail::core::Scene& scene, const rt::TrackWindowSettings& 
   rt::TrackWindowSettings own = set;
   own.track_step = scene.solver.track_step;
   rt::TrackWindow win(scene, own, s_front0 - set.vehicle_length, s_front0);
-  const double t_build = seconds(t0);
+  const double t_build = secondsSince(t0);
   const double h = win.trackStep();
   rt::NodalLoads loads(24 * 4 + 1);
   std::vector<double> times;
@@ -103,7 +90,7 @@ void benchWindow(const rail::core::Scene& scene, const rt::TrackWindowSettings& 
     win.follow(s_front - set.vehicle_length, s_front);
     placeCoach(win.mesh(), win.data(), s_front, loads);
     win.step(loads);
-    times.push_back(seconds(a));
+    times.push_back(secondsSince(a));
   }
   // Moves: the vehicle jumps ahead by one shift distance at a time.
   std::vector<double> rebuild, reuse;
@@ -132,7 +119,8 @@ int main(int argc, char** argv) {
   rt::TrackWindowSettings set;
   set.vehicle_length = kOffsets[3];
 
-  const rail::core::Scene paper = rail::core::loadSceneFile(configDir() + "/scenes/paper_demo.yaml");
+  const rail::core::Scene paper =
+      rail::core::loadSceneFile(rail::core::fixtures::configDir() + "/scenes/paper_demo.yaml");
   std::printf("paper scene (%s): %.0f m, h = %g s, %.2f m/s; window behind %.1f m, ahead %.1f m, shift %.1f m\n",
               paper.file.c_str(), paper.track.length(), paper.solver.track_step, paper.vehicle.speed, set.behind,
               set.ahead, set.shift);
@@ -149,7 +137,8 @@ int main(int argc, char** argv) {
       std::to_string(paper.vehicle.speed) +
       "\n  back_to_back: 1.592\neffects:\n  track_model: flexible\nsolver:\n  track_step: " +
       std::to_string(paper.solver.track_step) + "\n";
-  const rail::core::Scene line = rail::core::loadSceneText(text, "line_5km.yaml", configDir() + "/scenes");
+  const rail::core::Scene line =
+      rail::core::loadSceneText(text, "line_5km.yaml", rail::core::fixtures::configDir() + "/scenes");
   std::printf("5 km straight line: h = %g s, %.2f m/s\n", line.solver.track_step, line.vehicle.speed);
   benchWindow(line, set, 2500.0, steps, 2500.0, 2800.0);
   if (full_long_steps > 0) benchFull(line, 2500.0, full_long_steps);

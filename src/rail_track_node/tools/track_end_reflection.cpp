@@ -18,6 +18,7 @@
 #include <vector>
 
 #include <rail_contact/tool_args.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/end_reflection.hpp"
 #include "rail_track_node/track_data.hpp"
@@ -26,58 +27,33 @@ namespace rt = rail::track;
 
 namespace {
 
-std::string defaultTrackFile() {
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config/track/paper_track.yaml";
-}
-
 const char* const kUsage =
     "usage: track_end_reflection [--track FILE] [--freqs HZ,HZ,...] [--cycles N] [--no-damping] [--csv FILE]\n"
     "Reflected energy fraction of a bending wave at the FE track's ends, with the data file's absorbing ends\n"
     "and with free ends, vertical and lateral, per frequency. Defaults: config/track/paper_track.yaml,\n"
     "300,400,500,700,1000,1500,2000 Hz, 5 cycles, track damping on (--no-damping: the ends alone), no CSV.\n";
 
-[[noreturn]] void usage(const std::string& what) {
-  std::cerr << "track_end_reflection: " << what << "\n" << kUsage;
-  std::exit(2);
-}
-
-double number(const std::string& key, const std::string& text) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v <= 0.0)
-    usage(key + ": not a positive number: '" + text + "'");
-  return v;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;
-  std::string track = defaultTrackFile(), csv;
+  std::string track = rail::core::fixtures::configDir() + "/track/paper_track.yaml", csv;
   std::vector<double> freqs = {300, 400, 500, 700, 1000, 1500, 2000};
   int cycles = 5;
   bool damping = true;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) usage(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--track")
-      track = next();
-    else if (a == "--csv")
-      csv = next();
-    else if (a == "--no-damping")
+  for (rail::tools::Options o(argc, argv, "track_end_reflection"); o.next();) {
+    if (o.is("--track"))
+      track = o.value();
+    else if (o.is("--csv"))
+      csv = o.value();
+    else if (o.is("--no-damping"))
       damping = false;
-    else if (a == "--cycles")
-      cycles = static_cast<int>(number(a, next()));
-    else if (a == "--freqs") {
-      freqs.clear();
-      std::stringstream ss(next());
-      for (std::string item; std::getline(ss, item, ',');) freqs.push_back(number(a, item));
-    } else
-      usage("unknown argument " + a);
+    else if (o.is("--cycles"))
+      cycles = static_cast<int>(o.positive());
+    else if (o.is("--freqs"))
+      freqs = o.positives();
+    else
+      o.unknown();
   }
   rt::TrackData data;
   try {

@@ -21,6 +21,7 @@
 
 #include <rail_contact/tool_args.hpp>
 #include <rail_core/scene_loader.hpp>
+#include <rail_core/testing/fixtures.hpp>
 
 #include "rail_track_node/receptance.hpp"
 #include "rail_track_node/scene_track.hpp"
@@ -31,11 +32,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string defaultTrackFile() {
-  const std::string here = __FILE__;
-  return here.substr(0, here.rfind("/src/rail_track_node/")) + "/config/track/paper_track.yaml";
-}
-
 const char* const kUsage =
     "usage: track_receptance [--track FILE] [--length M] [--gauge M] [--points N] [--f-min HZ] [--f-max HZ]\n"
     "                        [--no-damping] [--rail-beta S] [--no-absorbing-ends] [--csv FILE]\n"
@@ -44,57 +40,41 @@ const char* const kUsage =
     "absorbing ends on, receptance.csv. --rail-beta replaces the rail's stiffness-proportional Rayleigh\n"
     "coefficient (s).\n";
 
-[[noreturn]] void usage(const std::string& what) {
-  std::cerr << "track_receptance: " << what << "\n" << kUsage;
-  std::exit(2);
-}
-
-double number(const std::string& key, const char* text) {
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(v)) usage(key + ": not a number: " + text);
-  return v;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   if (rail::tools::startTool(argc, argv, kUsage, rail::tools::kOwnOptions)) return 0;
-  std::string track = defaultTrackFile(), csv = "receptance.csv";
+  std::string track = rail::core::fixtures::configDir() + "/track/paper_track.yaml", csv = "receptance.csv";
   double length = 80.0, gauge = 1.668, f_min = 10.0, f_max = 3000.0;
   int points = 160;
   bool damping = true, absorbing = true;
   double rail_beta = -1.0;  // < 0: the data file's
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> const char* {
-      if (i + 1 >= argc) usage(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--track")
-      track = next();
-    else if (a == "--length")
-      length = number(a, next());
-    else if (a == "--gauge")
-      gauge = number(a, next());
-    else if (a == "--points")
-      points = static_cast<int>(number(a, next()));
-    else if (a == "--f-min")
-      f_min = number(a, next());
-    else if (a == "--f-max")
-      f_max = number(a, next());
-    else if (a == "--no-damping")
+  rail::tools::Options o(argc, argv, "track_receptance");
+  while (o.next()) {
+    if (o.is("--track"))
+      track = o.value();
+    else if (o.is("--length"))
+      length = o.number();
+    else if (o.is("--gauge"))
+      gauge = o.number();
+    else if (o.is("--points"))
+      points = static_cast<int>(o.number());
+    else if (o.is("--f-min"))
+      f_min = o.number();
+    else if (o.is("--f-max"))
+      f_max = o.number();
+    else if (o.is("--no-damping"))
       damping = false;
-    else if (a == "--rail-beta")
-      rail_beta = number(a, next());
-    else if (a == "--no-absorbing-ends")
+    else if (o.is("--rail-beta"))
+      rail_beta = o.number();
+    else if (o.is("--no-absorbing-ends"))
       absorbing = false;
-    else if (a == "--csv")
-      csv = next();
+    else if (o.is("--csv"))
+      csv = o.value();
     else
-      usage("unknown argument " + a);
+      o.unknown();
   }
-  if (!(f_min > 0.0 && f_max > f_min) || points < 3) usage("need 0 < f-min < f-max and at least 3 points");
+  if (!(f_min > 0.0 && f_max > f_min) || points < 3) o.fail("need 0 < f-min < f-max and at least 3 points");
 
   try {
     // The track goes through the same scene path as the node: a straight moving-load scene.

@@ -3,12 +3,16 @@
 // read as 0 by atoi.
 #pragma once
 
+#include <algorithm>
+#include <chrono>
 #include <climits>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "rail_contact/format.hpp"
 
@@ -89,6 +93,68 @@ inline bool startTool(int argc, char** argv, const char* usage, int max_position
   refuseOptions(argc, argv, usage);
   atMostArguments(argc, argv, max_positional, usage);
   return false;
+}
+
+/// A tool's named options, read in order:
+///   for (Options o(argc, argv, "name"); o.next();)
+///     if (o.is("--csv")) csv = o.value(); else if (o.is("--gauge")) gauge = o.number(); else o.unknown();
+/// A missing or malformed value, or an unknown option, is one line on stderr naming the option, then exit 2.
+class Options {
+ public:
+  Options(int argc, char** argv, const char* tool) : argc_(argc), argv_(argv), tool_(tool) {}
+  bool next() {
+    if (++i_ >= argc_) return false;
+    option_ = argv_[i_];
+    return true;
+  }
+  bool is(const char* option) const { return option_ == option; }
+  const std::string& option() const { return option_; }
+  // The option's value, the next argument.
+  std::string value() {
+    if (i_ + 1 >= argc_) fail(option_ + " needs a value");
+    return argv_[++i_];
+  }
+  // The value as a finite number, and as one above zero.
+  double number() { return parse(value(), false); }
+  double positive() { return parse(value(), true); }
+  // The value as comma-separated positive numbers.
+  std::vector<double> positives() {
+    std::vector<double> out;
+    std::stringstream ss(value());
+    for (std::string item; std::getline(ss, item, ',');) out.push_back(parse(item, true));
+    return out;
+  }
+  [[noreturn]] void unknown() const { fail("unknown option " + option_); }
+  [[noreturn]] void fail(const std::string& what) const {
+    std::fprintf(stderr, "%s: %s (%s --help lists the options)\n", tool_, what.c_str(), tool_);
+    std::exit(2);
+  }
+
+ private:
+  double parse(const std::string& text, bool positive) const {
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || (positive && v <= 0.0))
+      fail(option_ + ": not a " + (positive ? "positive " : "") + "number (" + text + ")");
+    return v;
+  }
+
+  int argc_;
+  char** argv_;
+  const char* tool_;
+  int i_ = 0;
+  std::string option_;
+};
+
+/// Benchmark programs' clock: seconds from t0 to t1 (now when omitted), and the median of timings.
+using BenchClock = std::chrono::steady_clock;
+inline double secondsSince(BenchClock::time_point t0, BenchClock::time_point t1 = BenchClock::now()) {
+  return std::chrono::duration<double>(t1 - t0).count();
+}
+inline double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
 }
 
 /// A tool's main in one call, `return runReportingErrors("name", run, argc, argv);`: an exception thrown by
