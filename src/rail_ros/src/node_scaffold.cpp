@@ -86,7 +86,30 @@ int startNode(int argc, char** argv, const char* name, const char* what, core::R
   ros::NodeHandle pnh("~");
   if (!readScene(pnh, scene)) return core::kExitBadInput;
   ROS_INFO_STREAM(me << ": will simulate\n" << core::describe(scene, role));
+  if (role == core::Role::kTrack && !scene.needsTrackNode()) {
+    ROS_INFO("%s: track_model is rigid: the vehicle runs alone, nothing to do here", me.c_str());
+    return core::kExitOk;
+  }
+  if (role == core::Role::kVehicle && !scene.has_vehicle) {
+    ROS_INFO("%s: the scene has no vehicle (moving loads on the track alone): nothing to do", me.c_str());
+    return core::kExitOk;
+  }
+  if (pnh.param("validate_only", false)) return core::kExitOk;
   return -1;
+}
+
+int nodeMain(int argc, char** argv, const char* name, const char* what, core::Role role,
+             int (*run)(const core::Scene& scene)) {
+  core::Scene scene;
+  if (const int rc = startNode(argc, argv, name, what, role, scene); rc >= 0) return rc;
+  int rc = core::kExitInternal;
+  try {
+    rc = run(scene);
+  } catch (const std::exception& e) {
+    ROS_FATAL("%s: internal error: %s", ros::this_node::getName().c_str(), e.what());
+  }
+  ros::shutdown();
+  return rc;
 }
 
 int handshakeAsVehicle(const core::Scene& scene, double wheel_span, std::string& peer) {

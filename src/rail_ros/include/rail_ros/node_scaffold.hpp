@@ -32,9 +32,15 @@ void installStopSignals();
 // The start both nodes share: answers -h/--help; ros::init without roscpp's SIGINT handler (the stop flag
 // takes the signals); umask 077 (bags and cost profiles are the user's alone); the stop signals; the
 // master wait; ros::start(); the scene from the parameter server, validated, and the "will simulate"
-// report for `role`. Returns -1 when the node goes on with `scene`, else the exit code to return (0 after
-// --help).
+// report for `role`. Returns -1 when the node goes on with `scene`, else the exit code to return: 0 after
+// --help, with ~validate_only, and when the scene has nothing for `role` (no track side with the rigid
+// track, no vehicle side without a vehicle), which the node says.
 int startNode(int argc, char** argv, const char* name, const char* what, core::Role role, core::Scene& scene);
+
+// A node's main: startNode, then run(scene) for its exit code (kExitInternal after one FATAL line when it
+// throws), then ros::shutdown().
+int nodeMain(int argc, char** argv, const char* name, const char* what, core::Role role,
+             int (*run)(const core::Scene& scene));
 
 // The vehicle's side: waits for the track's service (up to solver.handshake_timeout; a track node that died
 // meanwhile is reported at once with its exit code) and calls it. Returns 0 and the track node's name in
