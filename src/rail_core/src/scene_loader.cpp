@@ -12,6 +12,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <unistd.h>
@@ -557,10 +558,17 @@ void readVehicle(MapReader& root, Scene& s, const Context& ctx) {
   r.finish();
 }
 
+// The reader of the scene's top-level section `key`, none when the file leaves it out.
+std::optional<MapReader> sectionOf(MapReader& root, const char* key) {
+  const YAML::Node n = root.child(key);
+  if (!n) return std::nullopt;
+  return MapReader(n, key, root.file(), raiseSceneError);
+}
+
 void readContact(MapReader& root, Scene& s) {
-  const YAML::Node n = root.child("contact");
-  if (!n) return;
-  MapReader r(n, "contact", root.file(), raiseSceneError);
+  std::optional<MapReader> section = sectionOf(root, "contact");
+  if (!section) return;
+  MapReader& r = *section;
   Contact& c = s.contact;
   // Bounds: a friction coefficient above 1 is not a wheel on a rail (sanded dry rail reaches ~0.5); e is a
   // ratio of velocities; the floor keeps eq. 9's damping finite and below a penetration rate of 10 m/s.
@@ -601,9 +609,9 @@ void readMovingLoads(MapReader& root, Scene& s, const Context& ctx) {
 }
 
 void readEffects(MapReader& root, Scene& s) {
-  const YAML::Node n = root.child("effects");
-  if (!n) return;
-  MapReader r(n, "effects", root.file(), raiseSceneError);
+  std::optional<MapReader> section = sectionOf(root, "effects");
+  if (!section) return;
+  MapReader& r = *section;
   Effects& e = s.effects;
   r.choice("track_model", e.track_model, kTrackModelWords);
   r.boolean("irregularities", e.irregularities);
@@ -625,10 +633,10 @@ void readEffects(MapReader& root, Scene& s) {
 }
 
 void readSolver(MapReader& root, Scene& s) {
-  const YAML::Node n = root.child("solver");
+  std::optional<MapReader> section = sectionOf(root, "solver");
+  if (!section) return;
+  MapReader& r = *section;
   Solver& v = s.solver;
-  if (!n) return;
-  MapReader r(n, "solver", root.file(), raiseSceneError);
   r.number("track_step", v.track_step);
   obeys(r, "track_step", trackStepRule(v.track_step));
   r.number("vehicle_rtol", v.vehicle_rtol);
@@ -678,9 +686,9 @@ void readSolver(MapReader& root, Scene& s) {
 }
 
 void readOutput(MapReader& root, Scene& s) {
-  const YAML::Node n = root.child("output");
-  if (!n) return;
-  MapReader r(n, "output", root.file(), raiseSceneError);
+  std::optional<MapReader> section = sectionOf(root, "output");
+  if (!section) return;
+  MapReader& r = *section;
   Output& o = s.output;
   r.string("bag", o.bag);
   r.number("rate", o.rate);

@@ -27,18 +27,14 @@ const char* const kUsage =
     "usage: railsim_bench_shm [exchanges]\n"
     "Round-trip time of one co-simulation exchange (8 wheel states, 8 wrenches) over shared memory between\n"
     "two processes (spin, yield, then futex; futex only) and in-process between two threads. Default 100000.\n";
-}  // namespace
-
-namespace {
 
 namespace bench = rail::core::coupling::bench;
-constexpr int kWheels = bench::kWheels;
 const CouplingConfig kConfig = bench::config(0xbe9c000000000001ull);
 
 bool benchShm(const char* what, long warmup, long steps, double spin_time, double yield_time) {
   ShmOptions o;
   o.scene_hash = kConfig.scene_hash;
-  o.wheel_capacity = kWheels;
+  o.wheel_capacity = bench::kWheels;
   o.run_id = "bench" + std::to_string(getpid());
   o.spin_time = spin_time;
   o.yield_time = yield_time;
@@ -73,7 +69,7 @@ bool benchShm(const char* what, long warmup, long steps, double spin_time, doubl
 }
 
 bool benchLoopback(long warmup, long steps) {
-  LoopbackLink link(kWheels);
+  LoopbackLink link(bench::kWheels);
   int track_code = -1;
   std::thread track([&] { track_code = bench::answerExchanges(link.trackEnd(), kConfig, warmup + steps); });
   std::vector<double> rtt;
@@ -90,7 +86,7 @@ int main(int argc, char** argv) {
   if (rail::tools::startTool(argc, argv, kUsage, 1)) return 0;
   const long steps = static_cast<long>(rail::tools::positionalNumber(argc, argv, 1, 100000, 1, kUsage));
   const long warmup = std::min(steps / 10, 10000L);
-  std::printf("round trip of one exchange, %d wheels, %u hardware threads\n", kWheels,
+  std::printf("round trip of one exchange, %d wheels, %u hardware threads\n", bench::kWheels,
               std::thread::hardware_concurrency());
   const ShmOptions defaults;
   const std::string label = "shm, 2 processes (spin " + std::to_string(std::lround(defaults.spin_time * 1e6)) +

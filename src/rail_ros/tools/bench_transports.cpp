@@ -37,13 +37,8 @@ const char* const kUsage =
     "usage: railsim_bench_transports [exchanges] [service,topic,shm]\n"
     "Round-trip time of one co-simulation exchange over each ROS transport and shared memory, between two\n"
     "processes (needs a ROS master). Defaults: 20000 exchanges, all three transports.\n";
-}  // namespace
-
-namespace {
 
 namespace bench = rail::core::coupling::bench;
-constexpr int kWheels = bench::kWheels;
-constexpr double kTrackStep = bench::kTrackStep;  // [s]
 const CouplingConfig kConfig = bench::config(0xbe9c000000000002ull);
 
 struct Names {
@@ -53,27 +48,28 @@ struct Names {
 
 // One endpoint of the named transport for `role`.
 std::unique_ptr<FrameTransport> make(const std::string& kind, Role role, const Names& names, ros::NodeHandle& nh) {
+  auto common = [role](auto& options) {
+    options.role = role;
+    options.wheel_capacity = bench::kWheels;
+  };
   if (kind == "shm") {
     ShmOptions o;
-    o.role = role;
+    common(o);
     o.scene_hash = kConfig.scene_hash;
-    o.wheel_capacity = kWheels;
     o.run_id = names.run_id;
     return std::make_unique<ShmTransport>(o);
   }
   if (kind == "service") {
     ServiceTransportOptions o;
-    o.role = role;
-    o.track_step = kTrackStep;
-    o.wheel_capacity = kWheels;
+    common(o);
+    o.track_step = bench::kTrackStep;
     o.service = names.prefix + "/lockstep";
     return std::make_unique<ServiceTransport>(nh, o);
   }
   if (kind == "topic") {
     TopicTransportOptions o;
-    o.role = role;
-    o.track_step = kTrackStep;
-    o.wheel_capacity = kWheels;
+    common(o);
+    o.track_step = bench::kTrackStep;
     o.states_topic = names.prefix + "/wheel_states_exchange";
     o.wrenches_topic = names.prefix + "/contact_wrenches_exchange";
     return std::make_unique<TopicTransport>(nh, o);
@@ -166,7 +162,7 @@ int main(int argc, char** argv) {
   std::printf(
       "round trip of one exchange, %d wheels, two processes, %u hardware threads, %ld exchanges after %ld "
       "warm-up\n",
-      kWheels, std::thread::hardware_concurrency(), steps, warmup);
+      bench::kWheels, std::thread::hardware_concurrency(), steps, warmup);
   bool ok = true;
   for (const std::string& kind : kinds) {
     std::vector<double> rtt;

@@ -17,7 +17,6 @@
 #include "rail_track_node/track_simulator.hpp"
 
 namespace rt = rail::track;
-using Clock = rail::tools::BenchClock;
 using rail::tools::secondsSince;
 
 namespace {
@@ -25,9 +24,6 @@ const char* const kUsage =
     "usage: bench_track [steps_100m] [steps_500m] [steps_2km]\n"
     "Standalone flexible track on straights of 100 m, 500 m and 2 km: DOFs, matrix and factor memory, build\n"
     "and factorisation times, median Newmark step with two moving 100 kN loads. Defaults 2000, 500, 100.\n";
-}  // namespace
-
-namespace {
 
 // Compressed-column storage of a sparse matrix: values (8 B) and row indices (4 B) per entry, column starts.
 double sparseBytes(const Eigen::SparseMatrix<double>& A) {
@@ -62,22 +58,22 @@ int main(int argc, char** argv) {
         "solver:\n  track_step: 2.0e-5\n  end: {time: 1.0}\n";
     const rail::core::Scene scene =
         rail::core::loadSceneText(text, "bench.yaml", rail::core::fixtures::configDir() + "/scenes");
-    const auto t0 = Clock::now();
+    const auto t0 = rail::tools::BenchClock::now();
     const rt::SceneTrack track = rt::buildSceneTrack(scene);
-    const auto t1 = Clock::now();
+    const auto t1 = rail::tools::BenchClock::now();
     rt::SimulatorSettings set;
     set.track_step = dt;
     set.t_end = 1.0;
     set.loads = scene.moving_loads;
     set.rail_height = track.rail_height;
     // The simulator factorises K_eff (the timed part) and, for the initial static equilibrium, K and M.
-    const auto t2 = Clock::now();
+    const auto t2 = rail::tools::BenchClock::now();
     rt::NewmarkIntegrator only_factor(track.model.system, dt);
-    const auto t3 = Clock::now();
+    const auto t3 = rail::tools::BenchClock::now();
     rt::TrackSimulator sim(track.model, set);
     std::vector<double> times(steps[c]);
     for (int n = 0; n < steps[c]; ++n) {
-      const auto a = Clock::now();
+      const auto a = rail::tools::BenchClock::now();
       sim.advanceTo((n + 1) * dt);
       times[n] = secondsSince(a);
     }

@@ -31,9 +31,6 @@ const char* const kUsage =
     "usage: bench_track_window [steps] [full_5km_steps]\n"
     "Moving track window against the full-length FE track on the paper scene and a 5 km straight: build\n"
     "time, median step, median window move. Defaults 300 and 20.\n";
-}  // namespace
-
-namespace {
 
 constexpr double kOffsets[4] = {0.0, 2.7, 19.0, 21.7};  // m behind the leading wheelset (paper Table 3)
 constexpr double kWheelLoad = 72.9e3;                   // N per wheel

@@ -188,9 +188,6 @@ Bursts flangeBursts(const std::vector<Sample>& v, double t0, double t1) {
   return b;
 }
 
-}  // namespace
-
-namespace {
 const char* const kUsage =
     "usage: bench_vehicle_accuracy [--sample DT] scene.yaml reference.csv [method max_step rtol atol] ...\n"
     "Accuracy of the vehicle alone against a reference run (Adams capped at 5e-6 s, written to reference.csv\n"

@@ -32,9 +32,7 @@ const char* const kUsage =
     "linear solver with the coloured Jacobian; carry 0: no Jacobian carried with the wheelsets' spin (CVODE's\n"
     "own reuse policy); every: the contacts' impact memories and detection warm starts take every evaluation,\n"
     "trial states included, instead of the accepted steps only.\n";
-}  // namespace
 
-namespace {
 int runBenchmark(int argc, char** argv) {
   using namespace rail;
   if (rail::tools::startTool(argc, argv, kUsage, 13)) return 0;
