@@ -16,6 +16,9 @@
 //    the step's load-free right-hand side and K_eff solve depend on the track's state only: they run on a
 //    second thread from the end of one step (CosimTrackOptions::solve_beside) while the vehicle integrates
 //    and the next frame's contacts are found, and the contact loads enter through the influence columns.
+//  - the FE track is an FeTrack (fe_track.hpp): the full-length FullLengthTrack, or with
+//    solver.track_window.enabled the moving TrackWindow; the contact, the coupling and the outputs go
+//    through that one interface, only the window's moves below are the window's own.
 //  - flexible with solver.track_window.enabled: the FE track is a TrackWindow (track_window.hpp) that
 //    follows the wheels (follow() before each step from the frame's wheel arc lengths); d = d_g + w with
 //    only w integrated; the contact sees d_g + w. A window move renumbers the DOFs: the influence
@@ -46,6 +49,7 @@
 #include <rail_core/coupling/frames.hpp>
 #include <rail_core/scene.hpp>
 
+#include "rail_track_node/fe_track.hpp"
 #include "rail_track_node/hanging_support.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/pad_forces.hpp"
@@ -140,9 +144,9 @@ class CosimTrack {
   void finishStep() noexcept;
 
   /// FE track integrated (flexible; full-length or windowed).
-  bool flexible() const { return fe_ != nullptr || window_ != nullptr; }
+  bool flexible() const { return fe_ != nullptr; }
   /// The moving window (flexible with solver.track_window.enabled), or nullptr.
-  const TrackWindow* trackWindow() const { return window_.get(); }
+  const TrackWindow* trackWindow() const { return window_; }
   /// Track window: moves, moves that refactorised K_eff (the others reused it), influence-column caches
   /// dropped (one per refactorising move, semi-implicit), wall time of all moves including the rail and
   /// cache updates of this object (s). 0 without a window.
@@ -170,7 +174,7 @@ class CosimTrack {
   const rail::contact::WheelContactModel& contactModel() const { return *contact_model_; }
   /// The full-length FE track (flexible without a window), or nullptr (rigid_fe, or a track window: see
   /// trackWindow()).
-  const SceneTrack* sceneTrack() const { return fe_.get(); }
+  const SceneTrack* sceneTrack() const { return full_ != nullptr ? &full_->sceneTrack() : nullptr; }
   /// Newmark state (flexible only; d, v, a over the free DOFs); nullptr with rigid_fe. With a track
   /// window: w, w', w'' over the current window (the total displacement is trackWindow()->staticState() + d).
   const NewmarkState* state() const;
@@ -221,10 +225,10 @@ class CosimTrack {
     RailProbes rail;
   };
   struct Implicit;  // semi-implicit coupling: influence cache and this step's contact links
-  NewmarkIntegrator& integ() noexcept { return window_ ? window_->integrator() : *integrator_; }
-  NewmarkState& st() noexcept { return window_ ? window_->mutableState() : state_; }
-  const NewmarkState& st() const noexcept { return window_ ? window_->state() : state_; }
-  const TrackMesh& feMesh() const noexcept { return window_ ? window_->mesh() : fe_->model.mesh; }
+  NewmarkIntegrator& integ() noexcept { return fe_->integrator(); }
+  NewmarkState& st() noexcept { return fe_->mutableState(); }
+  const NewmarkState& st() const noexcept { return fe_->state(); }
+  const TrackMesh& feMesh() const noexcept { return fe_->mesh(); }
   void buildRails();    // deformation_ and rail_dofs_ on feMesh() (set-up, window move)
   void onWindowMove();  // after a move: rails, influence cache (allocates)
   void fillDeformation() noexcept;
@@ -263,8 +267,9 @@ class CosimTrack {
   void trimColumn(int dof, const double* x, int& lo, int& len) noexcept;
 
   std::unique_ptr<rail::contact::TrackGeometry> rigid_geometry_;  // rigid_fe: the geometry alone
-  std::unique_ptr<SceneTrack> fe_;                                // flexible full-length: geometry + FE model
-  std::unique_ptr<TrackWindow> window_;                           // flexible windowed
+  std::unique_ptr<FeTrack> fe_;                                   // flexible: the integrated FE track
+  TrackWindow* window_ = nullptr;                                 // fe_ when it is the moving window
+  FullLengthTrack* full_ = nullptr;                               // fe_ when it is the full-length track
   mutable std::unique_ptr<PadForceProbe> pad_probe_;              // padForces(): pads of the current mesh
   mutable int pad_probe_moves_ = -1;                              // window moves when it was built
   const rail::contact::TrackGeometry* geometry_ = nullptr;
@@ -275,14 +280,10 @@ class CosimTrack {
   std::vector<rail::contact::WheelContactResult> result_;  // per wheel id, last step
   std::vector<unsigned char> seen_;                        // per wheel id, step() scratch
   // Flexible only.
-  std::unique_ptr<NewmarkIntegrator> integrator_;
-  NewmarkState state_;
   std::unique_ptr<NodalLoads> loads_;
-  Eigen::VectorXd d_static_;                            // full-length: self-weight equilibrium (energy zero)
-  mutable Eigen::VectorXd energy_scratch_, energy_dd_;  // energy() work vectors
   std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
   std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
-  std::vector<Section> sections_;
+  std::vector<Section> sections_;              // rigid_fe (flexible: the FE track's)
   CosimCoupling coupling_ = CosimCoupling::kSemiImplicit;
   std::unique_ptr<Implicit> implicit_;
   long newmark_steps_ = 0;
@@ -312,9 +313,8 @@ class CosimTrack {
   std::atomic<bool> worker_posted_{false}, worker_completed_flag_{false}, worker_done_flag_{false};
   rail::core::CostClock worker_cost_;
   rail::core::CostClock completion_cost_;  // the worker's completion of a step (awaitCompletion takes it)
-  // Hanging sleepers of the full-length track (null without; a window holds its own) and the loads of
-  // the step being solved (the base solve's, or the explicit step's beside the contact loads).
-  std::unique_ptr<HangingSupports> hanging_;
+  // The loads of the hanging sleepers in the step being solved (the base solve's, or the explicit step's
+  // beside the contact loads).
   NodalLoads hanging_loads_{0};
 };
 

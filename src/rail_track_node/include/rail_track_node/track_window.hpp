@@ -33,6 +33,7 @@
 #include <rail_contact/track_geometry.hpp>
 #include <rail_core/scene.hpp>
 
+#include "rail_track_node/fe_track.hpp"
 #include "rail_track_node/hanging_support.hpp"
 #include "rail_track_node/newmark.hpp"
 #include "rail_track_node/scene_track.hpp"
@@ -77,7 +78,7 @@ struct TrackWindowStats {
   double total_shift_s = 0.0;  ///< wall time of all moves, s
 };
 
-class TrackWindow {
+class TrackWindow final : public FeTrack {
  public:
   /// Builds the line's geometry and track data from the scene and the first window around the vehicle
   /// whose last and first wheels are at arc lengths s_rear <= s_front (m); w = 0. Throws
@@ -94,11 +95,11 @@ class TrackWindow {
   /// moved; then mesh(), model(), the state's DOF numbering and the rail element frames are those of the
   /// new window (loads must be built on mesh() after this call). No allocation unless it moves; a move
   /// builds a model and may throw what building throws (std::bad_alloc, a factorisation failure).
-  bool follow(double s_rear, double s_front);
+  bool follow(double s_rear, double s_front) override;
   /// True when follow(s_rear, s_front) would not move the window (nothing changes). No allocation.
-  bool holds(double s_rear, double s_front) const;
+  bool holds(double s_rear, double s_front) const override;
   /// The clock of the Newmark integrators of this window and of the windows built at later moves.
-  void setCostClock(rail::core::CostClock* cost);
+  void setCostClock(rail::core::CostClock* cost) override;
 
   /// One Newmark step t -> t + dt of w with the external loads (built on mesh(), at t + dt) and the loads of
   /// the window's hanging sleepers (hanging()); then the rail nodal arrays of railDeformation() hold d_g + w
@@ -106,15 +107,15 @@ class TrackWindow {
   void step(const NodalLoads& loads) noexcept;
   /// The hanging sleepers of the current window (their loads relative to staticState()), or nullptr when it
   /// has none. Changes at a move. A caller stepping through integrator() adds their loads itself.
-  const HangingSupports* hanging() const;
+  const HangingSupports* hanging() const override;
 
   /// For a coupling that splits the step (e.g. a semi-implicit contact correcting the solved displacement
   /// before the step completes): the current window's integrator over w and the state it advances. The
   /// caller advances state() with it and then calls finishStep(). Both change at a move.
-  NewmarkIntegrator& integrator();
-  NewmarkState& mutableState() { return state_; }
+  NewmarkIntegrator& integrator() override;
+  NewmarkState& mutableState() override { return state_; }
   /// After a step done through integrator(): refreshes the rail arrays and counts the step. No allocation.
-  void finishStep() noexcept;
+  void finishStep() noexcept override;
 
   /// Sets w to the static solution K w = f_c (w' = w'' = 0) under loads built on mesh(): a start at
   /// static equilibrium under the initial wheel loads. Factorises K (set-up; allocates).
@@ -124,7 +125,7 @@ class TrackWindow {
   double sBegin() const;
   double sEnd() const;
   /// True when [s_min, s_max] (m) lies on the window's rails.
-  bool covers(double s_min, double s_max) const { return s_min >= sBegin() && s_max <= sEnd(); }
+  bool covers(double s_min, double s_max) const override { return s_min >= sBegin() && s_max <= sEnd(); }
   /// Index (from the line's first sleeper) of the window's first sleeper, and the number of sleeper bays.
   int firstSleeper() const;
   int bays() const { return window_bays_; }
@@ -134,20 +135,21 @@ class TrackWindow {
 
   /// The current window's FE model and mesh (DOF numbering of state()); changes at a move.
   const TrackModel& model() const;
-  const TrackMesh& mesh() const { return model().mesh; }
+  const TrackMesh& mesh() const override { return model().mesh; }
   /// Dynamic part w (m, rad; m/s, ...) over the current window's free DOFs; t is the time since set-up.
-  const NewmarkState& state() const { return state_; }
+  const NewmarkState& state() const override { return state_; }
   /// Self-weight static state d_g over the current window's free DOFs (zero when include_gravity is off);
   /// with hanging sleepers that of the piecewise-linear track.
   const Eigen::VectorXd& staticState() const;
+  const Eigen::VectorXd* selfWeightState() const override { return &staticState(); }
   /// The rails for the contact search over the current window: nodal d_g + w and w' (world axes). The
   /// object stays the same across moves (its layout is rebuilt in place at a move).
   const rail::contact::BeamRailDeformation& railDeformation() const { return *deformation_; }
   /// The line's geometry (the whole line) and the track data (scene applied; its absorbing_ends flag is
   /// off because the window places its end dashpots itself).
-  const rail::contact::TrackGeometry& geometry() const { return geometry_; }
-  const TrackData& data() const { return data_; }
-  double trackStep() const { return track_step_; }
+  const rail::contact::TrackGeometry& geometry() const override { return geometry_; }
+  const TrackData& data() const override { return data_; }
+  double trackStep() const override { return track_step_; }
   const TrackWindowSettings& settings() const { return settings_; }
   const TrackWindowStats& stats() const { return stats_; }
 
@@ -155,17 +157,19 @@ class TrackWindow {
   double dynamicEnergy() const;
   /// The same split into kinetic 1/2 w'^T M w' and potential 1/2 w^T K w (J). No allocation.
   void dynamicEnergy(double& kinetic, double& potential) const;
+  void energy(double& kinetic, double& potential) const override { dynamicEnergy(kinetic, potential); }
 
   /// Adds a rail deflection section at arc length s (m) on the line (set-up only); returns its index. Its
   /// self-weight static value is solved once on a line piece of 2 * static_half_length around s.
   /// Throws std::runtime_error when s is off the line's meshable range.
-  int addSection(double s, double static_half_length = 10.0);
-  int sectionCount() const { return static_cast<int>(sections_.size()); }
+  int addSection(double s, double static_half_length);
+  int addSection(double s) override { return addSection(s, 10.0); }
+  int sectionCount() const override { return static_cast<int>(sections_.size()); }
   /// Displacement (m) and small rotation (rad) of both rails' centre lines at section i, track-frame
   /// components (x along, y left, z up): the section's static value (if include_gravity) + w, where w is
   /// interpolated in the window, taken from the condensed end's static shapes beyond a condensed end
   /// (within boundary_length), and 0 farther away. No allocation.
-  void sectionDeflection(int i, RailSectionDeflection& out) const;
+  void sectionDeflection(int i, RailSectionDeflection& out) const override;
   /// The same without the static value (w only).
   void sectionDynamicDeflection(int i, RailSectionDeflection& out) const;
 

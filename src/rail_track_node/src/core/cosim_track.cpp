@@ -193,14 +193,25 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
       throw std::invalid_argument(os.str());
     }
     const double s_front = scene.vehicle.start_arc_length;
-    window_ = std::make_unique<TrackWindow>(scene, ws, s_front - ws.vehicle_length, s_front);
-    geometry_ = &window_->geometry();
-    section_depth = options.track.rail_height - window_->data().layout.rail_centroid_height;
+    auto window = std::make_unique<TrackWindow>(scene, ws, s_front - ws.vehicle_length, s_front);
+    window_ = window.get();
+    fe_ = std::move(window);
   } else if (scene.runsFeIntegration()) {
-    fe_ = std::make_unique<SceneTrack>(buildSceneTrack(scene, options.track));
-    geometry_ = &fe_->geometry;
+    // The whole track, from the static equilibrium under its own weight.
+    FullLengthTrackSettings fs;
+    fs.track_step = scene.solver.track_step;
+    fs.include_gravity = options.include_gravity;
+    fs.track = options.track;
+    fs.cost = options.cost;
+    fs.factor_layout = options.factor_layout;
+    auto full = std::make_unique<FullLengthTrack>(scene, fs);
+    full_ = full.get();
+    fe_ = std::move(full);
+  }
+  if (fe_) {
+    geometry_ = &fe_->geometry();
     // The contact's section centre on the FE beam axis (the rail centroid node).
-    section_depth = fe_->rail_height - fe_->model.data.layout.rail_centroid_height;
+    section_depth = options.track.rail_height - fe_->data().layout.rail_centroid_height;
   } else {
     rigid_geometry_ = std::make_unique<rc::TrackGeometry>(rail::core::buildTrackGeometry(scene));
     geometry_ = rigid_geometry_.get();
@@ -217,36 +228,8 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   result_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactResult());
   seen_.assign(static_cast<std::size_t>(n_wheels), 0);
 
-  if (!fe_ && !window_) return;
+  if (!fe_) return;
 
-  // Newmark at the track step, from the static equilibrium under the track's own weight (the window: w = 0
-  // on its self-weight state d_g, the same start).
-  if (fe_) {
-    const TrackModel& model = fe_->model;
-    integrator_ =
-        std::make_unique<NewmarkIntegrator>(model.system, scene.solver.track_step, options.include_gravity,
-                                            options.cost, countEndDashpots(model.mesh), options.factor_layout);
-    // With hanging sleepers the start is the piecewise-linear track's static state (HangingSupports).
-    auto hanging = std::make_unique<HangingSupports>(model.mesh);
-    Eigen::VectorXd d0 =
-        options.include_gravity ? staticGravityDeflection(model.system) : Eigen::VectorXd::Zero(model.system.size());
-    if (!hanging->empty()) {
-      d0 = hanging->solveStatic(
-          model.system, options.include_gravity ? model.system.f_gravity : Eigen::VectorXd::Zero(model.system.size()));
-      hanging_ = std::move(hanging);
-    }
-    if (hanging_) {
-      NodalLoads at_rest(hanging_->loadCapacity());
-      const Eigen::VectorXd zero = Eigen::VectorXd::Zero(d0.size());
-      hanging_->addLoads(d0, zero, nullptr, 0.0, at_rest);
-      state_ = integrator_->initialState(d0, &at_rest);
-    } else {
-      state_ = integrator_->initialState(d0);
-    }
-    d_static_ = d0;  // the zero of energy(): the self-weight equilibrium
-    energy_scratch_.resize(d0.size());
-    energy_dd_.resize(d0.size());
-  }
   const TrackMesh& mesh = feMesh();
   // Two contacts per wheel, each spread over the 12 DOFs of one rail element.
   loads_ = std::make_unique<NodalLoads>(24 * n_wheels + 1);
@@ -322,8 +305,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
     columns_beside_ = options.factor_layout == CholeskyLayout::kSimplicial;
     if (cost_ != nullptr) {
       cost_->track_solve_beside = true;
-      integ().setCostClock(&worker_cost_);
-      if (window_) window_->setCostClock(&worker_cost_);
+      fe_->setCostClock(&worker_cost_);
     }
     worker_ = std::thread([this] { workerLoop(); });
     startBaseSolve(false);
@@ -346,13 +328,13 @@ void CosimTrack::solveBase() noexcept {
   integ().solveStep(st(), hanging_loads_);
 }
 
-const HangingSupports* CosimTrack::hanging() const { return window_ ? window_->hanging() : hanging_.get(); }
+const HangingSupports* CosimTrack::hanging() const { return fe_ ? fe_->hanging() : nullptr; }
 
 // The hanging sleepers' loads of the next step from the state at its start (predicted to its end).
 void CosimTrack::fillHangingLoads() noexcept {
   hanging_loads_.clear();
   if (const HangingSupports* h = hanging())
-    h->addLoads(st().d, st().v, window_ ? &window_->staticState() : nullptr, integ().dt(), hanging_loads_);
+    h->addLoads(st().d, st().v, fe_->selfWeightState(), integ().dt(), hanging_loads_);
 }
 
 void CosimTrack::sizeHangingLoads() {
@@ -481,22 +463,21 @@ int CosimTrack::windowRebuilds() const { return window_ ? window_->stats().rebui
 int CosimTrack::padForces(double s_from, double s_to, PadForceSample* out, int capacity) const {
   if (!flexible()) return 0;
   rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kPadForces);
-  const TrackMesh& mesh = window_ ? window_->mesh() : fe_->model.mesh;
+  const TrackMesh& mesh = fe_->mesh();
   if (!pad_probe_ || pad_probe_moves_ != windowMoves()) {
     pad_probe_.reset(new PadForceProbe(mesh));
     pad_probe_moves_ = windowMoves();
   }
   const NewmarkState& s = st();
-  return pad_probe_->evaluate(mesh, *geometry_, s.d, s.v, window_ ? &window_->staticState() : nullptr, s_from, s_to,
-                              out, capacity);
+  return pad_probe_->evaluate(mesh, *geometry_, s.d, s.v, fe_->selfWeightState(), s_from, s_to, out, capacity);
 }
 
 int CosimTrack::sleeperCount() const {
   if (!flexible()) return 0;
-  return window_ ? window_->mesh().n_sleepers : fe_->model.mesh.n_sleepers;
+  return fe_->mesh().n_sleepers;
 }
 
-const NewmarkState* CosimTrack::state() const { return (fe_ || window_) ? &st() : nullptr; }
+const NewmarkState* CosimTrack::state() const { return fe_ ? &st() : nullptr; }
 long CosimTrack::influenceSolves() const { return implicit_ ? implicit_->solves : 0; }
 long CosimTrack::influenceClipped() const { return implicit_ ? implicit_->clipped : 0; }
 int CosimTrack::influenceWindow() const { return implicit_ ? implicit_->window : 0; }
@@ -505,7 +486,7 @@ long CosimTrack::newtonUnconverged() const { return implicit_ ? implicit_->uncon
 
 // Window: the rails carry d = d_g + w (self-weight static state + integrated part).
 void CosimTrack::fillDeformation() noexcept {
-  fillRailArrays(rail_dofs_, st().d, st().v, window_ ? &window_->staticState() : nullptr, 0.0, *deformation_);
+  fillRailArrays(rail_dofs_, st().d, st().v, fe_->selfWeightState(), 0.0, *deformation_);
 }
 
 // Rails predicted at t_k = t_{k-1} + h for the contact geometry: d_p = d + h v, v_p = v. (Holding the
@@ -514,12 +495,11 @@ void CosimTrack::fillDeformation() noexcept {
 void CosimTrack::predictRail(int g, double& d_p, double& v_p) const noexcept {
   const NewmarkState& state = st();
   v_p = state.v(g);
-  d_p = state.d(g) + (window_ ? window_->trackStep() : integrator_->dt()) * v_p;
+  d_p = state.d(g) + fe_->trackStep() * v_p;
 }
 
 void CosimTrack::fillPredictedDeformation() noexcept {
-  fillRailArrays(rail_dofs_, st().d, st().v, window_ ? &window_->staticState() : nullptr,
-                 window_ ? window_->trackStep() : integrator_->dt(), *deformation_);
+  fillRailArrays(rail_dofs_, st().d, st().v, fe_->selfWeightState(), fe_->trackStep(), *deformation_);
 }
 
 void CosimTrack::writeWrench(int i, const rc::WheelState& ws, const rc::WheelContactResult& res,
@@ -533,7 +513,7 @@ void CosimTrack::writeWrench(int i, const rc::WheelState& ws, const rc::WheelCon
 // (flexible) and the wheel-centre wrenches.
 void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
   const int n = wheelCount();
-  const bool fe = fe_ || window_;
+  const bool fe = fe_ != nullptr;
   if (fe) loads_->clear();
   for (int i = 0; i < n; ++i) {
     const rc::WheelState& ws = states.wheels[static_cast<std::size_t>(i)];
@@ -605,7 +585,7 @@ CosimStepStatus CosimTrack::stepForces(const cc::WheelStateFrame& states, cc::Wr
   out.time = states.time;
   out.scene_hash = states.scene_hash;
 
-  const bool integrate = (fe_ || window_) && states.step > 0;
+  const bool integrate = fe_ && states.step > 0;
   // The rails the contact sees: t_{k-1} (explicit, and step 0) or predicted at t_k.
   if (integrate && coupling_ != CosimCoupling::kExplicit) fillPredictedDeformation();
   evaluateContacts(states, out);
@@ -638,7 +618,7 @@ void CosimTrack::finishStep() noexcept {
         }
         break;
     }
-    if (window_) window_->finishStep();  // the window's own rail arrays and step count
+    fe_->finishStep();  // a window's own rail arrays and step count
     ++newmark_steps_;
     fillDeformation();
   }
@@ -1135,64 +1115,46 @@ void CosimTrack::addColumnLoads() noexcept {
   im.used_columns.clear();
 }
 
-int CosimTrack::sectionCount() const { return window_ ? window_->sectionCount() : static_cast<int>(sections_.size()); }
+int CosimTrack::sectionCount() const { return fe_ ? fe_->sectionCount() : static_cast<int>(sections_.size()); }
 
 int CosimTrack::addSection(double s) {
-  if (window_) return window_->addSection(s);
+  if (fe_) return fe_->addSection(s);
+  if (!(s >= geometry_->sStart() && s <= geometry_->sEnd())) {
+    std::ostringstream os;
+    os << "deflection section at s = " << s << " m is not on the track [" << geometry_->sStart() << ", "
+       << geometry_->sEnd() << "] m";
+    throw std::runtime_error(os.str());
+  }
   Section sec;
   sec.arc_length = s;
-  if (!fe_) {
-    if (!(s >= geometry_->sStart() && s <= geometry_->sEnd())) {
-      std::ostringstream os;
-      os << "deflection section at s = " << s << " m is not on the track [" << geometry_->sStart() << ", "
-         << geometry_->sEnd() << "] m";
-      throw std::runtime_error(os.str());
-    }
-    makeZeroRailProbes(sec.rail);
-    sections_.push_back(sec);
-    return static_cast<int>(sections_.size()) - 1;
-  }
-  const TrackMesh& mesh = fe_->model.mesh;
-  rc::TrackPoint tp;
-  requireOnMeshRails(mesh, s);
-  geometry_->centre(s, tp);
-  makeRailProbes(mesh, tp.R_track_to_world, s, sec.rail);
+  makeZeroRailProbes(sec.rail);
   sections_.push_back(sec);
   return static_cast<int>(sections_.size()) - 1;
 }
 
 void CosimTrack::sectionDeflection(int i, RailSectionDeflection& out) const {
   rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kRailDeflection);
-  if (window_) {
-    window_->sectionDeflection(i, out);
+  if (fe_) {
+    fe_->sectionDeflection(i, out);
     return;
   }
-  sectionDeflection(i, state_.d, out);
+  const Section& sec = sections_[static_cast<std::size_t>(i)];
+  out.arc_length = sec.arc_length;
+  evalRailProbes(sec.rail, Eigen::VectorXd(), out);
 }
 
 void CosimTrack::sectionDeflection(int i, const Eigen::VectorXd& d, RailSectionDeflection& out) const {
-  if (window_)
+  if (full_ == nullptr)
     throw std::runtime_error(
-        "CosimTrack::sectionDeflection(i, d, out): not available with a track window (its "
-        "DOFs change at every move); use sectionDeflection(i, out)");
-  const Section& sec = sections_[static_cast<std::size_t>(i)];
-  out.arc_length = sec.arc_length;
-  evalRailProbes(sec.rail, d, out);
+        "CosimTrack::sectionDeflection(i, d, out): only with the full-length flexible track (a window's DOFs "
+        "change at every move); use sectionDeflection(i, out)");
+  full_->sectionDeflection(i, d, out);
 }
 
 bool CosimTrack::energy(double& kinetic, double& potential) const noexcept {
   kinetic = potential = 0.0;
-  if (window_) {
-    window_->dynamicEnergy(kinetic, potential);
-    return true;
-  }
   if (!fe_) return false;
-  const LinearSystem& sys = fe_->model.system;
-  energy_scratch_.noalias() = sys.M * state_.v;
-  kinetic = 0.5 * state_.v.dot(energy_scratch_);
-  energy_dd_ = state_.d - d_static_;
-  energy_scratch_.noalias() = sys.K * energy_dd_;
-  potential = 0.5 * energy_dd_.dot(energy_scratch_);
+  fe_->energy(kinetic, potential);
   return true;
 }
 
