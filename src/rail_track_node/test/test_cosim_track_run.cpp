@@ -66,7 +66,7 @@ Outcome run(const Scene& sc, cc::RecordedStates rec, bool replay) {
   options.window.vehicle_length = 7.5;
   rt::CosimTrack track(sc, options);
   cc::ReplayTransport transport(std::move(rec), sc.solver.track_step, sc.hash, 0.0);
-  rt::CosimTrackRun loop(sc, track, transport, {"/vehicle_under_test", replay, nullptr});
+  rt::CosimTrackRun loop(rail::core::runSettings(sc), track, transport, {"/vehicle_under_test", replay, nullptr});
   Outcome o{rt::TrackRunStatus::kRunning, 0, "", 0, 0};
   while ((o.status = loop.step()) == rt::TrackRunStatus::kRunning) {
     ++o.steps;

@@ -309,7 +309,7 @@ TEST(VehicleRun, AloneOutputsEveryInstantFromTheStartToTheEnd) {
   core::Scene scene = cosimScene(0.02);
   scene.output.rate = 500.0;
   VehicleSimulator sim(scene);
-  VehicleRun run(scene, sim);
+  VehicleRun run(rail::core::runSettings(scene), sim);
   int outputs = 0;
   while (run.next() == VehicleRun::Event::kOutput) {
     EXPECT_NEAR(sim.time(), static_cast<double>(run.outputIndex()) / 500.0, 1e-12);
@@ -326,7 +326,7 @@ TEST(VehicleRun, TheStopFlagEndsTheRunWithExit5) {
   scene.output.rate = 500.0;
   VehicleSimulator sim(scene);
   std::atomic<bool> stop{false};
-  VehicleRun run(scene, sim, {&stop, nullptr});
+  VehicleRun run(rail::core::runSettings(scene), sim, {&stop, nullptr});
   int outputs = 0;
   while (run.next() == VehicleRun::Event::kOutput) {
     if (++outputs == 3) stop = true;
@@ -344,7 +344,7 @@ TEST(VehicleRun, CosimulatedOutputsAtTheExchangeThatReachesEachInstant) {
   CosimVehicle cosim(scene, link.vehicleEnd());
   RigidTrackPeer peer(scene, cosim.simulator().contactModel().wheels(), link.trackEnd());
   std::thread track([&peer] { peer.run(); });
-  VehicleRun run(scene, cosim);
+  VehicleRun run(rail::core::runSettings(scene), cosim);
   std::vector<double> times;
   while (run.next() == VehicleRun::Event::kOutput) times.push_back(cosim.time());
   cosim.close();
@@ -369,7 +369,7 @@ TEST(VehicleRun, ATrackThatClosesEarlyIsAnExchangeFailure) {
     }
     coupling.close();
   });
-  VehicleRun run(scene, cosim);
+  VehicleRun run(rail::core::runSettings(scene), cosim);
   while (run.next() == VehicleRun::Event::kOutput) {
   }
   cosim.close();

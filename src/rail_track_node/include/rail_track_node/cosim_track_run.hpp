@@ -2,7 +2,7 @@
 // step() receives the vehicle's wheel states of track step k, steps the CosimTrack and sends the wrenches
 // back, and applies the run's end rules. ROS-free; the node owns the loop and publishes at outputDue().
 //
-//   CosimTrackRun run(scene, track, transport, options);
+//   CosimTrackRun run(core::runSettings(scene), track, transport, options);
 //   while (run.step() == TrackRunStatus::kRunning) { if (run.outputDue()) publish(); }
 //   run.close();   // exitCode(), message()
 //
@@ -19,7 +19,7 @@
 #include <rail_core/coupling/protocol.hpp>
 #include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/coupling/transport.hpp>
-#include <rail_core/scene.hpp>
+#include <rail_core/run_settings.hpp>
 
 #include "rail_track_node/cosim_track.hpp"
 
@@ -39,8 +39,8 @@ struct CosimTrackRunOptions {
 
 class CosimTrackRun {
  public:
-  // scene: the resolved co-simulation scene; track and transport must outlive the run.
-  CosimTrackRun(const core::Scene& scene, CosimTrack& track, core::coupling::FrameTransport& transport,
+  // settings: the scene's (core::runSettings); track and transport must outlive the run.
+  CosimTrackRun(const core::RunSettings& settings, CosimTrack& track, core::coupling::FrameTransport& transport,
                 CosimTrackRunOptions options = {});
 
   // One track step: receive (the first waits up to solver.handshake_timeout for the vehicle's set-up, later
@@ -61,13 +61,12 @@ class CosimTrackRun {
  private:
   TrackRunStatus fail(int exit_code, std::string message);
 
-  const core::Scene& scene_;
+  core::RunSettings settings_;
   CosimTrack& track_;
   CosimTrackRunOptions options_;
   std::unique_ptr<core::coupling::TimedTransport> timed_;  // with options.cost
   core::coupling::TrackCoupling coupling_;
   double track_step_;
-  double output_period_;
   std::uint64_t outputs_ = 0;
   int exit_code_ = 0;
   std::string message_;

@@ -32,14 +32,13 @@ static_assert(rail::contact::namesEvery(kStepStatusWords, CosimStepStatus::kWind
 
 const char* describe(CosimStepStatus status) { return rail::contact::wordOf(kStepStatusWords, status); }
 
-CosimTrackRun::CosimTrackRun(const core::Scene& scene, CosimTrack& track, cc::FrameTransport& transport,
+CosimTrackRun::CosimTrackRun(const core::RunSettings& settings, CosimTrack& track, cc::FrameTransport& transport,
                              CosimTrackRunOptions options)
-    : scene_(scene),
+    : settings_(settings),
       track_(track),
       options_(std::move(options)),
-      coupling_(cc::couplingConfig(scene), timedOrPlain(timed_, transport, options_.cost)),
-      track_step_(scene.solver.track_step),
-      output_period_(1.0 / scene.output.rate) {}
+      coupling_(settings.coupling, timedOrPlain(timed_, transport, options_.cost)),
+      track_step_(settings.coupling.track_step) {}
 
 double CosimTrackRun::time() const {
   return coupling_.nextStep() == 0 ? 0.0 : static_cast<double>(coupling_.nextStep() - 1) * track_step_;
@@ -59,13 +58,12 @@ TrackRunStatus CosimTrackRun::step() {
   const cc::Result r =
       coupling_.nextStep() == 0
           ? coupling_.receive(cc::Clock::now() + std::chrono::duration_cast<cc::Clock::duration>(
-                                                     std::chrono::duration<double>(scene_.solver.handshake_timeout)))
+                                                     std::chrono::duration<double>(settings_.handshake_timeout)))
           : coupling_.receive();
   if (r.status == cc::Status::kPeerClosed) {
     const bool no_frame = coupling_.nextStep() == 0;
     const double t_last = no_frame ? -1.0 : time();
-    const bool before_end = no_frame || (scene_.solver.end.kind == core::EndKind::kTime &&
-                                         t_last < scene_.solver.end.value - 0.5 * track_step_);
+    const bool before_end = no_frame || t_last < settings_.end_time - 0.5 * track_step_;
     if (!options_.replay && before_end) {
       std::snprintf(text, sizeof(text), " went away after step %lld (t = %.6f s), before solver.end: ",
                     static_cast<long long>(coupling_.nextStep()) - 1, t_last);
@@ -108,7 +106,7 @@ TrackRunStatus CosimTrackRun::step() {
 
 bool CosimTrackRun::outputDue() {
   const double t = static_cast<double>(coupling_.states().step) * track_step_;
-  if (t + 1e-9 * track_step_ < static_cast<double>(outputs_) * output_period_) return false;
+  if (t + 1e-9 * track_step_ < static_cast<double>(outputs_) * settings_.output_period) return false;
   ++outputs_;
   return true;
 }

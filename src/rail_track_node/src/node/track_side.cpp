@@ -82,7 +82,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   CosimTrackOutputs outputs(nh, pnh, scene, *track, cost, clock);
   if (!outputs.openBag(me, pnh)) return kExitBadInput;
 
-  CosimTrackRun run(scene, *track, *transport, {peer, !replay_bag.empty(), &cost});
+  CosimTrackRun run(runSettings(scene), *track, *transport, {peer, !replay_bag.empty(), &cost});
   node_run.startLoop();
   int exit_code = kExitOk;
   bool stop_logged = false;  // the run loop said why it stopped

@@ -2,7 +2,7 @@
 // next() runs to the next output instant n / output.rate, or to the run's end, and says which; the node
 // publishes at each kOutput. ROS-free.
 //
-//   VehicleRun run(scene, simulator_or_cosim_vehicle, {&stop_flag, &cost});
+//   VehicleRun run(core::runSettings(scene), simulator_or_cosim_vehicle, {&stop_flag, &cost});
 //   while (run.next() == VehicleRun::Event::kOutput) publish(run.outputIndex());
 //   switch (run.end()) ...   // exitCode(), message()
 //
@@ -17,7 +17,7 @@
 #include <string>
 
 #include <rail_core/cost_profile.hpp>
-#include <rail_core/scene.hpp>
+#include <rail_core/run_settings.hpp>
 
 #include "rail_vehicle_node/cosim_vehicle.hpp"
 #include "rail_vehicle_node/vehicle_simulator.hpp"
@@ -46,8 +46,8 @@ class VehicleRun {
   };
 
   // The simulator, or the co-simulated vehicle, must outlive the run.
-  VehicleRun(const core::Scene& scene, VehicleSimulator& alone, VehicleRunOptions options = {});
-  VehicleRun(const core::Scene& scene, CosimVehicle& cosim, VehicleRunOptions options = {});
+  VehicleRun(const core::RunSettings& settings, VehicleSimulator& alone, VehicleRunOptions options = {});
+  VehicleRun(const core::RunSettings& settings, CosimVehicle& cosim, VehicleRunOptions options = {});
 
   // Runs to the next output instant (kOutput) or to the end (kEnd). After kEnd it keeps returning kEnd.
   Event next();

@@ -34,14 +34,11 @@ int exitCodeOf(RunStatus status) {
   }
 }
 
-VehicleRun::VehicleRun(const core::Scene& scene, VehicleSimulator& alone, VehicleRunOptions options)
-    : sim_(alone),
-      options_(options),
-      output_period_(1.0 / scene.output.rate),
-      t_limit_(scene.solver.end.kind == core::EndKind::kTime ? scene.solver.end.value : 1e9) {}
+VehicleRun::VehicleRun(const core::RunSettings& settings, VehicleSimulator& alone, VehicleRunOptions options)
+    : sim_(alone), options_(options), output_period_(settings.output_period), t_limit_(settings.end_time) {}
 
-VehicleRun::VehicleRun(const core::Scene& scene, CosimVehicle& cosim, VehicleRunOptions options)
-    : VehicleRun(scene, cosim.simulator(), options) {
+VehicleRun::VehicleRun(const core::RunSettings& settings, CosimVehicle& cosim, VehicleRunOptions options)
+    : VehicleRun(settings, cosim.simulator(), options) {
   cosim_ = &cosim;
 }
 

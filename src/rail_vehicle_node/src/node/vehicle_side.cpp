@@ -80,7 +80,8 @@ int runVehicleSide(const Scene& scene) {
   if (!outputs.openBag(node, pnh)) return kExitBadInput;
 
   const VehicleRunOptions options{&stop.requested, &cost};
-  VehicleRun run = cosim ? VehicleRun(scene, *cosim_vehicle, options) : VehicleRun(scene, sim, options);
+  const RunSettings run_settings = runSettings(scene);
+  VehicleRun run = cosim ? VehicleRun(run_settings, *cosim_vehicle, options) : VehicleRun(run_settings, sim, options);
   node_run.startLoop();
   ros_glue::ProgressLine progress(node, sim.endTimeEstimate());
   char where[64];
