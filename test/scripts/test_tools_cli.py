@@ -85,6 +85,26 @@ class ToolsAnswerHelp(unittest.TestCase):
         self.assertEqual(p.returncode, 2)
         self.assertIn("usage: count_tests.py", p.stderr)
 
+    def test_a_bad_option_value_is_named(self):
+        # The tools that read named options (rail::tools::Options): a missing value, a value that is not a
+        # number and a rule between options are one line naming the option, exit 2.
+        cases = [
+            ([os.path.join(LIB, "rail_contact", "contact_geometry"), "--gauge"],
+             "contact_geometry: --gauge needs a value (contact_geometry --help lists the options)"),
+            ([os.path.join(LIB, "rail_track_node", "track_receptance"), "--points", "x"],
+             "track_receptance: --points: not a number (x)"),
+            ([os.path.join(LIB, "rail_track_node", "track_end_reflection"), "--freqs", "300,-5"],
+             "track_end_reflection: --freqs: not a positive number (-5)"),
+            ([os.path.join(LIB, "rail_contact", "contact_geometry"), "--load", "1e5"],
+             "contact_geometry: --load needs --speed > 0"),
+        ]
+        for cmd, msg in cases:
+            with self.subTest(cmd=" ".join(os.path.basename(c) for c in cmd)):
+                p = run(cmd)
+                self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+                self.assertIn(msg, p.stderr)
+                self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
+
 
 class TrainMaker(unittest.TestCase):
     """scripts/make_train.py: the shipped train is what it writes from the shipped coach; bad input exits 2
