@@ -182,6 +182,21 @@ class TestCli(unittest.TestCase):
             self.assertEqual(rc, 0, "%s: %s" % (args, text))
             self.assertIn("usage", text.lower(), args)
 
+    def test_bootstrap_installs_packages_never_installed(self):
+        # On a fresh machine dpkg-query exits 1 for packages it has never seen; the bootstrap (set -euo
+        # pipefail) must still list them and hand them to apt-get, not stop silently.
+        with open(RAILSIM) as f:
+            text = f.read()
+        body = re.search(r"^install_packages\(\) \{\n.*?^\}\n", text, re.S | re.M)
+        self.assertIsNotNone(body, "install_packages() in ./railsim")
+        script = ("set -euo pipefail\nPACKAGES=(bash railsim-no-such-package)\n"
+                  "apt-get() { echo \"apt-get $*\"; }\nid() { echo 0; }\n" + body.group(0) + "install_packages\n")
+        p = subprocess.run(["/bin/bash", "-c", script], capture_output=True, text=True, env=self.env, timeout=30)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+        self.assertIn("installing Debian packages: railsim-no-such-package", p.stderr)
+        self.assertIn("apt-get install -y -q railsim-no-such-package", p.stdout)
+        self.assertNotIn(" bash", p.stdout.split("install", 1)[-1])
+
     def test_unknown_options_refused(self):
         for args, msg in ((["run", "--bogus"], "unknown option '--bogus'"),
                           (["run", SHORT, "--bogus"], "unknown argument '--bogus'"),
