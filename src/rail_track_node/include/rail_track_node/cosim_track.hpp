@@ -179,8 +179,9 @@ class CosimTrack {
   /// window: w, w', w'' over the current window (the total displacement is trackWindow()->staticState() + d).
   const NewmarkState* state() const;
   /// Rail nodal displacements and velocities of the FE state after the last step (t_k; the initial state
-  /// before the first), for a contact evaluation on the current rails; nullptr with rigid_fe.
-  const rail::contact::BeamRailDeformation* railDeformation() const { return deformation_.get(); }
+  /// before the first), for a contact evaluation on the current rails; nullptr with rigid_fe. Filled when
+  /// read (not at every step). No allocation.
+  const rail::contact::BeamRailDeformation* railDeformation() const;
 
   /// Contact results of wheel `id` from the last step (contact points, forces, rail wrenches). With
   /// kSemiImplicit the geometry is that found on the predicted rails; the normal and creep forces, the
@@ -229,9 +230,9 @@ class CosimTrack {
   NewmarkState& st() noexcept { return fe_->mutableState(); }
   const NewmarkState& st() const noexcept { return fe_->state(); }
   const TrackMesh& feMesh() const noexcept { return fe_->mesh(); }
-  void buildRails();    // deformation_ and rail_dofs_ on feMesh() (set-up, window move)
-  void onWindowMove();  // after a move: rails, influence cache (allocates)
-  void fillDeformation() noexcept;
+  void buildRails();                      // deformation_ and rail_dofs_ on feMesh() (set-up, window move)
+  void onWindowMove();                    // after a move: rails, influence cache (allocates)
+  void fillDeformation() const noexcept;  // the rails at the current state (railDeformation(), explicit)
   void fillPredictedDeformation() noexcept;
   void predictRail(int g, double& d_p, double& v_p) const noexcept;
   void evaluateContacts(const rail::core::coupling::WheelStateFrame& states,
@@ -282,6 +283,7 @@ class CosimTrack {
   // Flexible only.
   std::unique_ptr<NodalLoads> loads_;
   std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
+  mutable bool rails_current_ = false;         // deformation_ holds the current state (else a prediction or stale)
   std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
   std::vector<Section> sections_;              // rigid_fe (flexible: the FE track's)
   CosimCoupling coupling_ = CosimCoupling::kSemiImplicit;

@@ -102,8 +102,8 @@ class TrackWindow final : public FeTrack {
   void setCostClock(rail::core::CostClock* cost) override;
 
   /// One Newmark step t -> t + dt of w with the external loads (built on mesh(), at t + dt) and the loads of
-  /// the window's hanging sleepers (hanging()); then the rail nodal arrays of railDeformation() hold d_g + w
-  /// and w' of the new state. No allocation, no exception.
+  /// the window's hanging sleepers (hanging()); then railDeformation() holds d_g + w and w' of the new state.
+  /// No allocation, no exception.
   void step(const NodalLoads& loads) noexcept;
   /// The hanging sleepers of the current window (their loads relative to staticState()), or nullptr when it
   /// has none. Changes at a move. A caller stepping through integrator() adds their loads itself.
@@ -114,7 +114,8 @@ class TrackWindow final : public FeTrack {
   /// caller advances state() with it and then calls finishStep(). Both change at a move.
   NewmarkIntegrator& integrator() override;
   NewmarkState& mutableState() override { return state_; }
-  /// After a step done through integrator(): refreshes the rail arrays and counts the step. No allocation.
+  /// After a step done through integrator(): counts the step (the rail arrays are filled when
+  /// railDeformation() is next read). No allocation.
   void finishStep() noexcept override;
 
   /// Sets w to the static solution K w = f_c (w' = w'' = 0) under loads built on mesh(): a start at
@@ -144,7 +145,10 @@ class TrackWindow final : public FeTrack {
   const Eigen::VectorXd* selfWeightState() const override { return &staticState(); }
   /// The rails for the contact search over the current window: nodal d_g + w and w' (world axes). The
   /// object stays the same across moves (its layout is rebuilt in place at a move).
-  const rail::contact::BeamRailDeformation& railDeformation() const { return *deformation_; }
+  const rail::contact::BeamRailDeformation& railDeformation() const {
+    if (!rails_current_) fillRails();
+    return *deformation_;
+  }
   /// The line's geometry (the whole line) and the track data (scene applied; its absorbing_ends flag is
   /// off because the window places its end dashpots itself).
   const rail::contact::TrackGeometry& geometry() const override { return geometry_; }
@@ -202,7 +206,7 @@ class TrackWindow final : public FeTrack {
   void moveTo(int first_sleeper);
   void extrapolateEntering(const std::vector<char>& carried, NewmarkState& st) const;
   void setRails();
-  void fillRails() noexcept;
+  void fillRails() const noexcept;
   void placeSections();
   void sizeHangingLoads();  // hanging_loads_ capacity for the current window (set-up, moves)
   void placeSection(Section& sec) const;
@@ -225,6 +229,7 @@ class TrackWindow final : public FeTrack {
   mutable Eigen::VectorXd energy_scratch_;     // dynamicEnergy(): M w', K w
   std::array<std::vector<int>, 2> rail_dofs_;  // per rail: free DOF of (node k, dof j) at 6 k + j
   std::unique_ptr<rail::contact::BeamRailDeformation> deformation_;
+  mutable bool rails_current_ = false;  // deformation_ holds d_g + w of the current state
   std::vector<Section> sections_;
   TrackWindowStats stats_;
   NodalLoads hanging_loads_{0};  // step(): the hanging sleepers' loads

@@ -435,7 +435,7 @@ void CosimTrack::buildRails() { buildRailLayout(feMesh(), rail_dofs_, deformatio
 void CosimTrack::onWindowMove() {
   sizeHangingLoads();
   buildRails();
-  fillDeformation();
+  rails_current_ = false;
   const int rebuilds = window_->stats().rebuilds;
   if (implicit_ && rebuilds != seen_rebuilds_) {
     Implicit& im = *implicit_;
@@ -477,6 +477,11 @@ int CosimTrack::sleeperCount() const {
   return fe_->mesh().n_sleepers;
 }
 
+const rc::BeamRailDeformation* CosimTrack::railDeformation() const {
+  if (deformation_ && !rails_current_) fillDeformation();
+  return deformation_.get();
+}
+
 const NewmarkState* CosimTrack::state() const { return fe_ ? &st() : nullptr; }
 long CosimTrack::influenceSolves() const { return implicit_ ? implicit_->solves : 0; }
 long CosimTrack::influenceClipped() const { return implicit_ ? implicit_->clipped : 0; }
@@ -485,8 +490,9 @@ long CosimTrack::newtonIterations() const { return implicit_ ? implicit_->newton
 long CosimTrack::newtonUnconverged() const { return implicit_ ? implicit_->unconverged : 0; }
 
 // Window: the rails carry d = d_g + w (self-weight static state + integrated part).
-void CosimTrack::fillDeformation() noexcept {
+void CosimTrack::fillDeformation() const noexcept {
   fillRailArrays(rail_dofs_, st().d, st().v, fe_->selfWeightState(), 0.0, *deformation_);
+  rails_current_ = true;
 }
 
 // Rails predicted at t_k = t_{k-1} + h for the contact geometry: d_p = d + h v, v_p = v. (Holding the
@@ -500,6 +506,7 @@ void CosimTrack::predictRail(int g, double& d_p, double& v_p) const noexcept {
 
 void CosimTrack::fillPredictedDeformation() noexcept {
   fillRailArrays(rail_dofs_, st().d, st().v, fe_->selfWeightState(), fe_->trackStep(), *deformation_);
+  rails_current_ = false;
 }
 
 void CosimTrack::writeWrench(int i, const rc::WheelState& ws, const rc::WheelContactResult& res,
@@ -587,7 +594,10 @@ CosimStepStatus CosimTrack::stepForces(const cc::WheelStateFrame& states, cc::Wr
 
   const bool integrate = fe_ && states.step > 0;
   // The rails the contact sees: t_{k-1} (explicit, and step 0) or predicted at t_k.
-  if (integrate && coupling_ != CosimCoupling::kExplicit) fillPredictedDeformation();
+  if (integrate && coupling_ != CosimCoupling::kExplicit)
+    fillPredictedDeformation();
+  else if (deformation_ && !rails_current_)
+    fillDeformation();
   evaluateContacts(states, out);
 
   if (integrate && coupling_ == CosimCoupling::kSemiImplicit) {
@@ -620,7 +630,7 @@ void CosimTrack::finishStep() noexcept {
     }
     fe_->finishStep();  // a window's own rail arrays and step count
     ++newmark_steps_;
-    fillDeformation();
+    rails_current_ = false;  // filled when next read (railDeformation(), the explicit contact)
   }
   if (solve_beside_ && base_ == BaseSolve::kNone) startBaseSolve(false);
 }

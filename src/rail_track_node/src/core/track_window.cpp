@@ -517,7 +517,7 @@ NewmarkIntegrator& TrackWindow::integrator() { return *window_->integrator; }
 
 void TrackWindow::finishStep() noexcept {
   ++stats_.steps;
-  fillRails();
+  rails_current_ = false;  // filled when next read (railDeformation())
 }
 
 void TrackWindow::setStaticState(const NodalLoads& loads) {
@@ -606,8 +606,9 @@ void fillRailArrays(const std::array<std::vector<int>, 2>& rail_dofs, const Eige
   }
 }
 
-void TrackWindow::fillRails() noexcept {
+void TrackWindow::fillRails() const noexcept {
   fillRailArrays(rail_dofs_, state_.d, state_.v, &window_->d_static, 0.0, *deformation_);
+  rails_current_ = true;
 }
 
 void TrackWindow::placeSection(Section& sec) const {
