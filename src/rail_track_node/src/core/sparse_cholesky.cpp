@@ -21,11 +21,16 @@ struct SparseCholesky::Impl {
   cholmod_dense* X = nullptr;  // solution buffer, reused
   cholmod_dense* Y = nullptr;  // workspace, reused
   cholmod_dense* E = nullptr;  // workspace, reused
-  // Simplicial: L of P A P' = L L' copied packed, column-major, diagonal first in each column.
-  std::vector<int> perm;           // row k of P A P' is row perm[k] of A
-  std::vector<int> col_start;      // n + 1
-  std::vector<int> row;            // row index of each entry
-  std::vector<double> value;       // entry
+  // Simplicial: L of P A P' = L L' copied packed, column-major, diagonal first in each column and stored as
+  // its reciprocal (the solves' chain of dependent steps then multiplies where it would divide).
+  std::vector<int> perm;       // row k of P A P' is row perm[k] of A
+  std::vector<int> col_start;  // n + 1
+  std::vector<int> row;        // row index of each entry
+  std::vector<double> value;   // entry
+  // The same L by rows (diagonal last, as its reciprocal): the forward solve gathers instead of scattering.
+  std::vector<int> l_row_start;    // n + 1
+  std::vector<int> l_col;          // column index of each entry
+  std::vector<double> l_value;     // entry
   std::vector<double> y;           // permuted solution, reused
   std::vector<int> inverse;        // row of P A P' that holds row i of A
   std::vector<double> y_many;      // solveUnitColumns: rows x kMaxUnitColumns, row-major
@@ -107,10 +112,23 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
                                  " of L does not start at its diagonal");
       for (int p = Lp[j]; p < Lp[j] + Lnz[j]; ++p, ++k) {
         s.row[k] = Li[p];
-        s.value[k] = Lx[p];
+        s.value[k] = p == Lp[j] ? 1.0 / Lx[p] : Lx[p];
       }
     }
     s.col_start[static_cast<std::size_t>(s.n)] = static_cast<int>(k);
+    s.l_row_start.assign(static_cast<std::size_t>(s.n) + 1, 0);
+    for (std::size_t q = 0; q < nnz; ++q) ++s.l_row_start[static_cast<std::size_t>(s.row[q]) + 1];
+    for (int i = 0; i < s.n; ++i)
+      s.l_row_start[static_cast<std::size_t>(i) + 1] += s.l_row_start[static_cast<std::size_t>(i)];
+    s.l_col.resize(nnz);
+    s.l_value.resize(nnz);
+    std::vector<int> next(s.l_row_start.begin(), s.l_row_start.end() - 1);
+    for (int j = 0; j < s.n; ++j)  // ascending columns: each row's entries end with its diagonal
+      for (int q = s.col_start[static_cast<std::size_t>(j)]; q < s.col_start[static_cast<std::size_t>(j) + 1]; ++q) {
+        const int at = next[static_cast<std::size_t>(s.row[static_cast<std::size_t>(q)])]++;
+        s.l_col[static_cast<std::size_t>(at)] = j;
+        s.l_value[static_cast<std::size_t>(at)] = s.value[static_cast<std::size_t>(q)];
+      }
     s.y.assign(static_cast<std::size_t>(s.n), 0.0);
     s.inverse.assign(static_cast<std::size_t>(s.n), 0);
     for (int j = 0; j < s.n; ++j) s.inverse[static_cast<std::size_t>(s.perm[static_cast<std::size_t>(j)])] = j;
@@ -155,26 +173,37 @@ void SparseCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   const int* start = s.col_start.data();
   const int* row = s.row.data();
   const double* value = s.value.data();
+  const int* row_start = s.l_row_start.data();
+  const int* col = s.l_col.data();
+  const double* l_value = s.l_value.data();
   double* y = s.y.data();
-  for (int k = 0; k < n; ++k) y[k] = b[perm[k]];
-  // L y = P b, column by column.
-  for (int j = 0; j < n; ++j) {
-    const double yj = y[j] / value[start[j]];
-    y[j] = yj;
-    for (int p = start[j] + 1; p < start[j + 1]; ++p) y[row[p]] -= value[p] * yj;
+  // L y = P b, each unknown a dot product with its row; L' z = y, each a dot product with its column. Four
+  // partial sums: the loops are bound by the latency of the additions.
+  for (int i = 0; i < n; ++i) {
+    double sum0 = b[perm[i]], sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
+    int p = row_start[i];
+    const int diag = row_start[i + 1] - 1;
+    for (; p + 3 < diag; p += 4) {
+      sum0 -= l_value[p] * y[col[p]];
+      sum1 -= l_value[p + 1] * y[col[p + 1]];
+      sum2 -= l_value[p + 2] * y[col[p + 2]];
+      sum3 -= l_value[p + 3] * y[col[p + 3]];
+    }
+    for (; p < diag; ++p) sum0 -= l_value[p] * y[col[p]];
+    y[i] = ((sum0 + sum1) + (sum2 + sum3)) * l_value[diag];
   }
-  // L' z = y, each unknown a dot product with its column (two partial sums: the loop is bound by the
-  // latency of the additions).
   for (int j = n - 1; j >= 0; --j) {
-    double sum0 = y[j], sum1 = 0.0;
+    double sum0 = y[j], sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
     int p = start[j] + 1;
     const int end = start[j + 1];
-    for (; p + 1 < end; p += 2) {
+    for (; p + 3 < end; p += 4) {
       sum0 -= value[p] * y[row[p]];
       sum1 -= value[p + 1] * y[row[p + 1]];
+      sum2 -= value[p + 2] * y[row[p + 2]];
+      sum3 -= value[p + 3] * y[row[p + 3]];
     }
-    if (p < end) sum0 -= value[p] * y[row[p]];
-    y[j] = (sum0 + sum1) / value[start[j]];
+    for (; p < end; ++p) sum0 -= value[p] * y[row[p]];
+    y[j] = ((sum0 + sum1) + (sum2 + sum3)) * value[start[j]];
   }
   if (x.size() != n) x.resize(n);
   for (int k = 0; k < n; ++k) x[perm[k]] = y[k];
@@ -194,8 +223,8 @@ void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
     y[static_cast<std::ptrdiff_t>(s.inverse[static_cast<std::size_t>(unit[c])]) * K + c] = 1.0;
   for (int j = 0; j < n; ++j) {
     double* yj = y + static_cast<std::ptrdiff_t>(j) * K;
-    const double d = value[start[j]];
-    for (int c = 0; c < K; ++c) yj[c] /= d;
+    const double inv_d = value[start[j]];
+    for (int c = 0; c < K; ++c) yj[c] *= inv_d;
     for (int p = start[j] + 1; p < start[j + 1]; ++p) {
       double* yi = y + static_cast<std::ptrdiff_t>(row[p]) * K;
       const double l = value[p];
@@ -224,8 +253,8 @@ void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
       const double* y0 = y + static_cast<std::ptrdiff_t>(row[p]) * K;
       for (int c = 0; c < K; ++c) sum0[c] -= value[p] * y0[c];
     }
-    const double d = value[start[j]];
-    for (int c = 0; c < K; ++c) yj[c] = (sum0[c] + sum1[c]) / d;
+    const double inv_d = value[start[j]];
+    for (int c = 0; c < K; ++c) yj[c] = (sum0[c] + sum1[c]) * inv_d;
   }
   for (int i = 0; i < n; ++i) {
     const double* yi = y + static_cast<std::ptrdiff_t>(i) * K;
