@@ -28,7 +28,8 @@ struct CostClock {
     kVehicleRhs,          // vehicle right-hand sides for the integrator's steps (contact on the rigid track inside)
     kVehicleJacobian,     // right-hand sides of CVODE's difference-quotient Jacobians (BDF)
     kTrackRhs,            // Newmark right-hand side M x1 + C x2 + f and the step's completion (vector work; on the
-                          // second thread with the semi-implicit coupling's column loads)
+                          // second thread with the semi-implicit coupling's column loads, the completion shared
+                          // with the loop's thread, whose share is also part of track_step)
     kTrackSolve,          // Newmark K_eff solve (CHOLMOD), one per step
     kTrackSolveWait,      // the step waiting for its right-hand side and solve done beside it (second thread)
     kWindowMoves,         // track window moves (model build or reuse, state carry-over, rail arrays)

@@ -250,10 +250,13 @@ class CosimTrack {
   void solveLinkForces() noexcept;
   void applyLinkForces(const rail::core::coupling::WheelStateFrame& states,
                        rail::core::coupling::WrenchFrame& out) noexcept;
-  void addColumnLoads() noexcept;  // finishStep: d = x_b + K_eff^{-1} W f
+  // finishStep: d = x_b + K_eff^{-1} W f over the DOFs [begin, end), then the loads cleared once.
+  void addColumnLoads(int begin, int end) noexcept;
+  void clearColumnLoads() noexcept;
   // The load-free right-hand side and solve of the next step (stepDisplacement() = K_eff^{-1} rhs_0): on
-  // the second thread (startBaseSolve, then awaitBaseSolve) or here (solveBase). With finish, the second
-  // thread first completes the step (addColumnLoads, completeStep), which finishStep awaits
+  // the second thread (startBaseSolve, then awaitBaseSolve) or here (solveBase). With finish, the two
+  // threads first complete the step (column loads, Newmark completion), each over half of the DOFs
+  // (completion_split_); the second thread solves once both halves are done, finishStep awaits its half
   // (awaitCompletion).
   void solveBase() noexcept;
   void startBaseSolve(bool finish) noexcept;
@@ -309,8 +312,10 @@ class CosimTrack {
   std::mutex worker_mutex_;
   std::condition_variable worker_cv_;
   bool worker_job_ = false, worker_done_ = false, worker_stop_ = false;
-  bool worker_finish_ = false;     // the job first completes the step (column loads, Newmark completion)
-  bool worker_completed_ = false;  // ... and has done so
+  bool worker_finish_ = false;                // the job first completes the step (column loads, Newmark completion)
+  bool worker_completed_ = false;             // ... and has done so
+  int completion_split_ = 0;                  // the loop's thread completes the DOFs below, the worker the rest
+  std::atomic<bool> lower_completed_{false};  // the loop's thread has completed its DOFs (the worker spins)
   // worker_job_, worker_completed_ and worker_done_ as each side spins on them before it sleeps (no lock).
   std::atomic<bool> worker_posted_{false}, worker_completed_flag_{false}, worker_done_flag_{false};
   rail::core::CostClock worker_cost_;

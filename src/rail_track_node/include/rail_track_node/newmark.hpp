@@ -89,6 +89,10 @@ class NewmarkIntegrator {
   /// Second half of step(): a_{n+1}, v_{n+1} from stepDisplacement() and state; state becomes t + dt.
   /// No allocation.
   void completeStep(NewmarkState& state);
+  /// completeStep() split so that two threads can share it: completeRows() for the DOFs [begin, end) of
+  /// stepDisplacement() (not timed), then advanceTime() once every DOF is done. No allocation.
+  void completeRows(NewmarkState& state, int begin, int end) const noexcept;
+  void advanceTime(NewmarkState& state) const noexcept { state.t += dt_; }
   /// x = K_eff^{-1} b (b, x of size n; x preallocated). No allocation.
   void solveEffective(const Eigen::VectorXd& b, Eigen::VectorXd& x) { factor_->solve(b, x); }
   /// Columns K_eff^{-1} e_dofs[c], c < count <= SparseCholesky::kMaxUnitColumns, into x (n x count at least,

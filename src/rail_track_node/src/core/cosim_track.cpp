@@ -34,8 +34,8 @@ namespace {
 // How long a thread of the step waits awake (spinning) for the other before it sleeps on the condition
 // variable: a futex wake-up costs 10-50 us here, a track step a few hundred. The worker waits for its
 // next job through the Newton solve, and the loop's thread for the base solve after its contacts; both
-// while the vehicle node waits for the track. The loop's thread sleeps while the worker completes a step
-// (the vehicle integrates then: a spin would take a core from one of them).
+// while the vehicle node waits for the track. The two threads complete a step together, half of the DOFs
+// each, and each waits awake for the other's half.
 constexpr std::chrono::microseconds kJobSpin{400}, kSolveSpin{400};
 
 // Moves the Newmark parts (right-hand side, solve) and the counts of `from` into `to`.
@@ -358,17 +358,21 @@ void CosimTrack::workerLoop() noexcept {
       // Timed as the completion (track_rhs, beside the step); awaitCompletion takes the clock.
       if (cost_ != nullptr) integ().setCostClock(&completion_cost_);
       const auto t0 = std::chrono::steady_clock::now();
-      addColumnLoads();
-      if (cost_ != nullptr)
+      const int n = static_cast<int>(st().d.size());
+      addColumnLoads(completion_split_, n);
+      integ().completeRows(st(), completion_split_, n);
+      if (cost_ != nullptr) {
         completion_cost_.seconds[rail::core::CostClock::kTrackRhs] +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      integ().completeStep(st());
-      if (cost_ != nullptr) integ().setCostClock(&worker_cost_);
+        integ().setCostClock(&worker_cost_);
+      }
       lock.lock();
       worker_completed_ = true;
       worker_completed_flag_.store(true, std::memory_order_release);
       lock.unlock();
       worker_cv_.notify_all();
+      // The next right-hand side reads every DOF: wait (awake; the loop's thread is at it) for the other half.
+      while (!awaitFlag(lower_completed_, true, kSolveSpin)) std::this_thread::yield();
     }
     solveBase();
     lock.lock();
@@ -389,6 +393,8 @@ void CosimTrack::startBaseSolve(bool finish) noexcept {
     worker_completed_ = false;
     worker_completed_flag_.store(false, std::memory_order_relaxed);
     worker_finish_ = finish;
+    lower_completed_.store(false, std::memory_order_relaxed);
+    completion_split_ = static_cast<int>(st().d.size()) / 2;
     worker_job_ = true;
     worker_posted_.store(true, std::memory_order_release);
   }
@@ -396,9 +402,11 @@ void CosimTrack::startBaseSolve(bool finish) noexcept {
   base_ = BaseSolve::kRunning;
 }
 
-// Waits (asleep) for the worker's completion of the step.
+// Waits for the worker's share of the step's completion (awake first: it ends about when this thread's
+// share does).
 void CosimTrack::awaitCompletion() noexcept {
   rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolveWait);
+  awaitFlag(worker_completed_flag_, true, kSolveSpin);
   {
     std::unique_lock<std::mutex> lock(worker_mutex_);
     worker_cv_.wait(lock, [this] { return worker_completed_; });
@@ -620,10 +628,24 @@ void CosimTrack::finishStep() noexcept {
         break;
       case CosimCoupling::kSemiImplicit:
         if (solve_beside_) {
-          startBaseSolve(true);  // the worker completes this step, then solves the next base step
+          // Both threads complete this step, half of the DOFs each; the worker then solves the next base step.
+          startBaseSolve(true);
+          const auto t0 = std::chrono::steady_clock::now();
+          addColumnLoads(0, completion_split_);
+          integ().completeRows(st(), 0, completion_split_);
+          lower_completed_.store(true, std::memory_order_release);
+          const double lower_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           awaitCompletion();
+          integ().advanceTime(st());
+          clearColumnLoads();
+          if (cost_ != nullptr) {  // the completion: one call of track_rhs, as completeStep()
+            cost_->seconds[rail::core::CostClock::kTrackRhs] += lower_s;
+            ++cost_->calls[rail::core::CostClock::kTrackRhs];
+          }
         } else {
-          addColumnLoads();
+          const int n = static_cast<int>(st().d.size());
+          addColumnLoads(0, n);
+          clearColumnLoads();
           integ().completeStep(st());
         }
         break;
@@ -1106,21 +1128,31 @@ void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFr
   }
 }
 
-// d = x_b + K_eff^{-1} W f: the step's nodal loads, summed per influence column by applyLinkForces.
-void CosimTrack::addColumnLoads() noexcept {
+// d = x_b + K_eff^{-1} W f over the DOFs [begin, end): the step's nodal loads, summed per influence column
+// by applyLinkForces.
+void CosimTrack::addColumnLoads(int begin, int end) noexcept {
   if (!implicit_) return;
-  // Part of the contact forces' cost in the step; on the worker, part of the completion (track_rhs).
+  // Part of the contact forces' cost in the step; beside, part of the completion (track_rhs).
   ForcesTime timing(solve_beside_ ? nullptr : contact_cost_);
   Implicit& im = *implicit_;
   Eigen::VectorXd& d_new = integ().stepDisplacement();
   for (const int col : im.used_columns) {
     const std::size_t c = static_cast<std::size_t>(col);
-    const int lo_i = im.lo[c], len = im.len[c];
-    d_new.segment(lo_i, len) +=
+    const int first = std::max(im.lo[c], begin), last = std::min(im.lo[c] + im.len[c], end);
+    if (first >= last) continue;
+    d_new.segment(first, last - first) +=
         im.column_load[c] *
-        Eigen::Map<const Eigen::VectorXd>(im.values.data() + c * static_cast<std::size_t>(im.window), len);
-    im.column_load[c] = 0.0;
-    im.column_used[c] = 0;
+        Eigen::Map<const Eigen::VectorXd>(
+            im.values.data() + c * static_cast<std::size_t>(im.window) + (first - im.lo[c]), last - first);
+  }
+}
+
+void CosimTrack::clearColumnLoads() noexcept {
+  if (!implicit_) return;
+  Implicit& im = *implicit_;
+  for (const int col : im.used_columns) {
+    im.column_load[static_cast<std::size_t>(col)] = 0.0;
+    im.column_used[static_cast<std::size_t>(col)] = 0;
   }
   im.used_columns.clear();
 }

@@ -153,22 +153,25 @@ void NewmarkIntegrator::solveStep(const NewmarkState& st, const NodalLoads& load
 
 void NewmarkIntegrator::completeStep(NewmarkState& st) {
   rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackRhs);
+  completeRows(st, 0, static_cast<int>(d_new_.size()));
+  advanceTime(st);
+}
+
+void NewmarkIntegrator::completeRows(NewmarkState& st, int begin, int end) const noexcept {
   const double h = dt_;
   const double c0 = 4.0 / (h * h), c1 = 4.0 / h;
   // a_{n+1} = c0 (d_{n+1} - d_n) - c1 v_n - a_n ;  v_{n+1} = v_n + h/2 (a_n + a_{n+1})
-  const int n = static_cast<int>(d_new_.size());
   const double half_h = 0.5 * h;
   double* d = st.d.data();
   double* v = st.v.data();
   double* a = st.a.data();
   const double* d_new = d_new_.data();
-  for (int i = 0; i < n; ++i) {
+  for (int i = begin; i < end; ++i) {
     const double a_new = c0 * (d_new[i] - d[i]) - c1 * v[i] - a[i];
     v[i] += half_h * (a[i] + a_new);
     a[i] = a_new;
     d[i] = d_new[i];
   }
-  st.t += h;
 }
 
 Eigen::VectorXd solveStatic(const LinearSystem& sys, const Eigen::VectorXd& f) {
