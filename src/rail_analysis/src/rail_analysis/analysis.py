@@ -167,10 +167,13 @@ def _scene(runs):
     return None
 
 
-def _flexible_deflections(runs):
-    """The flexible run if it recorded rail displacements (else None), and the runs' scene."""
+def _flexible_deflections(runs, title, paper):
+    """(the flexible run, the runs' scene, None) when that run recorded rail displacements, else
+    (None, scene, the check titled `title` marked not available)."""
     flex = runs.get("flexible")
-    return (flex if flex is not None and flex.deflection else None), _scene(runs)
+    if flex is not None and flex.deflection:
+        return flex, _scene(runs), None
+    return None, _scene(runs), Check(title, paper, "needs the flexible run's rail displacements", NOT_AVAILABLE)
 
 
 def _outer_inner(scene):
@@ -305,9 +308,9 @@ def check_rails_outward_in_curve(runs, t_discard):
     title = "Rails pushed outward in the curve"
     paper = ("On the curved segment both rails are displaced to the outer side of the curve, the outer rail more "
              "(Fig. 23).")
-    flex, scene = _flexible_deflections(runs)
-    if flex is None:
-        return Check(title, paper, "needs the flexible run's rail displacements", NOT_AVAILABLE)
+    flex, scene, missing = _flexible_deflections(runs, title, paper)
+    if missing is not None:
+        return missing
     sides = _outer_inner(scene)
     if sides is None:
         return Check(title, paper, "the scene has no curve", NOT_AVAILABLE)
@@ -363,9 +366,9 @@ def check_max_between_bogie_wheels(runs, t_discard, under=None):
     title = "Largest rail displacement between the wheels of a bogie on the straight"
     paper = ("The absolute maximum displacement peaks are observed in-between the front and rear wheel passage of "
              "each bogie (Fig. 22).")
-    flex, scene = _flexible_deflections(runs)
-    if flex is None:
-        return Check(title, paper, "needs the flexible run's rail displacements", NOT_AVAILABLE)
+    flex, scene, missing = _flexible_deflections(runs, title, paper)
+    if missing is not None:
+        return missing
     parts, ok_all, n = [], True, 0
     for s, d in flex.deflection.items():
         if _section_kind(scene, s) != "straight":

@@ -160,6 +160,24 @@ SparseCholesky::~SparseCholesky() {
   cholmod_finish(&s.common);
 }
 
+namespace {
+// first - sum of value[p] y[index[p]] over p in [begin, end), in four partial sums: a triangular solve is
+// bound by the latency of these additions.
+inline double minusDot(double first, const double* value, const int* index, int begin, int end,
+                       const double* y) noexcept {
+  double sum0 = first, sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
+  int p = begin;
+  for (; p + 3 < end; p += 4) {
+    sum0 -= value[p] * y[index[p]];
+    sum1 -= value[p + 1] * y[index[p + 1]];
+    sum2 -= value[p + 2] * y[index[p + 2]];
+    sum3 -= value[p + 3] * y[index[p + 3]];
+  }
+  for (; p < end; ++p) sum0 -= value[p] * y[index[p]];
+  return (sum0 + sum1) + (sum2 + sum3);
+}
+}  // namespace
+
 void SparseCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   Impl& s = *impl_;
   if (s.layout == CholeskyLayout::kSupernodal) {
@@ -177,34 +195,12 @@ void SparseCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
   const int* col = s.l_col.data();
   const double* l_value = s.l_value.data();
   double* y = s.y.data();
-  // L y = P b, each unknown a dot product with its row; L' z = y, each a dot product with its column. Four
-  // partial sums: the loops are bound by the latency of the additions.
+  // L y = P b, each unknown a dot product with its row; L' z = y, each a dot product with its column.
   for (int i = 0; i < n; ++i) {
-    double sum0 = b[perm[i]], sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
-    int p = row_start[i];
     const int diag = row_start[i + 1] - 1;
-    for (; p + 3 < diag; p += 4) {
-      sum0 -= l_value[p] * y[col[p]];
-      sum1 -= l_value[p + 1] * y[col[p + 1]];
-      sum2 -= l_value[p + 2] * y[col[p + 2]];
-      sum3 -= l_value[p + 3] * y[col[p + 3]];
-    }
-    for (; p < diag; ++p) sum0 -= l_value[p] * y[col[p]];
-    y[i] = ((sum0 + sum1) + (sum2 + sum3)) * l_value[diag];
+    y[i] = minusDot(b[perm[i]], l_value, col, row_start[i], diag, y) * l_value[diag];
   }
-  for (int j = n - 1; j >= 0; --j) {
-    double sum0 = y[j], sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
-    int p = start[j] + 1;
-    const int end = start[j + 1];
-    for (; p + 3 < end; p += 4) {
-      sum0 -= value[p] * y[row[p]];
-      sum1 -= value[p + 1] * y[row[p + 1]];
-      sum2 -= value[p + 2] * y[row[p + 2]];
-      sum3 -= value[p + 3] * y[row[p + 3]];
-    }
-    for (; p < end; ++p) sum0 -= value[p] * y[row[p]];
-    y[j] = ((sum0 + sum1) + (sum2 + sum3)) * value[start[j]];
-  }
+  for (int j = n - 1; j >= 0; --j) y[j] = minusDot(y[j], value, row, start[j] + 1, start[j + 1], y) * value[start[j]];
   if (x.size() != n) x.resize(n);
   for (int k = 0; k < n; ++k) x[perm[k]] = y[k];
 }
