@@ -187,6 +187,13 @@ class SyntheticRuns(unittest.TestCase):
         self.assertEqual(analysis.check_max_between_bogie_wheels(runs, DISCARD).status, analysis.DISAGREES)
         self.assertEqual(analysis.check_flange_outer_only(runs, DISCARD).status, analysis.DISAGREES)
 
+    def test_rail_displacement_checks_not_available_without_the_flexible_run(self):
+        runs = {k: v for k, v in self.runs.items() if k != "flexible"}
+        for check in (analysis.check_rails_outward_in_curve, analysis.check_max_between_bogie_wheels):
+            c = check(runs, DISCARD)
+            self.assertEqual(c.status, analysis.NOT_AVAILABLE, check.__name__)
+            self.assertEqual(c.measured, "needs the flexible run's rail displacements", check.__name__)
+
 
 class FlangeContactDefinition(unittest.TestCase):
     """Flange contact is counted by the contact angle, whichever wheel surface reported the point: a patch on
