@@ -129,21 +129,8 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
   const Effects& e = scene.effects;
   o << "effects:\n"
     << "  track_model: " << toString(e.track_model) << "\n"
-    << "  irregularities: " << onOff(e.irregularities) << "\n"
-    << "  track_defects: " << onOff(e.track_defects) << "\n"
-    << "  wheel_defects: " << onOff(e.wheel_defects) << "\n"
-    << "  support_variation: " << onOff(e.support_variation) << "\n"
-    << "  flange_contact: " << onOff(e.flange_contact) << "\n"
-    << "  spin_creepage: " << onOff(e.spin_creepage) << "\n"
-    << "  creep_law: " << toString(e.creep_law) << "\n"
-    << "  track_damping: " << onOff(e.track_damping) << "\n"
-    << "  absorbing_ends: " << onOff(e.absorbing_ends) << "\n"
-    << "  rail_deflection_output: " << onOff(e.rail_deflection_output) << "\n"
-    << "  contact_point_output: " << onOff(e.contact_point_output) << "\n"
-    << "  rviz_markers: " << onOff(e.rviz_markers) << "\n"
-    << "  floor_acceleration_output: " << onOff(e.floor_acceleration_output) << "\n"
-    << "  pad_force_output: " << onOff(e.pad_force_output) << "\n"
-    << "  energy_output: " << onOff(e.energy_output) << "\n";
+    << "  creep_law: " << toString(e.creep_law) << "\n";
+  for (const EffectSwitch& sw : kEffectSwitches) o << "  " << sw.key << ": " << onOff(e.*sw.on) << "\n";
   return o.str();
 }
 

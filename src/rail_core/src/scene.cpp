@@ -221,21 +221,8 @@ std::string toYaml(const Scene& s) {
   const Effects& f = s.effects;
   e << YAML::Key << "effects" << YAML::Value << YAML::BeginMap;
   kv(e, "track_model", toString(f.track_model));
-  kv(e, "irregularities", f.irregularities);
-  kv(e, "track_defects", f.track_defects);
-  kv(e, "wheel_defects", f.wheel_defects);
-  kv(e, "support_variation", f.support_variation);
-  kv(e, "flange_contact", f.flange_contact);
-  kv(e, "spin_creepage", f.spin_creepage);
   kv(e, "creep_law", toString(f.creep_law));
-  kv(e, "track_damping", f.track_damping);
-  kv(e, "absorbing_ends", f.absorbing_ends);
-  kv(e, "rail_deflection_output", f.rail_deflection_output);
-  kv(e, "contact_point_output", f.contact_point_output);
-  kv(e, "rviz_markers", f.rviz_markers);
-  kv(e, "floor_acceleration_output", f.floor_acceleration_output);
-  kv(e, "pad_force_output", f.pad_force_output);
-  kv(e, "energy_output", f.energy_output);
+  for (const EffectSwitch& sw : kEffectSwitches) kv(e, sw.key, f.*sw.on);
   e << YAML::EndMap;
 
   const Solver& v = s.solver;

@@ -614,21 +614,8 @@ void readEffects(MapReader& root, Scene& s) {
   MapReader& r = *section;
   Effects& e = s.effects;
   r.choice("track_model", e.track_model, kTrackModelWords);
-  r.boolean("irregularities", e.irregularities);
-  r.boolean("track_defects", e.track_defects);
-  r.boolean("wheel_defects", e.wheel_defects);
-  r.boolean("support_variation", e.support_variation);
-  r.boolean("flange_contact", e.flange_contact);
-  r.boolean("spin_creepage", e.spin_creepage);
   r.choice("creep_law", e.creep_law, kCreepLawWords);
-  r.boolean("track_damping", e.track_damping);
-  r.boolean("absorbing_ends", e.absorbing_ends);
-  r.boolean("rail_deflection_output", e.rail_deflection_output);
-  r.boolean("contact_point_output", e.contact_point_output);
-  r.boolean("rviz_markers", e.rviz_markers);
-  r.boolean("floor_acceleration_output", e.floor_acceleration_output);
-  r.boolean("pad_force_output", e.pad_force_output);
-  r.boolean("energy_output", e.energy_output);
+  for (const EffectSwitch& sw : kEffectSwitches) r.boolean(sw.key, e.*sw.on);
   r.finish();
 }
 

@@ -178,6 +178,29 @@ struct Effects {
   bool energy_output = false;              // mechanical energy of the vehicle (and of the flexible track)
 };
 
+// The on/off effects by their key in the scene's effects section, in the order of the file: read by the
+// loader, written by writeScene and listed in the cost profile from this one table.
+struct EffectSwitch {
+  const char* key;
+  bool Effects::*on;
+};
+inline constexpr EffectSwitch kEffectSwitches[] = {
+    {"irregularities", &Effects::irregularities},
+    {"track_defects", &Effects::track_defects},
+    {"wheel_defects", &Effects::wheel_defects},
+    {"support_variation", &Effects::support_variation},
+    {"flange_contact", &Effects::flange_contact},
+    {"spin_creepage", &Effects::spin_creepage},
+    {"track_damping", &Effects::track_damping},
+    {"absorbing_ends", &Effects::absorbing_ends},
+    {"rail_deflection_output", &Effects::rail_deflection_output},
+    {"contact_point_output", &Effects::contact_point_output},
+    {"rviz_markers", &Effects::rviz_markers},
+    {"floor_acceleration_output", &Effects::floor_acceleration_output},
+    {"pad_force_output", &Effects::pad_force_output},
+    {"energy_output", &Effects::energy_output},
+};
+
 struct End {
   EndKind kind = EndKind::kArcLength;
   double value = 0.0;  // [s] or [m]; arc length 0 in the file = track end
