@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rail_contact/illinois.hpp"
+
 namespace rail {
 namespace contact {
 
@@ -196,30 +198,19 @@ bool ContactGeometryTable::solveLoaded(double y, double yaw, const LoadCase& loa
   // penetration below the detection's 5 mm limit.
   // jump_out: where the bracket closes on a jump of g instead of a root, the jump's size.
   auto solve1d = [](auto&& g, double lo, double hi, double tol, double& x, double* jump_out = nullptr) {
-    double g_lo = g(lo), g_hi = g(hi);
-    if (!std::isfinite(g_lo) || !std::isfinite(g_hi) || g_lo * g_hi > 0.0) return false;
-    int side = 0;
+    IllinoisBracket br{lo, g(lo), hi, g(hi)};
+    if (!std::isfinite(br.g_a) || !std::isfinite(br.g_b) || br.g_a * br.g_b > 0.0) return false;
     for (int k = 0; k < 200; ++k) {
-      x = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);  // Illinois variant of regula falsi
-      if (!(x > std::min(lo, hi) && x < std::max(lo, hi))) x = 0.5 * (lo + hi);
+      x = br.next();
+      if (!(x > std::min(br.a, br.b) && x < std::max(br.a, br.b))) x = 0.5 * (br.a + br.b);
       const double gx = g(x);
       if (!std::isfinite(gx)) return false;
       if (std::abs(gx) < tol) return true;
-      if (std::abs(hi - lo) < 1e-12 * std::max(1.0, std::abs(x))) {
+      if (std::abs(br.b - br.a) < 1e-12 * std::max(1.0, std::abs(x))) {
         if (jump_out) *jump_out = std::max(*jump_out, std::abs(gx));
         return false;
       }
-      if (gx * g_hi > 0.0) {
-        hi = x;
-        g_hi = gx;
-        if (side == -1) g_lo *= 0.5;
-        side = -1;
-      } else {
-        lo = x;
-        g_lo = gx;
-        if (side == 1) g_hi *= 0.5;
-        side = 1;
-      }
+      br.update(x, gx);
     }
     return false;
   };

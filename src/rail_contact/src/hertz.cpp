@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "rail_contact/illinois.hpp"
+
 namespace rail::contact {
 namespace {
 
@@ -312,23 +314,11 @@ HertzGeometry limitLateralWidth(const HertzGeometry& hz, double delta, double ma
   }
   if (g_hi > 0.0) return hz;  // not reached (degenerate input): leave it unclamped
   best = h;
-  int side = 0;
-  for (int i = 0; i < 30 && std::abs(g_hi) > 1e-4; ++i) {
-    const double x = (x_lo * g_hi - x_hi * g_lo) / (g_hi - g_lo);
+  IllinoisBracket br{x_hi, g_hi, x_lo, g_lo};  // g_b = g_lo > 0 throughout: a g <= 0 replaces x_hi
+  for (int i = 0; i < 30 && std::abs(br.g_a) > 1e-4; ++i) {
+    const double x = br.next();
     const HertzGeometry m = computeHertz(hz.A, std::exp(x), hz.E_star, options);
-    const double g = std::log(width(m)) - target;
-    if (g > 0.0) {
-      x_lo = x;
-      g_lo = g;
-      if (side == -1) g_hi *= 0.5;
-      side = -1;
-    } else {
-      x_hi = x;
-      g_hi = g;
-      best = m;
-      if (side == 1) g_lo *= 0.5;
-      side = 1;
-    }
+    if (br.update(x, std::log(width(m)) - target)) best = m;
   }
   best.flags |= hz.flags | kHertzWidthClamped;
   return best;  // b <= max_b, within 1e-4 of it

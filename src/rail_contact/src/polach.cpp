@@ -22,6 +22,15 @@ void throwOption(const char* name, double value, const char* rule) {
   throw std::runtime_error(os.str());
 }
 
+PolachOptions withParameters(double kA, double kS, double A, double B) noexcept {
+  PolachOptions o;
+  o.kA = kA;
+  o.kS = kS;
+  o.A = A;
+  o.B = B;
+  return o;
+}
+
 }  // namespace
 
 void validate(const PolachOptions& o) {
@@ -31,23 +40,9 @@ void validate(const PolachOptions& o) {
   if (!(o.B >= 0.0) || !std::isfinite(o.B)) throwOption("B", o.B, "must be >= 0 s/m");
 }
 
-PolachOptions polach2005DryOptions() noexcept {
-  PolachOptions o;  // Polach, Wear 258 (2005) 992-1000, recommended parameters, dry rail
-  o.kA = 1.00;
-  o.kS = 0.40;
-  o.A = 0.40;
-  o.B = 0.60;
-  return o;
-}
-
-PolachOptions polach2005WetOptions() noexcept {
-  PolachOptions o;  // Polach, Wear 258 (2005) 992-1000, recommended parameters, wet rail
-  o.kA = 0.30;
-  o.kS = 0.10;
-  o.A = 0.40;
-  o.B = 0.20;
-  return o;
-}
+// Polach, Wear 258 (2005) 992-1000, recommended parameters: kA, kS, A, B (s/m) for dry and for wet rail.
+PolachOptions polach2005DryOptions() noexcept { return withParameters(1.00, 0.40, 0.40, 0.60); }
+PolachOptions polach2005WetOptions() noexcept { return withParameters(0.30, 0.10, 0.40, 0.20); }
 
 PolachResult polachForces(const PolachInput& in, const PolachOptions& o) noexcept {
   PolachResult r;

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "rail_contact/hertz.hpp"
+#include "rail_contact/illinois.hpp"
 
 namespace rc = rail::contact;
 
@@ -315,4 +316,25 @@ TEST(NormalForce, ValidationRejectsBadParameters) {
   p.impact_velocity_floor = 0.0;
   EXPECT_THROW(rc::validate(p), std::runtime_error);
   EXPECT_NO_THROW(rc::validate(rc::NormalDampingParams{}));
+}
+
+// The Illinois bracket on x^3 = 2 from [0, 4]: a plain regula falsi keeps the end 4 for ever (g convex) and
+// converges linearly; halving the kept end's value moves both ends, and the root is found to 1e-12 within
+// 20 updates.
+TEST(IllinoisBracket, BothEndsMoveAndTheRootIsFound) {
+  const auto g = [](double x) { return x * x * x - 2.0; };
+  rc::IllinoisBracket br{0.0, g(0.0), 4.0, g(4.0)};
+  bool moved_a = false, moved_b = false;
+  int updates = 0;
+  double x = 0.0;
+  while (updates < 20 && std::abs(g(x = br.next())) > 1e-12) {
+    (br.update(x, g(x)) ? moved_a : moved_b) = true;
+    ++updates;
+  }
+  EXPECT_NEAR(x, std::cbrt(2.0), 1e-12);
+  EXPECT_LT(updates, 20);
+  EXPECT_TRUE(moved_a);
+  EXPECT_TRUE(moved_b);
+  EXPECT_LT(br.a, std::cbrt(2.0));  // the ends still bracket the root
+  EXPECT_GT(br.b, std::cbrt(2.0));
 }
