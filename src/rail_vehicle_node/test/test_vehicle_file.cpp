@@ -208,6 +208,38 @@ TEST(VehicleLoader, NamesAnUndefinedBodyOfAJoint) {
   EXPECT_EQ(loadError(path), path + ": joints[0].body_j: no body of that name is defined, got 'axlebox_9' (line 5)");
 }
 
+// A joint and a force element name their type, their name and their bodies the same way.
+TEST(VehicleLoader, NamesAnUnknownTypeASecondNameAndOneBodyTwiceForJointsAndForces) {
+  const std::string joint_type = writeTemp("joint_type.yaml", std::string(kTwoBodies) + R"(joints:
+  - {name: j, type: prismatic, body_i: ws, body_j: box, position: [0, 1, 0.445]}
+)");
+  EXPECT_EQ(loadError(joint_type), joint_type +
+                                       ": joints[0].type: unknown joint type (expected revolute, spherical or fixed), "
+                                       "got 'prismatic' (line 5)");
+  const std::string force_type = writeTemp("force_type.yaml", std::string(kTwoBodies) + R"(forces:
+  - {name: f, type: spring, body_i: ws, body_j: box}
+)");
+  EXPECT_EQ(loadError(force_type),
+            force_type +
+                ": forces[0].type: unknown force type (expected bushing, point_to_point or bump_stop), got 'spring' "
+                "(line 5)");
+  const std::string joint_same = writeTemp("joint_same.yaml", std::string(kTwoBodies) + R"(joints:
+  - {name: j, type: fixed, body_i: box, body_j: box, position: [0, 1, 0.445]}
+)");
+  EXPECT_EQ(loadError(joint_same),
+            joint_same + ": joints[0].body_j: a joint needs two different bodies, got 'box' (line 5)");
+  const std::string force_same = writeTemp("force_same.yaml", std::string(kTwoBodies) + R"(forces:
+  - {name: f, type: bushing, body_i: box, body_j: box, position: [0, 1, 0.445], stiffness: [1, 1, 1], damping: [0, 0, 0]}
+)");
+  EXPECT_EQ(loadError(force_same),
+            force_same + ": forces[0].body_j: a force element needs two different bodies, got 'box' (line 5)");
+  const std::string force_twice = writeTemp("force_twice.yaml", std::string(kTwoBodies) + R"(forces:
+  - {name: f, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], stiffness: [1, 1, 1], damping: [0, 0, 0]}
+  - {name: f, type: bushing, body_i: ws, body_j: box, position: [0, 1, 0.445], stiffness: [1, 1, 1], damping: [0, 0, 0]}
+)");
+  EXPECT_EQ(loadError(force_twice), force_twice + ": forces[1].name: force element defined twice, got 'f' (line 6)");
+}
+
 // yaml-cpp would keep the first of two equal keys: a key given twice is refused, naming both lines.
 TEST(VehicleLoader, RefusesAKeyGivenTwice) {
   const std::string top =

@@ -2,6 +2,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <array>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -124,24 +126,38 @@ void readBody(MapReader& r, VehicleModel& model) {
   build(r, [&] { model.addBody(body); });
 }
 
+// What a joint and a force element begin with: a type among three, a new name and two different bodies.
+struct Connection {
+  std::string type, name;
+  int body_i = 0, body_j = 0;
+};
+Connection readConnection(MapReader& r, const VehicleModel& model, std::set<std::string>& names, const char* type_kind,
+                          const char* kind, const std::array<const char*, 3>& types, bool ground_as_body_i) {
+  Connection c;
+  c.type = r.name("type");
+  if (std::find(types.begin(), types.end(), c.type) == types.end())
+    r.fail("type", std::string("unknown ") + type_kind + " type (expected " + types[0] + ", " + types[1] + " or " +
+                       types[2] + "), got '" + c.type + "'");
+  c.name = newName(r, names, kind);
+  c.body_i = bodyOf(r, model, "body_i", ground_as_body_i);
+  c.body_j = bodyOf(r, model, "body_j", true);
+  if (c.body_i == c.body_j)
+    r.fail("body_j", std::string("a ") + kind + " needs two different bodies, got " + describe(r.node("body_j")));
+  return c;
+}
+
 void readJoint(MapReader& r, VehicleModel& model, std::set<std::string>& names) {
-  const std::string type = r.name("type");
-  if (type != "revolute" && type != "spherical" && type != "fixed")
-    r.fail("type", "unknown joint type (expected revolute, spherical or fixed), got '" + type + "'");
-  const std::string name = newName(r, names, "joint");
-  const int body_i = bodyOf(r, model, "body_i", false);
-  const int body_j = bodyOf(r, model, "body_j", true);
-  if (body_i == body_j) r.fail("body_j", "a joint needs two different bodies, got " + describe(r.node("body_j")));
+  const Connection c = readConnection(r, model, names, "joint", "joint", {"revolute", "spherical", "fixed"}, false);
   const Vector3 p = r.vector3("position", kMaxPosition, "m");
-  const Vector3 axis = type == "revolute" ? axisOf(r, "axis") : Vector3::Zero();
+  const Vector3 axis = c.type == "revolute" ? axisOf(r, "axis") : Vector3::Zero();
   r.finish();
   build(r, [&] {
-    if (type == "revolute") {
-      model.addRevoluteJointAt(name, body_i, body_j, p, axis.normalized());
-    } else if (type == "spherical") {
-      model.addSphericalJointAt(name, body_i, body_j, p);
+    if (c.type == "revolute") {
+      model.addRevoluteJointAt(c.name, c.body_i, c.body_j, p, axis.normalized());
+    } else if (c.type == "spherical") {
+      model.addSphericalJointAt(c.name, c.body_i, c.body_j, p);
     } else {
-      model.addFixedJointAt(name, body_i, body_j, p);
+      model.addFixedJointAt(c.name, c.body_i, c.body_j, p);
     }
   });
 }
@@ -175,15 +191,9 @@ void readBumpStopTable(MapReader& r, std::vector<double>& deflections, std::vect
 }
 
 void readForce(MapReader& r, VehicleModel& model, std::set<std::string>& names) {
-  const std::string type = r.name("type");
-  if (type != "bushing" && type != "point_to_point" && type != "bump_stop")
-    r.fail("type", "unknown force type (expected bushing, point_to_point or bump_stop), got '" + type + "'");
-  const std::string name = newName(r, names, "force element");
-  const int body_i = bodyOf(r, model, "body_i", true);
-  const int body_j = bodyOf(r, model, "body_j", true);
-  if (body_i == body_j)
-    r.fail("body_j", "a force element needs two different bodies, got " + describe(r.node("body_j")));
-  if (type == "bushing") {
+  const Connection c =
+      readConnection(r, model, names, "force", "force element", {"bushing", "point_to_point", "bump_stop"}, true);
+  if (c.type == "bushing") {
     Bushing::Parameters par;
     par.stiffness = nonNegativeVector3(r, "stiffness", kMaxStiffness, "N/m");
     par.damping = nonNegativeVector3(r, "damping", kMaxDamping, "N s/m");
@@ -193,8 +203,8 @@ void readForce(MapReader& r, VehicleModel& model, std::set<std::string>& names) 
     par.rotational_damping = nonNegativeVector3(r, "rotational_damping", kMaxDamping, "N m s/rad");
     const Vector3 p = r.vector3("position", kMaxPosition, "m");
     r.finish();
-    build(r, [&] { model.addBushingAt(name, body_i, body_j, p, Matrix3::Identity(), par); });
-  } else if (type == "point_to_point") {
+    build(r, [&] { model.addBushingAt(c.name, c.body_i, c.body_j, p, Matrix3::Identity(), par); });
+  } else if (c.type == "point_to_point") {
     const Vector3 p_i = r.vector3("position_i", kMaxPosition, "m");
     const Vector3 p_j = r.vector3("position_j", kMaxPosition, "m");
     const double stiffness = r.optionalBounded("stiffness", 0.0, kMaxStiffness, "N/m");
@@ -208,15 +218,16 @@ void readForce(MapReader& r, VehicleModel& model, std::set<std::string>& names) 
     if ((p_j - p_i).norm() < 1e-9)
       r.fail("position_j", "must differ from position_i, got " + describe(r.node("position_j")));
     r.finish();
-    build(r,
-          [&] { model.addPointToPointAt(name, body_i, body_j, p_i, p_j, stiffness, damping, free_length, preload); });
+    build(r, [&] {
+      model.addPointToPointAt(c.name, c.body_i, c.body_j, p_i, p_j, stiffness, damping, free_length, preload);
+    });
   } else {
     const Vector3 p = r.vector3("position", kMaxPosition, "m");
     const Vector3 axis = axisOf(r, "axis");
     std::vector<double> deflections, magnitudes;
     readBumpStopTable(r, deflections, magnitudes);
     r.finish();
-    build(r, [&] { model.addBumpStopAt(name, body_i, body_j, p, axis.normalized(), deflections, magnitudes); });
+    build(r, [&] { model.addBumpStopAt(c.name, c.body_i, c.body_j, p, axis.normalized(), deflections, magnitudes); });
   }
 }
 
