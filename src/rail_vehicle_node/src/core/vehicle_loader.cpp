@@ -7,6 +7,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <rail_contact/format.hpp>
@@ -253,21 +254,19 @@ void loadVehicleInto(const std::string& path, VehicleModel& model) {
   }
 
   forEachElement(root, "bodies", true, [&](MapReader& r) { readBody(r, model); });
-  // Load points and measurement points (reported motion only, e.g. floor accelerometers).
-  forEachElement(root, "load_points", false, [&](MapReader& r) {
-    const std::string name = r.name("name");
-    const int body = bodyOf(r, model, "body", false);
-    const Vector3 p = r.vector3("position", kMaxPosition, "m");
-    r.finish();
-    build(r, [&] { model.addLoadPointAtWorld(name, body, p); });
-  });
-  forEachElement(root, "measurement_points", false, [&](MapReader& r) {
-    const std::string name = r.name("name");
-    const int body = bodyOf(r, model, "body", false);
-    const Vector3 p = r.vector3("position", kMaxPosition, "m");
-    r.finish();
-    build(r, [&] { model.addMeasurementPointAtWorld(name, body, p); });
-  });
+  // Load points and measurement points (reported motion only, e.g. floor accelerometers): a name, a body
+  // and a position each.
+  using AddPoint = int (VehicleModel::*)(const std::string&, int, const Vector3&);
+  for (const auto& [key, add] : {std::pair<const char*, AddPoint>{"load_points", &VehicleModel::addLoadPointAtWorld},
+                                 {"measurement_points", &VehicleModel::addMeasurementPointAtWorld}}) {
+    forEachElement(root, key, false, [&, add = add](MapReader& r) {
+      const std::string name = r.name("name");
+      const int body = bodyOf(r, model, "body", false);
+      const Vector3 p = r.vector3("position", kMaxPosition, "m");
+      r.finish();
+      build(r, [&] { (model.*add)(name, body, p); });
+    });
+  }
   std::set<std::string> joint_names;
   forEachElement(root, "joints", false, [&](MapReader& r) { readJoint(r, model, joint_names); });
   std::set<std::string> force_names;
