@@ -11,8 +11,9 @@ namespace track {
 
 /// How the factor is stored and solved.
 enum class CholeskyLayout {
-  /// CHOLMOD's simplicial L L' (fill-reducing ordering P), solved by two loops over its column arrays: the
-  /// fastest solve on the track's thin factors (about 14 entries per column).
+  /// CHOLMOD's simplicial L L' (fill-reducing ordering P), solved by two loops of dot products, along a row
+  /// copy of L and along its columns: the fastest solve on the track's thin factors (about 14 entries per
+  /// column).
   kSimplicial,
   /// CHOLMOD's supernodal L L' solved by cholmod_solve2: the reference of the simplicial solve, and the
   /// faster factorisation of long tracks.
