@@ -22,14 +22,19 @@ namespace {
 
 // Straight 30 m of the paper's track, rigid_fe (contact only, no FE), track step 1 ms, to t = 0.02 s, outputs
 // at 200 Hz.
-Scene scene() {
+// end: the scene's solver.end (an arc length leaves the end to the vehicle, which then needs a speed).
+Scene scene(const std::string& end = "{time: 0.02}", const std::string& speed = "0.0") {
   const std::string text =
       "name: t\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n  data: ../track/paper_track.yaml\n"
       "  segments:\n    - {type: straight, length: 30.0}\n"
-      "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 25.0\n  speed: 0.0\n"
+      "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 25.0\n  speed: " +
+      speed +
+      "\n"
       "  back_to_back: 1.592\n  nominal_radius: 0.445\n"
       "effects:\n  track_model: rigid_fe\n"
-      "solver:\n  track_step: 1.0e-3\n  vehicle_max_step: 1.0e-3\n  end: {time: 0.02}\n  exchange_timeout: 1.0\n"
+      "solver:\n  track_step: 1.0e-3\n  vehicle_max_step: 1.0e-3\n  end: " +
+      end +
+      "\n  exchange_timeout: 1.0\n"
       "output:\n  rate: 200\n";
   return rail::core::fixtures::sceneFromText(text, "t.yaml");
 }
@@ -98,6 +103,16 @@ TEST(CosimTrackRun, AVehicleClosingBeforeSolverEndWentAway) {
                            "before solver.end"),
             std::string::npos)
       << o.message;
+  EXPECT_EQ(o.steps, 11);
+}
+
+// With an end by arc length only the vehicle knows when it has arrived: its closing ends the run, exit 0
+// (the whole paper scene ends at s = 499 m).
+TEST(CosimTrackRun, AVehicleClosingAtAnArcLengthEndFinishesTheRun) {
+  const Scene sc = scene("{arc_length: 29.0}", "10.0");
+  const Outcome o = run(sc, recording(sc.wheelCount(), 0.01), false);
+  EXPECT_EQ(o.status, rt::TrackRunStatus::kFinished) << o.message;
+  EXPECT_EQ(o.exit_code, 0) << o.message;
   EXPECT_EQ(o.steps, 11);
 }
 

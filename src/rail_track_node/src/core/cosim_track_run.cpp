@@ -1,6 +1,7 @@
 #include "rail_track_node/cosim_track_run.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 #include <rail_contact/enum_words.hpp>
@@ -63,7 +64,9 @@ TrackRunStatus CosimTrackRun::step() {
   if (r.status == cc::Status::kPeerClosed) {
     const bool no_frame = coupling_.nextStep() == 0;
     const double t_last = no_frame ? -1.0 : time();
-    const bool before_end = no_frame || t_last < settings_.end_time - 0.5 * track_step_;
+    // An end by arc length (end_time infinite) is the vehicle's to tell: its closing ends the run.
+    const bool before_end =
+        no_frame || (std::isfinite(settings_.end_time) && t_last < settings_.end_time - 0.5 * track_step_);
     if (!options_.replay && before_end) {
       std::snprintf(text, sizeof(text), " went away after step %lld (t = %.6f s), before solver.end: ",
                     static_cast<long long>(coupling_.nextStep()) - 1, t_last);
