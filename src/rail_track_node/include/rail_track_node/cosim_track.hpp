@@ -230,9 +230,9 @@ class CosimTrack {
   NewmarkState& st() noexcept { return fe_->mutableState(); }
   const NewmarkState& st() const noexcept { return fe_->state(); }
   const TrackMesh& feMesh() const noexcept { return fe_->mesh(); }
-  void buildRails();                      // deformation_ and rail_dofs_ on feMesh() (set-up, window move)
-  void onWindowMove();                    // after a move: rails, influence cache (allocates)
-  void fillDeformation() const noexcept;  // the rails at the current state (railDeformation(), explicit)
+  void buildRails();                   // deformation_ and rail_dofs_ on feMesh() (set-up, window move)
+  void onWindowMove();                 // after a move: rails, influence cache (allocates)
+  void refreshRails() const noexcept;  // the rails at the current state unless they hold it already
   void fillPredictedDeformation() noexcept;
   void predictRail(int g, double& d_p, double& v_p) const noexcept;
   void evaluateContacts(const rail::core::coupling::WheelStateFrame& states,
@@ -256,9 +256,11 @@ class CosimTrack {
   // The load-free right-hand side and solve of the next step (stepDisplacement() = K_eff^{-1} rhs_0): on
   // the second thread (startBaseSolve, then awaitBaseSolve) or here (solveBase). With finish, the two
   // threads first complete the step (column loads, Newmark completion), each over half of the DOFs
-  // (completion_split_); the second thread solves once both halves are done, finishStep awaits its half
+  // (completionSplit()); the second thread solves once both halves are done, finishStep awaits its half
   // (awaitCompletion).
   void solveBase() noexcept;
+  // The loop's thread completes the DOFs below, the worker the rest (the DOF count changes only at a move).
+  int completionSplit() const noexcept { return static_cast<int>(st().d.size()) / 2; }
   void startBaseSolve(bool finish) noexcept;
   void awaitCompletion() noexcept;
   void awaitBaseSolve() noexcept;
@@ -314,7 +316,6 @@ class CosimTrack {
   bool worker_job_ = false, worker_done_ = false, worker_stop_ = false;
   bool worker_finish_ = false;                // the job first completes the step (column loads, Newmark completion)
   bool worker_completed_ = false;             // ... and has done so
-  int completion_split_ = 0;                  // the loop's thread completes the DOFs below, the worker the rest
   std::atomic<bool> lower_completed_{false};  // the loop's thread has completed its DOFs (the worker spins)
   // worker_job_, worker_completed_ and worker_done_ as each side spins on them before it sleeps (no lock).
   std::atomic<bool> worker_posted_{false}, worker_completed_flag_{false}, worker_done_flag_{false};

@@ -235,7 +235,7 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
   loads_ = std::make_unique<NodalLoads>(24 * n_wheels + 1);
   sizeHangingLoads();
   buildRails();
-  fillDeformation();
+  refreshRails();
 
   coupling_ = options.coupling;
   if (coupling_ != CosimCoupling::kSemiImplicit) return;
@@ -359,8 +359,8 @@ void CosimTrack::workerLoop() noexcept {
       if (cost_ != nullptr) integ().setCostClock(&completion_cost_);
       const auto t0 = std::chrono::steady_clock::now();
       const int n = static_cast<int>(st().d.size());
-      addColumnLoads(completion_split_, n);
-      integ().completeRows(st(), completion_split_, n);
+      addColumnLoads(completionSplit(), n);
+      integ().completeRows(st(), completionSplit(), n);
       if (cost_ != nullptr) {
         completion_cost_.seconds[rail::core::CostClock::kTrackRhs] +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -394,7 +394,6 @@ void CosimTrack::startBaseSolve(bool finish) noexcept {
     worker_completed_flag_.store(false, std::memory_order_relaxed);
     worker_finish_ = finish;
     lower_completed_.store(false, std::memory_order_relaxed);
-    completion_split_ = static_cast<int>(st().d.size()) / 2;
     worker_job_ = true;
     worker_posted_.store(true, std::memory_order_release);
   }
@@ -486,7 +485,7 @@ int CosimTrack::sleeperCount() const {
 }
 
 const rc::BeamRailDeformation* CosimTrack::railDeformation() const {
-  if (deformation_ && !rails_current_) fillDeformation();
+  if (deformation_) refreshRails();
   return deformation_.get();
 }
 
@@ -498,7 +497,8 @@ long CosimTrack::newtonIterations() const { return implicit_ ? implicit_->newton
 long CosimTrack::newtonUnconverged() const { return implicit_ ? implicit_->unconverged : 0; }
 
 // Window: the rails carry d = d_g + w (self-weight static state + integrated part).
-void CosimTrack::fillDeformation() const noexcept {
+void CosimTrack::refreshRails() const noexcept {
+  if (rails_current_) return;
   fillRailArrays(rail_dofs_, st().d, st().v, fe_->selfWeightState(), 0.0, *deformation_);
   rails_current_ = true;
 }
@@ -604,8 +604,8 @@ CosimStepStatus CosimTrack::stepForces(const cc::WheelStateFrame& states, cc::Wr
   // The rails the contact sees: t_{k-1} (explicit, and step 0) or predicted at t_k.
   if (integrate && coupling_ != CosimCoupling::kExplicit)
     fillPredictedDeformation();
-  else if (deformation_ && !rails_current_)
-    fillDeformation();
+  else if (deformation_)
+    refreshRails();
   evaluateContacts(states, out);
 
   if (integrate && coupling_ == CosimCoupling::kSemiImplicit) {
@@ -631,8 +631,8 @@ void CosimTrack::finishStep() noexcept {
           // Both threads complete this step, half of the DOFs each; the worker then solves the next base step.
           startBaseSolve(true);
           const auto t0 = std::chrono::steady_clock::now();
-          addColumnLoads(0, completion_split_);
-          integ().completeRows(st(), 0, completion_split_);
+          addColumnLoads(0, completionSplit());
+          integ().completeRows(st(), 0, completionSplit());
           lower_completed_.store(true, std::memory_order_release);
           const double lower_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           awaitCompletion();
