@@ -198,7 +198,7 @@ std::string check(const std::string& path, const rail::core::SceneOverrides& ove
   std::unique_ptr<rv::VehicleSimulator> vehicle;
   rv::RunStatus vehicle_status = rv::RunStatus::kRunning;
   if (scene.has_vehicle) {
-    vehicle = std::make_unique<rv::VehicleSimulator>(scene);
+    vehicle = std::make_unique<rv::VehicleSimulator>(rv::resolveVehicle(scene));
     checkVehicleOutputs(scene, *vehicle);
     requireFinite(vehicle->settleLift(), "vehicle settling lift", vehicleFile(scene));
   }
@@ -254,7 +254,7 @@ std::string check(const std::string& path, const rail::core::SceneOverrides& ove
   if (scene.cosimulation()) {
     rt::CosimTrackOptions track_options;
     track_options.window.vehicle_length = vehicle->model().wheelSpan();  // as the handshake carries it
-    rt::CosimTrack track(scene, track_options);
+    rt::CosimTrack track(rt::resolveCosimTrack(scene), track_options);
     const bool deflections = scene.effects.rail_deflection_output && !scene.output.deflection_sections.empty();
     if (deflections) {
       for (std::size_t i = 0; i < scene.output.deflection_sections.size(); ++i) {

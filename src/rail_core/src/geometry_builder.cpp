@@ -7,6 +7,7 @@
 #include <exception>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "rail_core/scene_loader.hpp"
 
@@ -72,17 +73,29 @@ rc::WheelProfile wheelProfile(const Scene& scene) {
   }
 }
 
-rc::WheelContactOptions contactOptions(const Scene& scene, rc::WheelContactOptions base) {
-  base.flange_contact = scene.effects.flange_contact;
-  base.spin = scene.effects.spin_creepage;
+SceneContact sceneContact(const Scene& scene) {
+  SceneContact c;
+  c.flange_contact = scene.effects.flange_contact;
+  c.spin = scene.effects.spin_creepage;
+  c.section = scene.contact;
+  if (scene.effects.wheel_defects)
+    c.wheel_defects = rc::WheelDefects(scene.vehicle.wheel_defects, scene.vehicle.nominal_radius);
+  return c;
+}
+
+rc::WheelContactOptions SceneContact::over(rc::WheelContactOptions base) const {
+  base.flange_contact = flange_contact;
+  base.spin = spin;
   base.creep_law = rc::CreepLaw::kPolach;  // the scene's contact.creep_law has Polach only
-  base.friction = scene.contact.friction;
-  base.damping.restitution = scene.contact.restitution;
-  base.damping.impact_velocity_floor = scene.contact.impact_velocity_floor;
-  base.wheel_defects = scene.effects.wheel_defects
-                           ? rc::WheelDefects(scene.vehicle.wheel_defects, scene.vehicle.nominal_radius)
-                           : rc::WheelDefects();
+  base.friction = section.friction;
+  base.damping.restitution = section.restitution;
+  base.damping.impact_velocity_floor = section.impact_velocity_floor;
+  base.wheel_defects = wheel_defects;
   return base;
+}
+
+rc::WheelContactOptions contactOptions(const Scene& scene, rc::WheelContactOptions base) {
+  return sceneContact(scene).over(std::move(base));
 }
 
 std::vector<DefectOutline> defectOutlines(const Scene& scene, const rc::TrackGeometry& geometry) {

@@ -11,7 +11,9 @@
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <rail_contact/profile.hpp>
@@ -113,7 +115,7 @@ constexpr double kStations[4] = {25.0, 22.3, 8.6, 5.9};  // paper coach: 2.7 m b
 // Same arithmetic on the same inputs: identical up to round-off, 1e-9 relative.
 TEST(CosimTrack, RigidFeGivesRailContactWrenches) {
   const Scene sc = scene("rigid_fe");
-  rt::CosimTrack track(sc);
+  rt::CosimTrack track(rt::resolveCosimTrack(sc));
   ASSERT_EQ(track.wheelCount(), 8);
   const DirectContact direct(sc);
   const double Q = 72937.0;  // N, the paper wheelset's static wheel load (README: contact geometry)
@@ -168,7 +170,7 @@ TEST(CosimTrack, RigidFeGivesRailContactWrenches) {
 // step 0. Exact counts.
 TEST(CosimTrack, RigidFeRunsNoFeIntegration) {
   const Scene rigid_sc = scene("rigid_fe");
-  rt::CosimTrack rigid(rigid_sc);
+  rt::CosimTrack rigid(rt::resolveCosimTrack(rigid_sc));
   EXPECT_FALSE(rigid.flexible());
   EXPECT_EQ(rigid.sceneTrack(), nullptr);
   EXPECT_EQ(rigid.state(), nullptr);
@@ -177,7 +179,7 @@ TEST(CosimTrack, RigidFeRunsNoFeIntegration) {
   EXPECT_FALSE(rigid.energy(kinetic, potential));  // no FE state, no energy
   EXPECT_EQ(kinetic + potential, 0.0);
   const Scene flex_sc = scene("flexible", 1e-4);
-  rt::CosimTrack flex(flex_sc);
+  rt::CosimTrack flex(rt::resolveCosimTrack(flex_sc));
   EXPECT_TRUE(flex.flexible());
   ASSERT_NE(flex.sceneTrack(), nullptr);
   EXPECT_GT(flex.sceneTrack()->model.system.size(), 0);
@@ -204,9 +206,40 @@ TEST(CosimTrack, RigidFeRunsNoFeIntegration) {
   EXPECT_EQ(d.displacement[0].norm() + d.rotation[1].norm(), 0.0);
 }
 
+// The scene is resolved once, and refused there with its file named; the track takes only the setup.
+TEST(CosimTrack, ResolvingRefusesScenesWithoutATrackSide) {
+  auto message = [](const Scene& sc) {
+    try {
+      rt::resolveCosimTrack(sc);
+    } catch (const rail::core::SceneError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(message(scene("rigid")),
+            "t.yaml: effects.track_model: rigid runs the vehicle alone; the track side needs rigid_fe or flexible");
+  Scene no_vehicle = scene("rigid_fe");
+  no_vehicle.has_vehicle = false;
+  EXPECT_EQ(message(no_vehicle), "t.yaml: the co-simulation track needs a vehicle (none in the scene)");
+  // rigid_fe: the rails' geometry only, no FE line.
+  const rt::CosimTrackSetup rigid = rt::resolveCosimTrack(scene("rigid_fe"));
+  EXPECT_FALSE(rigid.line.has_value());
+  EXPECT_TRUE(rigid.rigid_geometry.has_value());
+  EXPECT_EQ(rigid.wheel_count, 8);
+  // A hand-made setup without wheels is refused by the track, naming the setup's source.
+  rt::CosimTrackSetup none = rt::resolveCosimTrack(scene("rigid_fe"));
+  none.wheel_count = 0;
+  try {
+    rt::CosimTrack track(std::move(none));
+    ADD_FAILURE() << "a track without wheels was built";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(std::string(e.what()), "t.yaml: the track needs at least one wheel, got 0");
+  }
+}
+
 // A frame with the wrong wheel count or a repeated id is refused and changes nothing.
 TEST(CosimTrack, RefusesMalformedFrames) {
-  rt::CosimTrack track(scene("rigid_fe"));
+  rt::CosimTrack track(rt::resolveCosimTrack(scene("rigid_fe")));
   cc::WheelStateFrame frame(8);
   cc::WrenchFrame out(8);
   frame.count = 6;
@@ -347,7 +380,7 @@ double mean(const std::vector<double>& t, const std::vector<double>& x, double t
 // Deflection sections: off the rails they are refused, naming s and the rails' extent; on the rigid_fe
 // track they read zero; on the flexible track at rest (self-weight state) they read the rails' sag.
 TEST(CosimTrack, DeflectionSectionsOffTheRailsAreRefusedAndRigidRailsReadZero) {
-  rt::CosimTrack rigid(scene("rigid_fe"));
+  rt::CosimTrack rigid(rt::resolveCosimTrack(scene("rigid_fe")));
   try {
     rigid.addSection(100.0);
     FAIL() << "a section off the track was accepted";
@@ -362,7 +395,7 @@ TEST(CosimTrack, DeflectionSectionsOffTheRailsAreRefusedAndRigidRailsReadZero) {
     EXPECT_EQ(out.displacement[r].norm(), 0.0);
     EXPECT_EQ(out.rotation[r].norm(), 0.0);
   }
-  rt::CosimTrack flexible(scene("flexible"));
+  rt::CosimTrack flexible(rt::resolveCosimTrack(scene("flexible")));
   try {
     flexible.addSection(100.0);
     FAIL() << "a section off the meshed rails was accepted";
@@ -382,7 +415,7 @@ TEST(CosimTrack, DeflectionSectionsOffTheRailsAreRefusedAndRigidRailsReadZero) {
 TEST(CosimTrack, FlexibleStandingWheelsetSettlesToStaticLoads) {
   const double h = 2e-5;
   const Scene sc = scene("flexible", h);
-  rt::CosimTrack track(sc);
+  rt::CosimTrack track(rt::resolveCosimTrack(sc));
   ASSERT_EQ(track.coupling(), rt::CosimCoupling::kSemiImplicit);
   ASSERT_EQ(track.contactModel().options().damping.restitution, 0.5);  // the default contact data
   const DirectContact direct(sc);
@@ -470,7 +503,7 @@ TEST(CosimTrack, ExplicitCouplingChattersWithContactDampingSemiImplicitDoesNot) 
   for (int scheme = 0; scheme < 2; ++scheme) {
     rt::CosimTrackOptions options;
     options.coupling = scheme == 0 ? rt::CosimCoupling::kExplicit : rt::CosimCoupling::kSemiImplicit;
-    rt::CosimTrack track(sc, options);
+    rt::CosimTrack track(rt::resolveCosimTrack(sc), options);
     const double dz = staticContact(track, direct, s0, z_rigid).dz_loaded;
     const WheelsetRun lowered = runWheelset(track, direct.taping_y, s0, 0.0, z_rigid, z_rigid + dz, 0.02, 0.02, h);
     const WheelsetRun held = runWheelset(track, direct.taping_y, s0, 0.0, z_rigid + dz, z_rigid + dz, 1e-3, 0.01, h,
@@ -512,7 +545,7 @@ TEST(CosimTrack, ExplicitCouplingChattersWithContactDampingSemiImplicitDoesNot) 
 TEST(CosimTrack, FlexibleRollingWheelsetKeepsContactAndLoad) {
   const double V = 30.0, Q = 100000.0, a = 0.6, s0 = 9.0, T_ramp = 0.02, T_end = 0.3, t0 = 0.1;
   const Scene sc = scene("flexible", 2e-5, 1);
-  rt::CosimTrack track(sc);
+  rt::CosimTrack track(rt::resolveCosimTrack(sc));
   const DirectContact direct(sc);
   const double z_rigid = direct.settledHeight(s0, Q);
 
@@ -553,7 +586,7 @@ TEST(CosimTrack, FlexibleRollingWheelsetKeepsContactAndLoad) {
   // Quasi-static limit: at 3 m/s (sleeper passing 5 Hz) the same amplitude within 5 %.
   {
     const double V_slow = 3.0, h_slow = 1e-4, T_slow = 0.1 + 2 * a / V_slow;
-    rt::CosimTrack slow(scene("flexible", h_slow, 1));
+    rt::CosimTrack slow(rt::resolveCosimTrack(scene("flexible", h_slow, 1)));
     const WheelsetRun run =
         runWheelset(slow, direct.taping_y, 14.4 - 0.1 * V_slow, V_slow, z_rigid, z, T_ramp, T_slow, h_slow);
     EXPECT_EQ(run.losses, 0);
@@ -595,7 +628,7 @@ TEST(CosimTrack, FlexibleRollingWheelsetKeepsContactAndLoad) {
   }
 
   // Half the step: the same history within 0.1 % of Q.
-  rt::CosimTrack fine(scene("flexible", 1e-5, 1));
+  rt::CosimTrack fine(rt::resolveCosimTrack(scene("flexible", 1e-5, 1)));
   const WheelsetRun run_fine = runWheelset(fine, direct.taping_y, s0, V, z_rigid, z, T_ramp, T_end, 1e-5);
   EXPECT_EQ(run_fine.losses, 0);
   double worst = 0.0;
@@ -625,7 +658,7 @@ TrackCostRun runTrackWithClock(const Scene& sc, bool sections, bool pads, int st
   TrackCostRun r;
   rt::CosimTrackOptions options;
   options.cost = &r.clock;
-  rt::CosimTrack track(sc, options);
+  rt::CosimTrack track(rt::resolveCosimTrack(sc), options);
   const DirectContact direct(sc);
   const double z = direct.settledHeight(15.0, 72900.0), v = 10.0;
   const int section = sections ? track.addSection(15.0) : -1;

@@ -64,7 +64,7 @@ struct Counted {
 Counted allocationsPerRun(const std::string& track_model, rt::CosimCoupling coupling, double offset) {
   rt::CosimTrackOptions options;
   options.coupling = coupling;
-  rt::CosimTrack track(scene(track_model), options);
+  rt::CosimTrack track(rt::resolveCosimTrack(scene(track_model)), options);
   const double taping_y = 0.5 * 1.592 + rc::flangeBackY(rc::makeS1002());
   cc::WheelStateFrame frame(8);
   cc::WrenchFrame out(8);
@@ -112,7 +112,7 @@ WindowCounted windowAllocations(bool curve) {
       "  end: {time: 1.0}\n  track_window: {enabled: true, behind: 2.0, ahead: 2.0, shift: 3.0}\n";
   rt::CosimTrackOptions options;
   options.window.vehicle_length = 21.7;  // the paper coach's wheel span (its data file's load points)
-  rt::CosimTrack track(rail::core::fixtures::sceneFromText(text, "t.yaml"), options);
+  rt::CosimTrack track(rt::resolveCosimTrack(rail::core::fixtures::sceneFromText(text, "t.yaml")), options);
   const rc::TrackGeometry& geo = track.geometry();
   const double taping_y = 0.5 * 1.592 + rc::flangeBackY(rc::makeS1002());
   const double offsets[4] = {0.0, 2.7, 19.0, 21.7}, V = 30.0, r0 = 0.445, h = 1e-4;

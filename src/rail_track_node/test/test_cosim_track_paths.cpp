@@ -99,7 +99,7 @@ PathRun runPath(bool beside, rt::CholeskyLayout layout, long steps, bool split =
   o.window.vehicle_length = 21.7;
   o.solve_beside = beside;
   o.factor_layout = layout;
-  rt::CosimTrack track(sc, o);
+  rt::CosimTrack track(rt::resolveCosimTrack(sc), o);
   const int section = track.addSection(50.0);
   const double V = 30.0, h = sc.solver.track_step;
   cc::WheelStateFrame frame(8);
@@ -180,7 +180,7 @@ TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleS
   rt::CosimTrackOptions o;
   o.window.vehicle_length = 21.7;
   o.solve_beside = false;
-  rt::CosimTrack track(sc, o);
+  rt::CosimTrack track(rt::resolveCosimTrack(sc), o);
   const rt::LinearSystem& sys = track.trackWindow()->model().system;
   const Eigen::SparseMatrix<double> K_eff = sys.K + (4.0 / 4e-10) * sys.M + (2.0 / 2e-5) * sys.C;
   rt::SparseCholesky simplicial(K_eff, rt::CholeskyLayout::kSimplicial);

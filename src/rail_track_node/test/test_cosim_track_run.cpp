@@ -69,7 +69,7 @@ struct Outcome {
 Outcome run(const Scene& sc, cc::RecordedStates rec, bool replay) {
   rt::CosimTrackOptions options;
   options.window.vehicle_length = 7.5;
-  rt::CosimTrack track(sc, options);
+  rt::CosimTrack track(rt::resolveCosimTrack(sc), options);
   cc::ReplayTransport transport(std::move(rec), sc.solver.track_step, sc.hash, 0.0);
   rt::CosimTrackRun loop(rail::core::runSettings(sc), track, transport, {"/vehicle_under_test", replay, nullptr});
   Outcome o{rt::TrackRunStatus::kRunning, 0, "", 0, 0};

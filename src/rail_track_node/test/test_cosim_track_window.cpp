@@ -116,7 +116,7 @@ struct History {
 // design rails (rails at their self-weight state) and are lowered by 0.7 mm over the first 20 ms (the
 // loads rise to about the coach's static wheel load), then roll at that height.
 History run(const Scene& sc, double s_front0, long steps, const double (&sections)[2]) {
-  rt::CosimTrack track(sc, coachWindow());
+  rt::CosimTrack track(rt::resolveCosimTrack(sc), coachWindow());
   History H;
   for (double s : sections) track.addSection(s);
   const rc::TrackGeometry& geo = track.geometry();
@@ -292,7 +292,7 @@ TEST(CosimTrackWindow, HangingSleepersMatchFullLengthTrack) { checkAgainstFull(f
 // evaluated or integrated, and a following good frame steps normally. Non-finite arc lengths too.
 TEST(CosimTrackWindow, WheelOutsideWindowIsAStatus) {
   const Scene sc = windowed(lineScene(false, 1e-4), 2.0);
-  rt::CosimTrack track(sc, coachWindow());
+  rt::CosimTrack track(rt::resolveCosimTrack(sc), coachWindow());
   ASSERT_NE(track.trackWindow(), nullptr);
   EXPECT_EQ(track.sceneTrack(), nullptr);
   EXPECT_TRUE(track.flexible());
@@ -323,7 +323,7 @@ TEST(CosimTrackWindow, WheelOutsideWindowIsAStatus) {
 TEST(CosimTrackWindow, RefusesAWindowWithoutTheWheelSpan) {
   const Scene sc = windowed(lineScene(false, 1e-4), 2.0);
   try {
-    rt::CosimTrack track(sc);
+    rt::CosimTrack track(rt::resolveCosimTrack(sc));
     FAIL() << "built without a wheel span";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("CosimTrackOptions::window.vehicle_length: the vehicle's wheel span (m, > 0) "

@@ -125,7 +125,7 @@ History runWindow(const Scene& scene, rt::TrackWindowSettings set, const std::ve
   const rail::core::MovingLoads& ml = scene.moving_loads;
   set.vehicle_length = rt::movingLoadsLength(ml);
   const double s_front0 = ml.start_arc_length;
-  rt::TrackWindow win(scene, set, s_front0 - set.vehicle_length, s_front0);
+  rt::TrackWindow win(rt::resolveTrackLine(scene), set, s_front0 - set.vehicle_length, s_front0);
   for (double s : s_sections) win.addSection(s);
   rt::NodalLoads loads(24 * static_cast<int>(ml.loads.size()) + 1);
   movingLoadsAt(ml, win.mesh(), win.data(), 0.0, loads);
@@ -231,7 +231,7 @@ TEST(TrackWindow, CondensedEndsReproduceTheLineStatically) {
     set.shift = 0.6;
     set.include_gravity = false;
     set.condensed_ends = condensed;
-    rt::TrackWindow win(scene, set, 80.0, 80.0);
+    rt::TrackWindow win(rt::resolveTrackLine(scene), set, 80.0, 80.0);
     ASSERT_LT(win.sEnd() - win.sBegin(), 5.0);
     rt::NodalLoads lw(100), lf(100);
     for (int r = 0; r < 2; ++r) {
@@ -299,7 +299,7 @@ TEST(TrackWindow, RefusesWindowShorterThanVehiclePlusMarginsStatingTheMinimum) {
   set.behind = set.ahead = 10.0;
   set.length = 40.0;
   try {
-    rt::TrackWindow w(scene, set, 40.0 - kCoachLength, 40.0);
+    rt::TrackWindow w(rt::resolveTrackLine(scene), set, 40.0 - kCoachLength, 40.0);
     FAIL() << "a 40 m window was accepted";
   } catch (const std::runtime_error& e) {
     const std::string msg = e.what();
@@ -307,13 +307,13 @@ TEST(TrackWindow, RefusesWindowShorterThanVehiclePlusMarginsStatingTheMinimum) {
     EXPECT_NE(msg.find("it needs at least 45 m (75 sleeper bays of 0.6 m)"), std::string::npos) << msg;
   }
   set.length = 45.0;
-  rt::TrackWindow w(scene, set, 40.0 - kCoachLength, 40.0);
+  rt::TrackWindow w(rt::resolveTrackLine(scene), set, 40.0 - kCoachLength, 40.0);
   EXPECT_EQ(w.bays(), 75);
   EXPECT_NEAR(w.minimumLength(), 45.0, 1e-12);
   // The solver rules as the loader states them (rail_core trackStepRule, windowShiftRule).
   auto refusal = [&](const rt::TrackWindowSettings& bad) {
     try {
-      rt::TrackWindow refused(scene, bad, 40.0 - kCoachLength, 40.0);
+      rt::TrackWindow refused(rt::resolveTrackLine(scene), bad, 40.0 - kCoachLength, 40.0);
     } catch (const std::runtime_error& e) {
       return std::string(e.what());
     }
@@ -342,7 +342,7 @@ TEST(TrackWindow, WindowIsTheLineModelRestrictedToItsRange) {
   rt::TrackWindowSettings set;
   set.track_step = scene.solver.track_step;
   set.vehicle_length = kCoachLength;
-  const rt::TrackWindow win(scene, set, 80.0 - kCoachLength, 80.0);
+  const rt::TrackWindow win(rt::resolveTrackLine(scene), set, 80.0 - kCoachLength, 80.0);
   const rt::TrackMesh& wm = win.mesh();
   const rt::TrackMesh& fm = full.model.mesh;
   const int j0 = win.firstSleeper(), n_e = wm.rail_elements_between_sleepers;
@@ -443,7 +443,7 @@ TEST(TrackWindow, MoveCarriesTheStateOfSharedNodes) {
     set.entering_static = entering_static;
     set.vehicle_length = kCoachLength;
     set.behind = set.ahead = 5.0;
-    rt::TrackWindow win(scene, set, 50.0 - kCoachLength, 50.0);
+    rt::TrackWindow win(rt::resolveTrackLine(scene), set, 50.0 - kCoachLength, 50.0);
     rt::NodalLoads loads(200);
     movingLoadsAt(scene.moving_loads, win.mesh(), win.data(), 0.0, loads);
     win.setStaticState(loads);
@@ -579,7 +579,7 @@ TEST(TrackWindow, EnergyDoesNotGrowOverManyMoves) {
   set.vehicle_length = kCoachLength;
   set.behind = set.ahead = 4.0;
   set.shift = 0.6;
-  rt::TrackWindow win(scene, set, 40.0 - kCoachLength, 40.0);
+  rt::TrackWindow win(rt::resolveTrackLine(scene), set, 40.0 - kCoachLength, 40.0);
   rt::NodalLoads loads(200);
   movingLoadsAt(ml, win.mesh(), win.data(), 0.0, loads);
   win.setStaticState(loads);
@@ -616,7 +616,7 @@ TEST(TrackWindow, StepAllocatesNothing) {
   rt::TrackWindowSettings set;
   set.track_step = scene.solver.track_step;
   set.vehicle_length = kCoachLength;
-  rt::TrackWindow win(scene, set, 40.0 - kCoachLength, 40.0);
+  rt::TrackWindow win(rt::resolveTrackLine(scene), set, 40.0 - kCoachLength, 40.0);
   rt::NodalLoads loads(200);
   const int s0 = win.addSection(45.0);
   rt::RailSectionDeflection d;

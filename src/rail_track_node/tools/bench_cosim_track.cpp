@@ -140,7 +140,7 @@ static void runWindow(rail::core::Scene scene, double s_front0, int steps, const
   options.solve_beside = g_beside;
   options.factor_layout = g_layout;
   if (g_cost) options.cost = &clock;
-  rt::CosimTrack track(scene, options);
+  rt::CosimTrack track(rt::resolveCosimTrack(scene), options);
   const double build = std::chrono::duration<double>(Clock::now() - t0).count();
   cc::WheelStateFrame frame(8);
   cc::WrenchFrame out(8);
@@ -193,7 +193,7 @@ static void run(rail::core::Scene scene, rail::core::TrackModel model, rt::Cosim
   options.factor_layout = g_layout;
   if (g_cost) options.cost = &clock;
   options.window.vehicle_length = kCoachWheelSpan;
-  rt::CosimTrack track(scene, options);
+  rt::CosimTrack track(rt::resolveCosimTrack(scene), options);
   const double build = std::chrono::duration<double>(Clock::now() - t0).count();
   cc::WheelStateFrame frame(8);
   cc::WrenchFrame out(8);

@@ -76,7 +76,7 @@ void benchWindow(const rail::core::Scene& scene, const rt::TrackWindowSettings& 
   Clock::time_point t0 = Clock::now();
   rt::TrackWindowSettings own = set;
   own.track_step = scene.solver.track_step;
-  rt::TrackWindow win(scene, own, s_front0 - set.vehicle_length, s_front0);
+  rt::TrackWindow win(rt::resolveTrackLine(scene), own, s_front0 - set.vehicle_length, s_front0);
   const double t_build = secondsSince(t0);
   const double h = win.trackStep();
   rt::NodalLoads loads(24 * 4 + 1);

@@ -161,7 +161,7 @@ TEST(CosimVehicle, ReproducesTheVehicleAloneOnTheRigidTrack) {
   // Standalone: the same scene on the rigid track.
   core::Scene rigid = cosimScene(kEnd);
   rigid.effects.track_model = core::TrackModel::kRigid;
-  VehicleSimulator alone(rigid);
+  VehicleSimulator alone(resolveVehicle(rigid));
   alone.resetState(shifted(alone, kShift));
   Record ra;
   const int n_samples = static_cast<int>(std::lround(kEnd / kSample));
@@ -176,7 +176,7 @@ TEST(CosimVehicle, ReproducesTheVehicleAloneOnTheRigidTrack) {
   // Co-simulation over the loopback: vehicle in this thread, rigid-track peer in another.
   const core::Scene scene = cosimScene(kEnd);
   cc::LoopbackLink link(scene.wheelCount());
-  CosimVehicle cosim(scene, link.vehicleEnd());
+  CosimVehicle cosim(resolveCosimVehicle(scene), link.vehicleEnd());
   cosim.resetState(shifted(cosim.simulator(), kShift));
   RigidTrackPeer peer(scene, cosim.simulator().contactModel().wheels(), link.trackEnd());
   // The vehicle's own contact evaluations (placement and settling); none may follow: the wrenches must
@@ -247,7 +247,7 @@ TEST(CosimVehicle, BuildingBeforeConnectingGivesTheSameRun) {
     cc::LoopbackLink link(scene.wheelCount());
     std::unique_ptr<CosimVehicle> v;
     if (connect_later) {
-      v = std::make_unique<CosimVehicle>(scene);
+      v = std::make_unique<CosimVehicle>(resolveCosimVehicle(scene));
       EXPECT_FALSE(v->connected());
       EXPECT_EQ(v->stepsExchanged(), 0u);
       // What the node sends in the handshake: the span of the model it built, the span of the file.
@@ -255,7 +255,7 @@ TEST(CosimVehicle, BuildingBeforeConnectingGivesTheSameRun) {
       v->connect(link.vehicleEnd());
       EXPECT_THROW(v->connect(link.vehicleEnd()), std::logic_error);
     } else {
-      v = std::make_unique<CosimVehicle>(scene, link.vehicleEnd());
+      v = std::make_unique<CosimVehicle>(resolveCosimVehicle(scene), link.vehicleEnd());
     }
     EXPECT_TRUE(v->connected());
     v->resetState(shifted(v->simulator(), kShift));
@@ -280,21 +280,21 @@ TEST(CosimVehicle, BuildingBeforeConnectingGivesTheSameRun) {
 }
 
 TEST(CosimVehicle, StartBeforeConnectIsRefused) {
-  CosimVehicle v(cosimScene(0.01));
+  CosimVehicle v(resolveCosimVehicle(cosimScene(0.01)));
   EXPECT_EQ(v.start(), RunStatus::kIntegratorFailed);
   EXPECT_EQ(v.message(), "cosim vehicle: Start() before connect()");
   v.close();  // nothing to tell: no transport
 }
 
-TEST(CosimVehicle, RefusesAScene) {
+TEST(CosimVehicle, ResolvingRefusesAScene) {
   cc::LoopbackLink link(8);
   core::Scene rigid = cosimScene(0.1);
   rigid.effects.track_model = core::TrackModel::kRigid;
-  EXPECT_THROW(CosimVehicle(rigid, link.vehicleEnd()), std::runtime_error);
+  EXPECT_THROW(resolveCosimVehicle(rigid), std::runtime_error);
   core::Scene big_step = cosimScene(0.1);
   big_step.solver.vehicle_max_step = 2.0 * big_step.solver.track_step;
   try {
-    CosimVehicle v(big_step, link.vehicleEnd());
+    CosimVehicle v(resolveCosimVehicle(big_step), link.vehicleEnd());
     ADD_FAILURE() << "a vehicle max step larger than the track step was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("solver.vehicle_max_step"), std::string::npos) << e.what();
@@ -308,7 +308,7 @@ TEST(CosimVehicle, RefusesAScene) {
 TEST(VehicleRun, AloneOutputsEveryInstantFromTheStartToTheEnd) {
   core::Scene scene = cosimScene(0.02);
   scene.output.rate = 500.0;
-  VehicleSimulator sim(scene);
+  VehicleSimulator sim(resolveVehicle(scene));
   VehicleRun run(rail::core::runSettings(scene), sim);
   int outputs = 0;
   while (run.next() == VehicleRun::Event::kOutput) {
@@ -324,7 +324,7 @@ TEST(VehicleRun, AloneOutputsEveryInstantFromTheStartToTheEnd) {
 TEST(VehicleRun, TheStopFlagEndsTheRunWithExit5) {
   core::Scene scene = cosimScene(0.02);
   scene.output.rate = 500.0;
-  VehicleSimulator sim(scene);
+  VehicleSimulator sim(resolveVehicle(scene));
   std::atomic<bool> stop{false};
   VehicleRun run(rail::core::runSettings(scene), sim, {&stop, nullptr});
   int outputs = 0;
@@ -341,7 +341,7 @@ TEST(VehicleRun, CosimulatedOutputsAtTheExchangeThatReachesEachInstant) {
   core::Scene scene = cosimScene(0.004);
   scene.output.rate = 1000.0;
   cc::LoopbackLink link(scene.wheelCount());
-  CosimVehicle cosim(scene, link.vehicleEnd());
+  CosimVehicle cosim(resolveCosimVehicle(scene), link.vehicleEnd());
   RigidTrackPeer peer(scene, cosim.simulator().contactModel().wheels(), link.trackEnd());
   std::thread track([&peer] { peer.run(); });
   VehicleRun run(rail::core::runSettings(scene), cosim);
@@ -358,7 +358,7 @@ TEST(VehicleRun, CosimulatedOutputsAtTheExchangeThatReachesEachInstant) {
 TEST(VehicleRun, ATrackThatClosesEarlyIsAnExchangeFailure) {
   const core::Scene scene = cosimScene(0.004);
   cc::LoopbackLink link(scene.wheelCount());
-  CosimVehicle cosim(scene, link.vehicleEnd());
+  CosimVehicle cosim(resolveCosimVehicle(scene), link.vehicleEnd());
   // The track answers 10 steps with zero wrenches, then closes.
   std::thread track([&] {
     cc::TrackCoupling coupling(cc::couplingConfig(scene), link.trackEnd());

@@ -124,7 +124,7 @@ void expectMatches(const Comparison& c) {
 
 TEST(VehicleJacobian, MatchesTheDenseQuotientInTheCurve) {
   // Paper scene, 110 km/h, inside the R 500 m circular curve (s 200-380 m).
-  VehicleSimulator sim(timedScene("paper_demo.yaml", 300.0, 30.5556, 0.1));
+  VehicleSimulator sim(resolveVehicle(timedScene("paper_demo.yaml", 300.0, 30.5556, 0.1)));
   ASSERT_EQ(sim.advanceTo(0.1), RunStatus::kFinished) << sim.message();
   expectMatches(compare(sim));
 }
@@ -134,14 +134,14 @@ TEST(VehicleJacobian, MatchesTheDenseQuotientInFlangeContact) {
   // (test_vehicle_simulator's TightCurveLeadingWheelsetsFlangeOnTheOuterRail).
   core::Scene scene =
       timedScene("tight_curve.yaml", 145.0, core::fixtures::loadConfigScene("tight_curve.yaml").vehicle.speed, 0.7);
-  VehicleSimulator sim(scene);
+  VehicleSimulator sim(resolveVehicle(scene));
   ASSERT_EQ(sim.advanceTo(0.7), RunStatus::kFinished) << sim.message();
   ASSERT_TRUE(sim.contacts()[1].contact[rc::kFlange].active);
   expectMatches(compare(sim));
 }
 
 TEST(VehicleJacobian, MatchesTheDenseQuotientAtStandstill) {
-  VehicleSimulator sim(timedScene("straight_short.yaml", 25.0, 0.0, 0.01));
+  VehicleSimulator sim(resolveVehicle(timedScene("straight_short.yaml", 25.0, 0.0, 0.01)));
   ASSERT_EQ(sim.advanceTo(0.01), RunStatus::kFinished) << sim.message();
   expectMatches(compare(sim));
 }
@@ -150,7 +150,7 @@ TEST(VehicleJacobian, VelocityColumnsWithTheKeptClusterFactorsAreTheFreshlyFacto
   // The velocity columns keep the range-space solve's cluster factors of the unperturbed evaluation
   // (VehicleData::reuse_cluster_factors): Phi_v depends on the positions only, so each such column must be
   // the very same numbers as when the factors are formed anew. Compared bit for bit, in the paper curve.
-  VehicleSimulator sim(timedScene("paper_demo.yaml", 300.0, 30.5556, 0.1));
+  VehicleSimulator sim(resolveVehicle(timedScene("paper_demo.yaml", 300.0, 30.5556, 0.1)));
   ASSERT_EQ(sim.advanceTo(0.1), RunStatus::kFinished) << sim.message();
   const VehicleModel& model = sim.model();
   VehicleData& data = sim.data();
@@ -213,7 +213,7 @@ TurnedState turnWheelsets(const VehicleSimulator& sim, double angle) {
 }
 
 TEST(VehicleJacobian, CarriedWithTheSpinMatchesTheJacobianWhereTheWheelsetsHaveTurned) {
-  VehicleSimulator sim(timedScene("paper_demo.yaml", 300.0, 30.5556, 0.1));
+  VehicleSimulator sim(resolveVehicle(timedScene("paper_demo.yaml", 300.0, 30.5556, 0.1)));
   ASSERT_EQ(sim.advanceTo(0.1), RunStatus::kFinished) << sim.message();
   const VehicleModel& model = sim.model();
   VehicleData& data = sim.data();

@@ -42,7 +42,7 @@ core::Scene straightScene(double speed, double end_time) {
 int wheel(int w, int side) { return 2 * w + side; }
 
 TEST(VehicleSimulator, SettlesWithEachWheelCarryingItsShareOfTheWeight) {
-  VehicleSimulator sim(straightScene(30.5556, 0.2));
+  VehicleSimulator sim(resolveVehicle(straightScene(30.5556, 0.2)));
   const double share = kCoachMass * kG / 8.0;  // 72 937.35 N
   // The static solve matches the total to 1e-9 of the load; the data file's preloads make the reference
   // pose the suspension's equilibrium, so every wheel carries the same share up to the contact geometry's
@@ -181,7 +181,7 @@ TEST(VehicleSimulator, LoneWheelsetOscillatesWithKlingelsWavelength) {
     m.addLoadPointAtWorld("wheel_right", b, Vector3(0.0, -0.8665, 0.445));
     m.addForceElement(std::make_unique<AxleLoad>(b, axle_load - 1800.0 * kG));
   };
-  VehicleSimulator sim(scene, build);
+  VehicleSimulator sim(resolveVehicle(scene), build);
   EXPECT_NEAR(sim.staticLoad(), axle_load, 1e-9 * axle_load);
 
   // Klingel: L = 2 pi sqrt(r0 e / lambda), e half the distance between the contact points, r0 the rolling
@@ -234,7 +234,7 @@ TEST(VehicleSimulator, WheelsetOffsetDecaysOnStraightTrackBelowCriticalSpeed) {
   scene.track.cant_reference_width = 1.500;
   scene.track.rail_inclination = 1.0 / 40.0;
   scene.vehicle.back_to_back = 1.356;
-  VehicleSimulator sim(scene);
+  VehicleSimulator sim(resolveVehicle(scene));
   const double offset = 3e-3;
   shiftBodies(sim, {"ws1", "ab1_left", "ab1_right"}, offset);
   const LateralRecord rec = runAndRecord(sim, 0, 2.5, 1e-3);
@@ -275,7 +275,7 @@ CurveRun runTightCurve(double t_end, double split_overlap, double rtol, double a
   SimulatorSettings settings;
   settings.contact.detection.split_overlap = split_overlap;
   settings.warm_starts_at_accepted_steps = warm_starts_at_accepted_steps;
-  VehicleSimulator sim(scene, settings);
+  VehicleSimulator sim(resolveVehicle(scene), settings);
   RunStatus status = RunStatus::kRunning;
   for (int i = 1; status == RunStatus::kRunning; ++i) status = sim.advanceTo(std::min(t_end, 0.01 * i));
   EXPECT_EQ(status, RunStatus::kFinished) << sim.message();
@@ -371,7 +371,7 @@ struct FirstFourSeconds {
 FirstFourSeconds runFirstFourSeconds(const SimulatorSettings& settings) {
   core::Scene scene = core::fixtures::loadConfigScene("paper_demo.yaml");
   scene.effects.track_model = core::TrackModel::kRigid;
-  VehicleSimulator sim(scene, settings);
+  VehicleSimulator sim(resolveVehicle(scene), settings);
   FirstFourSeconds out;
   for (int i = 1; i <= 4000; ++i) {
     EXPECT_EQ(sim.advanceTo(1e-3 * i), RunStatus::kRunning) << sim.message();
@@ -433,7 +433,7 @@ TEST(VehicleSimulator, FloorAccelerometersReadTheDerivativeOfTheFloorVelocityMin
   scene.effects.floor_acceleration_output = true;
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = 0.3;
-  VehicleSimulator sim(scene);
+  VehicleSimulator sim(resolveVehicle(scene));
   const auto& points = sim.model().measurementPoints();
   ASSERT_EQ(points.size(), 3u);
   ASSERT_EQ(points[1].name, "floor_centre");
@@ -488,7 +488,7 @@ TEST(VehicleSimulator, EnergyOnlyFallsWithNoDriveOnRigidRails) {
   scene.effects.energy_output = true;
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = 0.3;
-  VehicleSimulator sim(scene);
+  VehicleSimulator sim(resolveVehicle(scene));
   const double e0 = sim.energy().kinetic + sim.energy().potential + hertzEnergy(sim);
   const double kinetic0 = sim.energy().kinetic;
   EXPECT_NEAR(kinetic0, 0.5 * kCoachMass * scene.vehicle.speed * scene.vehicle.speed, 0.02 * kinetic0);  // + spin
@@ -506,14 +506,14 @@ TEST(VehicleSimulator, EnergyOnlyFallsWithNoDriveOnRigidRails) {
 }
 
 TEST(VehicleSimulator, EnergyIsNotComputedWhenTheEffectIsOff) {
-  VehicleSimulator sim(straightScene(30.5556, 0.01));
+  VehicleSimulator sim(resolveVehicle(straightScene(30.5556, 0.01)));
   ASSERT_EQ(sim.advanceTo(0.01), RunStatus::kFinished) << sim.message();
   EXPECT_EQ(sim.energy().kinetic, 0.0);
   EXPECT_EQ(sim.energy().potential, 0.0);
 }
 
 TEST(VehicleSimulator, FloorAccelerationsAreNotComputedWhenTheEffectIsOff) {
-  VehicleSimulator sim(straightScene(30.5556, 0.05));
+  VehicleSimulator sim(resolveVehicle(straightScene(30.5556, 0.05)));
   ASSERT_EQ(sim.measurements().size(), 3u);
   ASSERT_EQ(sim.advanceTo(0.05), RunStatus::kFinished) << sim.message();
   for (const MeasurementOutput& m : sim.measurements()) EXPECT_EQ(m.specific_force_in_body.norm(), 0.0);
@@ -535,7 +535,7 @@ TEST(VehicleSimulator, FloorAccelerationsNeedMeasurementPointsInTheDataFile) {
   };
   scene.vehicle.wheelsets = 1;
   try {
-    VehicleSimulator sim(scene, build);
+    VehicleSimulator sim(resolveVehicle(scene), build);
     FAIL() << "built without measurement points";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("effects.floor_acceleration_output is on but the vehicle data file"),
@@ -555,7 +555,7 @@ TEST(VehicleSimulator, TightCurveLeadingWheelsetsFlangeOnTheOuterRail) {
   scene.vehicle.start_arc_length = 145.0;  // trailing wheelset at 123.3 m, inside the circle
   scene.solver.end.kind = core::EndKind::kTime;
   scene.solver.end.value = 1.0;
-  VehicleSimulator sim(scene);
+  VehicleSimulator sim(resolveVehicle(scene));
   std::vector<double> lateral_sum(4, 0.0);
   std::vector<int> flange_count(8, 0);
   int samples = 0;
@@ -603,7 +603,7 @@ CostRun runWithClock(const core::Scene& scene, double t_end = 0.02) {
   SimulatorSettings settings;
   settings.cost = &r.clock;
   const long long s0 = rc::Irregularities::stationsEvaluated();
-  VehicleSimulator sim(scene, settings);
+  VehicleSimulator sim(resolveVehicle(scene), settings);
   const long long s1 = rc::Irregularities::stationsEvaluated();
   EXPECT_EQ(sim.advanceTo(t_end), RunStatus::kFinished) << sim.message();
   r.irregularity_stations_build = s1 - s0;
@@ -714,7 +714,7 @@ TEST(VehicleSimulator, AWheelFlatStrikesOnceARevolutionWhereTheWheelAngleSays) {
   scene.vehicle.wheel_defects = {flat};
   scene.effects.wheel_defects = true;
   scene.effects.energy_output = true;
-  VehicleSimulator sim(scene);
+  VehicleSimulator sim(resolveVehicle(scene));
   const double e0 = sim.energy().kinetic + sim.energy().potential + hertzEnergy(sim);
   const double kinetic0 = sim.energy().kinetic;
   double highest = -1e300;
@@ -766,7 +766,7 @@ TEST(VehicleSimulator, AWheelFlatStrikesOnceARevolutionWhereTheWheelAngleSays) {
   off.solver.end.value = 0.12;
   core::Scene round = off;
   round.vehicle.wheel_defects.clear();
-  VehicleSimulator a(off), b(round);
+  VehicleSimulator a(resolveVehicle(off)), b(resolveVehicle(round));
   ASSERT_EQ(a.advanceTo(0.12), RunStatus::kFinished);
   ASSERT_EQ(b.advanceTo(0.12), RunStatus::kFinished);
   EXPECT_EQ((a.state() - b.state()).cwiseAbs().maxCoeff(), 0.0);
@@ -795,7 +795,7 @@ TEST(VehicleSimulator, ANewFlatThrowsTheWheelOffTheRailAboveItsCriticalSpeed) {
       scene.vehicle.wheel_defects.push_back(flat);
     }
     scene.effects.wheel_defects = true;
-    VehicleSimulator sim(scene);
+    VehicleSimulator sim(resolveVehicle(scene));
     const double t_pivot = t_hit - std::asin(0.5 * L / r0) * r0 / V;  // the first edge reaches the rail
     double least = 1e9;
     RunStatus status = RunStatus::kRunning;
@@ -824,7 +824,7 @@ TEST(VehicleSimulatorCost, BdfJacobianRightHandSidesAreTimedAsJacobianWithoutCha
   core::CostClock clock;
   SimulatorSettings timed;
   timed.cost = &clock;
-  VehicleSimulator a(scene, timed), b(scene);
+  VehicleSimulator a(resolveVehicle(scene), timed), b(resolveVehicle(scene));
   ASSERT_EQ(a.method(), IntegrationMethod::kBdf);
   EXPECT_EQ(a.advanceTo(t_end), RunStatus::kFinished) << a.message();
   EXPECT_EQ(b.advanceTo(t_end), RunStatus::kFinished) << b.message();
@@ -852,13 +852,13 @@ TEST(VehicleSimulator, TheVehicleAloneTakesTheScenesStandaloneCapAndNotTheCosimu
   // (0 = none) does, and a cap of T / n makes CVODE take at least n steps to T.
   core::Scene scene = straightScene(30.5556, 0.02);
   scene.solver.vehicle_max_step = 1e-5;
-  VehicleSimulator free_run(scene);
+  VehicleSimulator free_run(resolveVehicle(scene));
   EXPECT_EQ(free_run.maxStep(), 0.0);
   EXPECT_EQ(free_run.method(), IntegrationMethod::kBdf);
   ASSERT_EQ(free_run.advanceTo(0.02), RunStatus::kFinished) << free_run.message();
   for (const double cap : {1e-4, 2e-5}) {
     scene.solver.standalone_max_step = cap;
-    VehicleSimulator capped(scene);
+    VehicleSimulator capped(resolveVehicle(scene));
     EXPECT_EQ(capped.maxStep(), cap);
     // auto: Adams at a cap of 5e-5 s or less, BDF above
     EXPECT_EQ(capped.method(), cap <= 5e-5 ? IntegrationMethod::kAdams : IntegrationMethod::kBdf);

@@ -52,7 +52,7 @@ std::vector<Sample> simulate(const core::Scene& base, const Candidate& c, double
   if (c.rtol > 0.0) scene.solver.vehicle_rtol = c.rtol;
   if (c.atol > 0.0) scene.solver.vehicle_atol = c.atol;
   scene.solver.standalone_max_step = c.max_step;
-  vehicle::VehicleSimulator sim(scene, vehicle::SimulatorSettings());
+  vehicle::VehicleSimulator sim(vehicle::resolveVehicle(scene), vehicle::SimulatorSettings());
   std::vector<Sample> out;
   const auto t0 = std::chrono::steady_clock::now();
   vehicle::RunStatus status = vehicle::RunStatus::kRunning;

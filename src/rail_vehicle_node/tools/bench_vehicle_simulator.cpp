@@ -84,7 +84,7 @@ int runBenchmark(int argc, char** argv) {
     core::CostClock clock;
     settings.cost = with_cost ? &clock : nullptr;
     const auto t0 = std::chrono::steady_clock::now();
-    vehicle::VehicleSimulator sim(scene, settings);
+    vehicle::VehicleSimulator sim(vehicle::resolveVehicle(scene), settings);
     const auto t1 = std::chrono::steady_clock::now();
     vehicle::RunStatus status = vehicle::RunStatus::kRunning;
     for (int i = 1; status == vehicle::RunStatus::kRunning; ++i) status = sim.advanceTo(std::min(duration, 1e-3 * i));

@@ -26,9 +26,20 @@ rail::contact::ProfileCurve railProfileCurve(const Scene& scene);
 // SceneError naming vehicle.wheel_profile.
 rail::contact::WheelProfile wheelProfile(const Scene& scene);
 
-// The contact options of the scene over `base` (the caller's numerical settings): effects.flange_contact and
-// effects.spin_creepage, Polach's creep law, contact.friction and the impact damping of contact.restitution
-// and contact.impact_velocity_floor.
+// What the scene says about the wheel-rail contact, resolved once; over(base) writes it over a side's
+// contact data (the caller's numerical settings: materials, Polach's parameters, detection).
+struct SceneContact {
+  bool flange_contact = true;                 // effects.flange_contact
+  bool spin = true;                           // effects.spin_creepage
+  Contact section;                            // contact: friction, restitution, impact-velocity floor
+  rail::contact::WheelDefects wheel_defects;  // effects.wheel_defects: the vehicle's defects, else none
+  // base with flange_contact, spin, Polach's creep law, the friction and the impact damping of the section,
+  // and the wheel defects.
+  rail::contact::WheelContactOptions over(rail::contact::WheelContactOptions base) const;
+};
+SceneContact sceneContact(const Scene& scene);
+
+// sceneContact(scene).over(base).
 rail::contact::WheelContactOptions contactOptions(const Scene& scene, rail::contact::WheelContactOptions base);
 
 // Where a scene's local defects are, for the picture (rviz): a dipped joint or a weld as a line along the

@@ -39,6 +39,8 @@
 #include <condition_variable>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -47,6 +49,7 @@
 #include <rail_contact/track_geometry.hpp>
 #include <rail_contact/wheel_contact.hpp>
 #include <rail_core/coupling/frames.hpp>
+#include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene.hpp>
 
 #include "rail_track_node/fe_track.hpp"
@@ -74,13 +77,32 @@ enum class CosimCoupling {
   kSemiImplicit,
 };
 
+/// What the track side is built from, resolved once from a scene (resolveCosimTrack) and constant
+/// afterwards: what CosimTrack takes instead of the Scene.
+struct CosimTrackSetup {
+  std::string source;              ///< the scene file; build errors start with it
+  int wheel_count = 0;             ///< 2 x vehicle.wheelsets, > 0
+  double start_arc_length = 0.0;   ///< m, the leading wheelset's at t = 0 (vehicle.start_arc_length)
+  double track_step = 0.0;         ///< s, solver.track_step (flexible)
+  rail::core::TrackWindow window;  ///< solver.track_window (flexible)
+  std::optional<TrackLine> line;   ///< flexible: the FE track's line; rigid_fe: empty
+  std::optional<rail::contact::TrackGeometry> rigid_geometry;  ///< rigid_fe: the rails' geometry alone
+  rail::contact::WheelProfile wheel_profile;                   ///< vehicle.wheel_profile
+  rail::contact::ProfileCurve rail_profile;                    ///< the scene's rail profile
+  double nominal_radius = 0.0;                                 ///< m, vehicle.nominal_radius
+  rail::core::SceneContact contact;                            ///< the scene's effects and contact section
+};
+
+/// Resolves the track side of a co-simulated scene; track: rail height and gravity of the FE track
+/// (flexible only). Throws rail::core::SceneError naming the scene file when the scene has no vehicle or
+/// runs the rigid track alone, or its data are not physical.
+CosimTrackSetup resolveCosimTrack(const rail::core::Scene& scene, const SceneTrackOptions& track = {});
+
 /// What the scene does not say (constant after building).
 struct CosimTrackOptions {
-  /// Contact data without a scene key (materials, Polach, detection); the scene's effects (flange_contact,
-  /// spin_creepage, creep_law) and contact section (friction, restitution, impact-velocity floor) override
-  /// its fields, as on the vehicle side.
+  /// Contact data without a scene key (materials, Polach, detection); the setup's contact (the scene's
+  /// effects and contact section) overrides the fields it has, as on the vehicle side.
   rail::contact::WheelContactOptions contact;
-  SceneTrackOptions track;      ///< rail height and gravity of the FE track (flexible only)
   bool include_gravity = true;  ///< track self-weight f_g in every Newmark step and in the initial state
   CosimCoupling coupling = CosimCoupling::kSemiImplicit;  ///< flexible only
   /// kSemiImplicit: the right-hand side and K_eff solve of the next step, which depend on the track's own
@@ -94,8 +116,8 @@ struct CosimTrackOptions {
   /// fraction of its largest entry (the DOFs are numbered plane by plane along the track).
   double influence_tolerance = 1e-12;
   /// With solver.track_window.enabled: the window settings the scene does not hold (entering_static,
-  /// condensed_ends, boundary_length, end_dashpots). behind, ahead, shift and length come from the scene,
-  /// dt from solver.track_step, include_gravity and track from the fields above. vehicle_length (m, first
+  /// condensed_ends, boundary_length, end_dashpots). behind, ahead, shift and length come from the setup's
+  /// window, dt from its track_step, include_gravity from the field above. vehicle_length (m, first
   /// to last wheel) is the vehicle's wheel span, required with a window: the vehicle node sends it in the
   /// handshake (VehicleModel::wheelSpan()); a replay takes it from the recorded run's first frame.
   TrackWindowSettings window;
@@ -119,9 +141,9 @@ enum class CosimStepStatus {
 /// Track side of the co-simulation: built once from a resolved scene, then advanced by step().
 class CosimTrack {
  public:
-  /// Throws std::runtime_error (rail::core::SceneError for scene data) when the scene has no vehicle,
-  /// runs the rigid track alone, or its data are not physical. Allocates (set-up).
-  explicit CosimTrack(const rail::core::Scene& scene, const CosimTrackOptions& options = {});
+  /// Throws std::runtime_error (rail::core::SceneError for the line's data) when the options or the
+  /// model's data are not physical. Allocates (set-up).
+  explicit CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options = {});
   ~CosimTrack();
   CosimTrack(const CosimTrack&) = delete;
   CosimTrack& operator=(const CosimTrack&) = delete;

@@ -68,21 +68,20 @@ class FeTrack {
   virtual void energy(double& kinetic, double& potential) const = 0;
 };
 
-/// What the full-length track takes besides the scene (constant after building).
+/// What the full-length track takes besides its line (constant after building).
 struct FullLengthTrackSettings {
   double track_step = 0.0;      ///< Newmark step h, s (trackStepRule)
   bool include_gravity = true;  ///< self-weight f_g in every step and in the initial state
-  SceneTrackOptions track;      ///< rail height and gravity
   rail::core::CostClock* cost = nullptr;
   CholeskyLayout factor_layout = CholeskyLayout::kSimplicial;
 };
 
-/// The scene's whole FE track (buildSceneTrack) integrated by Newmark from its static equilibrium under its
+/// The line's whole FE track (buildSceneTrack) integrated by Newmark from its static equilibrium under its
 /// own weight (with hanging sleepers: that of the piecewise-linear track).
 class FullLengthTrack final : public FeTrack {
  public:
-  /// Throws rail::core::SceneError on scene data, std::runtime_error on settings. Allocates (set-up).
-  FullLengthTrack(const rail::core::Scene& scene, const FullLengthTrackSettings& settings);
+  /// Throws rail::core::SceneError on the line's data, std::runtime_error on settings. Allocates (set-up).
+  FullLengthTrack(TrackLine line, const FullLengthTrackSettings& settings);
 
   const SceneTrack& sceneTrack() const { return track_; }
   /// A section's deflection for any displacement vector d over the free DOFs (e.g. a static solution).

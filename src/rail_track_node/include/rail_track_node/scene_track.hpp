@@ -9,6 +9,8 @@
 // so the FE rails run under the geometry's rails.
 #pragma once
 
+#include <string>
+
 #include <Eigen/Core>
 
 #include <rail_contact/profile.hpp>
@@ -49,6 +51,22 @@ double seatPlaneBelowCentreLine(const TrackData& data, double rail_height);
 /// time only).
 TrackFrameFunction seatPlaneFrames(const rail::contact::TrackGeometry& geometry, double seat_below_centre);
 
+/// The line a flexible track is built on, resolved once from a scene and constant afterwards: what the
+/// full-length track and the track window take instead of the Scene.
+struct TrackLine {
+  std::string source;                                    ///< the scene file; build errors start with it
+  rail::contact::TrackGeometry geometry;                 ///< design geometry (+ irregularities when on)
+  TrackData data;                                        ///< sceneTrackData: the track data file with the scene applied
+  double s_start = 0.0;                                  ///< m, track.start_arc_length
+  double length = 0.0;                                   ///< m, the line's length (track end - start)
+  double rail_height = 0.0;                              ///< m, foot to head top
+  Eigen::Vector3d g_in_world = Eigen::Vector3d::Zero();  ///< gravity, m/s^2
+};
+
+/// Resolves the scene's line: geometry (rail_core::buildTrackGeometry), data (sceneTrackData), extent.
+/// Throws rail::core::SceneError.
+TrackLine resolveTrackLine(const rail::core::Scene& scene, const SceneTrackOptions& options = {});
+
 /// Everything built from a scene for the flexible track. Not to be moved once an integrator refers to
 /// model.system.
 struct SceneTrack {
@@ -58,8 +76,10 @@ struct SceneTrack {
   double rail_height = 0.0;               ///< m, foot to head top
 };
 
-/// Builds the scene's track: geometry (rail_core::buildTrackGeometry), data (sceneTrackData), mesh over
-/// [track.start_arc_length, track end] on seatPlaneFrames, model. Throws rail::core::SceneError.
+/// Builds the line's track: mesh over [s_start, s_start + length] on seatPlaneFrames, model. Throws
+/// rail::core::SceneError naming line.source.
+SceneTrack buildSceneTrack(TrackLine line);
+/// buildSceneTrack(resolveTrackLine(scene, options)).
 SceneTrack buildSceneTrack(const rail::core::Scene& scene, const SceneTrackOptions& options = {});
 
 }  // namespace track

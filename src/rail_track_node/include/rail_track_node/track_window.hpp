@@ -63,7 +63,6 @@ struct TrackWindowSettings {
   double boundary_length = 120.0;  ///< m of track condensed at each artificial end
   bool end_dashpots = true;        ///< absorbing dashpots at the rail ends of every artificial end
   bool include_gravity = true;     ///< d_g (self-weight static state) in the rails' and sections' output
-  SceneTrackOptions track;         ///< rail height and gravity
   /// Optional cost clock of the window's Newmark integrators (NewmarkIntegrator); must outlive the window.
   rail::core::CostClock* cost = nullptr;
   CholeskyLayout factor_layout = CholeskyLayout::kSimplicial;  ///< how each window's K_eff is solved
@@ -80,12 +79,11 @@ struct TrackWindowStats {
 
 class TrackWindow final : public FeTrack {
  public:
-  /// Builds the line's geometry and track data from the scene and the first window around the vehicle
-  /// whose last and first wheels are at arc lengths s_rear <= s_front (m); w = 0. Throws
-  /// std::runtime_error (rail::core::SceneError for scene data) on non-physical settings, e.g. a window
-  /// shorter than vehicle_length + behind + ahead + shift (the message states the minimum length).
-  /// Allocates (set-up).
-  TrackWindow(const rail::core::Scene& scene, const TrackWindowSettings& settings, double s_rear, double s_front);
+  /// Builds the first window on the line around the vehicle whose last and first wheels are at arc lengths
+  /// s_rear <= s_front (m); w = 0. Throws std::runtime_error (rail::core::SceneError for the line's data)
+  /// on non-physical settings, e.g. a window shorter than vehicle_length + behind + ahead + shift (the
+  /// message names line.source and states the minimum length). Allocates (set-up).
+  TrackWindow(TrackLine line, const TrackWindowSettings& settings, double s_rear, double s_front);
   ~TrackWindow();
   TrackWindow(const TrackWindow&) = delete;
   TrackWindow& operator=(const TrackWindow&) = delete;
@@ -213,7 +211,9 @@ class TrackWindow final : public FeTrack {
 
   TrackWindowSettings settings_;
   rail::contact::TrackGeometry geometry_;
-  TrackData data_;  // scene applied, absorbing ends off (the window adds its own)
+  TrackData data_;                                        // scene applied, absorbing ends off (the window adds its own)
+  double rail_height_ = 0.0;                              // m, foot to head top
+  Eigen::Vector3d g_in_world_ = Eigen::Vector3d::Zero();  // gravity, m/s^2
   bool line_ends_absorb_ = false;
   Vector6d c_end_;                         // window-end dashpots (rail local frame)
   std::array<CondensedEnd, 2> condensed_;  // [0] rear end (line behind), [1] front end (line ahead)

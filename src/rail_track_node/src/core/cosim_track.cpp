@@ -155,34 +155,58 @@ struct CosimTrack::Implicit {
   }
 };
 
-CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
-    : cost_(options.cost), contact_cost_(options.cost != nullptr ? &options.cost->contact : nullptr) {
+CosimTrackSetup resolveCosimTrack(const Scene& scene, const SceneTrackOptions& track) {
   if (!scene.has_vehicle)
     throw SceneError(scene.file + ": the co-simulation track needs a vehicle (none in the scene)");
   if (!scene.needsTrackNode())
     throw SceneError(scene.file +
                      ": effects.track_model: rigid runs the vehicle alone; the track side needs "
                      "rigid_fe or flexible");
-  const int n_wheels = scene.wheelCount();
-  if (n_wheels <= 0) {
+  CosimTrackSetup m;
+  m.source = scene.file;
+  m.wheel_count = scene.wheelCount();
+  if (m.wheel_count <= 0) {
     std::ostringstream os;
     os << scene.file << ": vehicle.wheelsets: must be > 0, got " << scene.vehicle.wheelsets;
     throw SceneError(os.str());
   }
+  m.start_arc_length = scene.vehicle.start_arc_length;
+  m.track_step = scene.solver.track_step;
+  m.window = scene.solver.track_window;
+  if (scene.runsFeIntegration())
+    m.line = resolveTrackLine(scene, track);
+  else
+    m.rigid_geometry = rail::core::buildTrackGeometry(scene);
+  // Contact model data, resolved from the scene as the vehicle side resolves them (rail_core's builder).
+  m.wheel_profile = rail::core::wheelProfile(scene);
+  m.rail_profile = rail::core::railProfileCurve(scene);
+  m.nominal_radius = scene.vehicle.nominal_radius;
+  m.contact = rail::core::sceneContact(scene);
+  return m;
+}
+
+CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
+    : cost_(options.cost), contact_cost_(options.cost != nullptr ? &options.cost->contact : nullptr) {
+  const int n_wheels = setup.wheel_count;
+  if (n_wheels <= 0) {
+    std::ostringstream os;
+    os << setup.source << ": the track needs at least one wheel, got " << n_wheels;
+    throw std::invalid_argument(os.str());
+  }
 
   // Geometry (both cases), FE track (flexible only).
   double section_depth = rc::uic60::kCentroidDepth;  // rail section centre below the head top, as the vehicle
-  if (scene.runsFeIntegration() && scene.solver.track_window.enabled) {
-    // Moving window: settings of the scene, the vehicle's wheel span from the options, first
-    // window around the vehicle's start position (leading wheelset at vehicle.start_arc_length).
+  double rail_height = 0.0;
+  if (setup.line && setup.window.enabled) {
+    // Moving window: the model's window settings, the vehicle's wheel span from the options, first
+    // window around the vehicle's start position (leading wheelset at start_arc_length).
     TrackWindowSettings ws = options.window;
-    ws.behind = scene.solver.track_window.behind;
-    ws.ahead = scene.solver.track_window.ahead;
-    ws.shift = scene.solver.track_window.shift;
-    ws.length = scene.solver.track_window.length;
-    ws.track_step = scene.solver.track_step;
+    ws.behind = setup.window.behind;
+    ws.ahead = setup.window.ahead;
+    ws.shift = setup.window.shift;
+    ws.length = setup.window.length;
+    ws.track_step = setup.track_step;
     ws.include_gravity = options.include_gravity;
-    ws.track = options.track;
     ws.cost = options.cost;
     ws.factor_layout = options.factor_layout;
     if (!(ws.vehicle_length > 0.0) || !std::isfinite(ws.vehicle_length)) {
@@ -192,38 +216,38 @@ CosimTrack::CosimTrack(const Scene& scene, const CosimTrackOptions& options)
          << rc::formatNumber(ws.vehicle_length);
       throw std::invalid_argument(os.str());
     }
-    const double s_front = scene.vehicle.start_arc_length;
-    auto window = std::make_unique<TrackWindow>(scene, ws, s_front - ws.vehicle_length, s_front);
+    const double s_front = setup.start_arc_length;
+    rail_height = setup.line->rail_height;
+    auto window = std::make_unique<TrackWindow>(std::move(*setup.line), ws, s_front - ws.vehicle_length, s_front);
     window_ = window.get();
     fe_ = std::move(window);
-  } else if (scene.runsFeIntegration()) {
+  } else if (setup.line) {
     // The whole track, from the static equilibrium under its own weight.
     FullLengthTrackSettings fs;
-    fs.track_step = scene.solver.track_step;
+    fs.track_step = setup.track_step;
     fs.include_gravity = options.include_gravity;
-    fs.track = options.track;
     fs.cost = options.cost;
     fs.factor_layout = options.factor_layout;
-    auto full = std::make_unique<FullLengthTrack>(scene, fs);
+    rail_height = setup.line->rail_height;
+    auto full = std::make_unique<FullLengthTrack>(std::move(*setup.line), fs);
     full_ = full.get();
     fe_ = std::move(full);
   }
   if (fe_) {
     geometry_ = &fe_->geometry();
     // The contact's section centre on the FE beam axis (the rail centroid node).
-    section_depth = options.track.rail_height - fe_->data().layout.rail_centroid_height;
+    section_depth = rail_height - fe_->data().layout.rail_centroid_height;
   } else {
-    rigid_geometry_ = std::make_unique<rc::TrackGeometry>(rail::core::buildTrackGeometry(scene));
+    if (!setup.rigid_geometry) throw std::invalid_argument(setup.source + ": the track setup has no geometry");
+    rigid_geometry_ = std::make_unique<rc::TrackGeometry>(std::move(*setup.rigid_geometry));
     geometry_ = rigid_geometry_.get();
   }
 
-  // Contact model, built from the scene as the vehicle side builds it (rail_core's geometry builder).
-  wheel_profile_ = rail::core::wheelProfile(scene);
-  rail_profile_ = rail::core::railProfileCurve(scene);
-  const rc::WheelContactOptions contact = rail::core::contactOptions(scene, options.contact);
-  contact_model_ =
-      std::make_unique<rc::WheelContactModel>(wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
-                                              rc::railSectionCentre(rail_profile_, section_depth), contact);
+  wheel_profile_ = std::move(setup.wheel_profile);
+  rail_profile_ = std::move(setup.rail_profile);
+  contact_model_ = std::make_unique<rc::WheelContactModel>(wheel_profile_, setup.nominal_radius, rail_profile_,
+                                                           rc::railSectionCentre(rail_profile_, section_depth),
+                                                           setup.contact.over(options.contact));
   work_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactWork());
   result_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactResult());
   seen_.assign(static_cast<std::size_t>(n_wheels), 0);

@@ -3,14 +3,15 @@
 
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include <rail_core/scene_loader.hpp>
 
 namespace rail {
 namespace track {
 
-FullLengthTrack::FullLengthTrack(const rail::core::Scene& scene, const FullLengthTrackSettings& settings)
-    : track_(buildSceneTrack(scene, settings.track)) {
+FullLengthTrack::FullLengthTrack(TrackLine line, const FullLengthTrackSettings& settings)
+    : track_(buildSceneTrack(std::move(line))) {
   if (const std::string why = rail::core::trackStepRule(settings.track_step); !why.empty())
     throw std::runtime_error("FullLengthTrackSettings::track_step " + why);
   const LinearSystem& sys = track_.model.system;

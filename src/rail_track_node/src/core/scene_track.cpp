@@ -60,22 +60,31 @@ TrackFrameFunction seatPlaneFrames(const rc::TrackGeometry& geometry, double sea
   };
 }
 
-SceneTrack buildSceneTrack(const Scene& scene, const SceneTrackOptions& options) {
+TrackLine resolveTrackLine(const Scene& scene, const SceneTrackOptions& options) {
   rc::TrackGeometry geometry = rail::core::buildTrackGeometry(scene);
-  const TrackData data = sceneTrackData(scene, geometry.spec(), options);
-  const double seat = seatPlaneBelowCentreLine(data, options.rail_height);
+  TrackData data = sceneTrackData(scene, geometry.spec(), options);
+  return TrackLine{scene.file,           std::move(geometry), std::move(data),   scene.track.start_arc_length,
+                   scene.track.length(), options.rail_height, options.g_in_world};
+}
+
+SceneTrack buildSceneTrack(TrackLine line) {
+  const double seat = seatPlaneBelowCentreLine(line.data, line.rail_height);
   MeshOptions mesh;
-  mesh.s_start = scene.track.start_arc_length;
-  mesh.track_length = scene.track.length();
+  mesh.s_start = line.s_start;
+  mesh.track_length = line.length;
   TrackModel model;
   try {
-    model = buildTrackModel(data, mesh, seatPlaneFrames(geometry, seat), options.g_in_world);
+    model = buildTrackModel(line.data, mesh, seatPlaneFrames(line.geometry, seat), line.g_in_world);
   } catch (const SceneError&) {
     throw;
   } catch (const std::exception& e) {
-    throw SceneError(scene.file + ": track: " + e.what());
+    throw SceneError(line.source + ": track: " + e.what());
   }
-  return SceneTrack{std::move(geometry), std::move(model), seat, options.rail_height};
+  return SceneTrack{std::move(line.geometry), std::move(model), seat, line.rail_height};
+}
+
+SceneTrack buildSceneTrack(const Scene& scene, const SceneTrackOptions& options) {
+  return buildSceneTrack(resolveTrackLine(scene, options));
 }
 
 }  // namespace track

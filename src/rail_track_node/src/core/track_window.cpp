@@ -14,7 +14,6 @@
 
 #include <rail_contact/beam_shape.hpp>
 #include <rail_contact/format.hpp>
-#include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene_loader.hpp>
 
 #include "rail_track_node/elements.hpp"
@@ -25,7 +24,6 @@ namespace track {
 
 namespace rc = rail::contact;
 using rail::contact::formatNumber;
-using rail::core::Scene;
 using rail::core::SceneError;
 using Clock = std::chrono::steady_clock;
 
@@ -96,45 +94,49 @@ double movingLoadsLength(const rail::core::MovingLoads& loads) {
   return hi - lo;
 }
 
-TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings, double s_rear, double s_front)
-    : settings_(settings), geometry_(rail::core::buildTrackGeometry(scene)) {
+TrackWindow::TrackWindow(TrackLine line, const TrackWindowSettings& settings, double s_rear, double s_front)
+    : settings_(settings),
+      geometry_(std::move(line.geometry)),
+      data_(std::move(line.data)),
+      rail_height_(line.rail_height),
+      g_in_world_(line.g_in_world) {
   const TrackWindowSettings& S = settings_;
-  auto refuse = [&scene](const std::string& field, const std::string& what, double value) {
-    throw std::runtime_error(scene.file + ": track window: " + field + " " + what + ", got " + formatNumber(value));
+  const std::string& source = line.source;
+  auto refuse = [&source](const std::string& field, const std::string& what, double value) {
+    throw std::runtime_error(source + ": track window: " + field + " " + what + ", got " + formatNumber(value));
   };
   if (!(S.behind >= 0.0) || !std::isfinite(S.behind)) refuse("behind", "must be finite and >= 0 m", S.behind);
   if (!(S.ahead >= 0.0) || !std::isfinite(S.ahead)) refuse("ahead", "must be finite and >= 0 m", S.ahead);
   if (const std::string why = rail::core::windowShiftRule(S.shift); !why.empty())
-    throw std::runtime_error(scene.file + ": track window: shift " + why);
+    throw std::runtime_error(source + ": track window: shift " + why);
   if (!(S.vehicle_length >= 0.0) || !std::isfinite(S.vehicle_length))
     refuse("vehicle_length", "must be finite and >= 0 m", S.vehicle_length);
   if (!(S.length >= 0.0) || !std::isfinite(S.length))
     refuse("length", "must be finite and >= 0 m (0: minimum)", S.length);
   track_step_ = S.track_step;
   if (const std::string why = rail::core::trackStepRule(track_step_); !why.empty())
-    throw std::runtime_error(scene.file + ": track window: track_step " + why);
+    throw std::runtime_error(source + ": track window: track_step " + why);
   if (!(s_front >= s_rear) || !std::isfinite(s_rear) || !std::isfinite(s_front)) {
     std::ostringstream os;
-    os << scene.file << ": track window: the first wheel (s = " << s_front
+    os << source << ": track window: the first wheel (s = " << s_front
        << " m) must not be behind the last one (s = " << s_rear << " m)";
     throw std::runtime_error(os.str());
   }
 
-  data_ = sceneTrackData(scene, geometry_.spec(), S.track);
   line_ends_absorb_ = data_.absorbing_ends.enabled;
   c_end_.setZero();
   if (S.end_dashpots || line_ends_absorb_) {
     double k_lat = 0.0, k_vert = 0.0;
     foundationModuli(data_, k_lat, k_vert);
     if (!(data_.absorbing_ends.design_frequency > 0.0))
-      throw SceneError(scene.file +
+      throw SceneError(source +
                        ": track.data: absorbing_ends.design_frequency must be > 0 Hz for the window's "
                        "absorbing ends, got " +
                        formatNumber(data_.absorbing_ends.design_frequency));
     c_end_ = absorbingEndDashpots(data_.rail, k_lat, k_vert, 2.0 * kPi * data_.absorbing_ends.design_frequency);
   }
   data_.absorbing_ends.enabled = false;  // the window places its own end dashpots (buildWindow)
-  seat_below_centre_ = seatPlaneBelowCentreLine(data_, S.track.rail_height);
+  seat_below_centre_ = seatPlaneBelowCentreLine(data_, rail_height_);
   if (S.condensed_ends) {
     if (!(S.boundary_length >= data_.layout.sleeper_spacing) || !std::isfinite(S.boundary_length))
       refuse("boundary_length",
@@ -146,11 +148,11 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
   }
 
   const double a = data_.layout.sleeper_spacing;
-  s_line_ = scene.track.start_arc_length;
-  line_bays_ = static_cast<int>(std::floor(scene.track.length() / a + 1e-9));
+  s_line_ = line.s_start;
+  line_bays_ = static_cast<int>(std::floor(line.length / a + 1e-9));
   if (line_bays_ < 1)
-    throw SceneError(scene.file + ": track: the line is shorter than one sleeper bay (" + formatNumber(a) +
-                     " m), got " + formatNumber(scene.track.length()));
+    throw SceneError(source + ": track: the line is shorter than one sleeper bay (" + formatNumber(a) + " m), got " +
+                     formatNumber(line.length));
   shift_bays_ = std::max(1, baysFor(S.shift, a));
   const int min_bays = std::max(1, baysFor(S.vehicle_length + S.behind + S.ahead + shift_bays_ * a, a));
   min_length_ = min_bays * a;
@@ -159,10 +161,9 @@ TrackWindow::TrackWindow(const Scene& scene, const TrackWindowSettings& settings
     bays = baysFor(S.length, a);
     if (bays < min_bays) {
       std::ostringstream os;
-      os << scene.file << ": track window: length " << S.length << " m is shorter than the vehicle ("
-         << S.vehicle_length << " m) + behind (" << S.behind << " m) + ahead (" << S.ahead << " m) + shift ("
-         << shift_bays_ * a << " m); it needs at least " << min_length_ << " m (" << min_bays << " sleeper bays of "
-         << a << " m)";
+      os << source << ": track window: length " << S.length << " m is shorter than the vehicle (" << S.vehicle_length
+         << " m) + behind (" << S.behind << " m) + ahead (" << S.ahead << " m) + shift (" << shift_bays_ * a
+         << " m); it needs at least " << min_length_ << " m (" << min_bays << " sleeper bays of " << a << " m)";
       throw std::runtime_error(os.str());
     }
   }
@@ -219,7 +220,7 @@ std::unique_ptr<TrackWindow::Window> TrackWindow::buildWindow(int first_sleeper)
   if (window_ && window_->rear_cut == rear_cut && window_->front_cut == front_cut &&
       sameShape(window_->model.mesh, mesh))
     return w;
-  w->model.system = assembleLinearSystem(mesh, data_, settings_.track.g_in_world);
+  w->model.system = assembleLinearSystem(mesh, data_, g_in_world_);
   if (settings_.condensed_ends) {
     if (rear_cut) addCondensedEnd(*w, false);
     if (front_cut) addCondensedEnd(*w, true);
@@ -369,7 +370,7 @@ void TrackWindow::addCondensedEnd(Window& w, bool front) const {
   add(sys.K, e.K);
   add(sys.C, e.C);
   add(sys.M, e.M);
-  const Eigen::VectorXd f = B * (e.G * (R.transpose() * settings_.track.g_in_world));
+  const Eigen::VectorXd f = B * (e.G * (R.transpose() * g_in_world_));
   for (int r = 0; r < 48; ++r) sys.f_gravity(dofs[static_cast<std::size_t>(r)]) += f(r);
 }
 
@@ -684,8 +685,7 @@ int TrackWindow::addSection(double s, double static_half_length) {
     MeshOptions mo;
     mo.s_start = s_line_ + j_lo * a;
     mo.track_length = (j_hi - j_lo) * a;
-    const TrackModel piece =
-        buildTrackModel(data_, mo, seatPlaneFrames(geometry_, seat_below_centre_), settings_.track.g_in_world);
+    const TrackModel piece = buildTrackModel(data_, mo, seatPlaneFrames(geometry_, seat_below_centre_), g_in_world_);
     RailProbes probes;
     rc::TrackPoint tp;
     geometry_.centre(s, tp);

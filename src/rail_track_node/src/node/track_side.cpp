@@ -56,7 +56,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   track_options.window.vehicle_length = wheel_span;
   std::unique_ptr<CosimTrack> track;
   try {
-    track = std::make_unique<CosimTrack>(scene, track_options);
+    track = std::make_unique<CosimTrack>(resolveCosimTrack(scene), track_options);
   } catch (const std::exception& e) {
     ROS_FATAL("%s: cannot build the track: %s", me.c_str(), e.what());
     return kExitBadInput;

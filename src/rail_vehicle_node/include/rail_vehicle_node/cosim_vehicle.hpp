@@ -25,16 +25,25 @@
 
 namespace rail::vehicle {
 
+// What the co-simulated vehicle is built from, resolved once from a scene (resolveCosimVehicle).
+struct CosimVehicleSetup {
+  VehicleSetup vehicle;
+  core::coupling::CouplingConfig coupling;  // track step, exchange timeout, scene hash, wheel count
+};
+
+// Resolves a co-simulation scene's vehicle side: effects.track_model rigid_fe or flexible with
+// 0 < solver.vehicle_max_step <= solver.track_step. Throws std::runtime_error naming the scene file and the
+// field for a scene that does not qualify (and whatever resolveVehicle throws).
+CosimVehicleSetup resolveCosimVehicle(const core::Scene& scene);
+
 class CosimVehicle {
  public:
-  // scene: a resolved co-simulation scene (effects.track_model rigid_fe or flexible) with
-  // 0 < solver.vehicle_max_step <= solver.track_step. Builds the vehicle; the transport is bound later
-  // with connect(), so that a node can build first and send the handshake what the model says (its wheel
-  // span). Throws std::runtime_error naming the field for a scene that does not qualify (and whatever
-  // VehicleSimulator throws).
-  explicit CosimVehicle(const core::Scene& scene, const SimulatorSettings& settings = {});
+  // Builds the vehicle; the transport is bound later with connect(), so that a node can build first and
+  // send the handshake what the model says (its wheel span). Throws std::runtime_error when the model's
+  // wheels are not the frames' (and whatever VehicleSimulator throws).
+  explicit CosimVehicle(CosimVehicleSetup setup, const SimulatorSettings& settings = {});
   // Builds and connects: transport is the vehicle end and must outlive this object.
-  CosimVehicle(const core::Scene& scene, core::coupling::FrameTransport& transport,
+  CosimVehicle(CosimVehicleSetup setup, core::coupling::FrameTransport& transport,
                const SimulatorSettings& settings = {});
   ~CosimVehicle();
   CosimVehicle(const CosimVehicle&) = delete;

@@ -1,6 +1,6 @@
 // The vehicle running alone on the rigid track (effects.track_model: rigid): paper sections 2 and 4.2.
 //
-// Built once from a resolved Scene: the vehicle data file (VehicleModel), the rigid track geometry, the
+// Built once from a resolved scene (VehicleSetup): the vehicle data file (VehicleModel), the rigid track geometry, the
 // wheel and rail profiles and the wheel-rail contact of every wheel evaluated inside each right-hand side
 // (WheelRailContactElement). The vehicle is placed on the track (placeOnTrack below), lowered onto the
 // rails until the contact carries its weight (static vertical solve), and handed to a VehicleIntegrator
@@ -15,10 +15,12 @@
 #include <rail_contact/profile.hpp>
 #include <rail_contact/track_geometry.hpp>
 #include <rail_contact/wheel_contact.hpp>
+#include <rail_core/geometry_builder.hpp>
 #include <rail_core/scene.hpp>
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -158,13 +160,37 @@ Eigen::VectorXd placeOnTrack(const VehicleModel& model, const contact::TrackGeom
 double projectOnTrack(const contact::TrackGeometry& track, const Vector3& p_in_world, double s_guess,
                       contact::TrackPoint& tp) noexcept;
 
+// What the vehicle simulator is built from, resolved once from a scene (resolveVehicle) and constant
+// afterwards: what VehicleSimulator takes instead of the Scene.
+struct VehicleSetup {
+  std::string source;                           // the scene file; build errors start with it
+  std::string data_file;                        // vehicle.data: the vehicle data file
+  int wheelsets = 0;                            // vehicle.wheelsets, as the data file must have them
+  double start_arc_length = 0.0;                // leading wheelset's arc length at t = 0 [m]
+  double speed = 0.0;                           // [m/s]
+  double nominal_radius = 0.0;                  // [m]
+  double back_to_back = 0.0;                    // wheel back-to-back distance [m]
+  core::End end;                                // solver.end
+  core::Solver solver;                          // the vehicle integrator's tolerances, step caps and method choice
+  std::optional<contact::TrackGeometry> track;  // the rails' design geometry (+ irregularities when on)
+  contact::WheelProfile wheel_profile;          // vehicle.wheel_profile
+  contact::ProfileCurve rail_profile;           // the scene's rail profile
+  core::SceneContact contact;                   // the scene's effects and contact section
+  bool floor_acceleration_output = false;       // effects.floor_acceleration_output
+  bool energy_output = false;                   // effects.energy_output
+};
+
+// Resolves the vehicle of a scene. Throws std::runtime_error (core::SceneError for scene data) naming the
+// scene file when it has no vehicle, or a profile or the geometry cannot be built.
+VehicleSetup resolveVehicle(const core::Scene& scene);
+
 class VehicleSimulator {
  public:
-  // Builds a model from the scene's vehicle data file.
-  explicit VehicleSimulator(const core::Scene& scene, const SimulatorSettings& settings = {});
+  // Builds a model from the setup's vehicle data file.
+  explicit VehicleSimulator(VehicleSetup setup, const SimulatorSettings& settings = {});
   // Builds the model with `build_model` instead (tests): it adds bodies, load points (two wheel centres per
   // wheelset body, nothing else), joints and force elements to an unfinalised model.
-  VehicleSimulator(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
+  VehicleSimulator(VehicleSetup setup, const std::function<void(VehicleModel&)>& build_model,
                    const SimulatorSettings& settings = {});
   ~VehicleSimulator();
   VehicleSimulator(const VehicleSimulator&) = delete;
@@ -222,12 +248,12 @@ class VehicleSimulator {
   double settledWheelLoadSum() const { return settled_load_sum_; }
 
  private:
-  void build(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
+  void build(VehicleSetup setup, const std::function<void(VehicleModel&)>& build_model,
              const SimulatorSettings& settings);
   double sumWheelLoads(const Eigen::VectorXd& y);
   RunStatus check();
 
-  // What the run's end needs from the scene (solver.end, the vehicle's start and speed).
+  // What the run's end needs from the setup (solver.end, the vehicle's start and speed).
   core::End end_;
   double start_arc_length_ = 0.0, speed_ = 0.0;
   SimulatorSettings settings_;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "rail_vehicle_node/multibody_dynamics.hpp"
 
@@ -31,10 +32,7 @@ class CosimVehicle::CouplingSource : public WheelWrenchSource {
   const cc::VehicleCoupling* coupling_ = nullptr;
 };
 
-namespace {
-
-// Checks what the co-simulation needs from the scene before anything is built.
-const core::Scene& checkCosimScene(const core::Scene& scene) {
+CosimVehicleSetup resolveCosimVehicle(const core::Scene& scene) {
   std::ostringstream os;
   if (!scene.has_vehicle) {
     os << scene.file << ": the scene has no vehicle";
@@ -48,23 +46,22 @@ const core::Scene& checkCosimScene(const core::Scene& scene) {
              !why_max.empty()) {
     os << scene.file << ": solver.vehicle_max_step: " << why_max;
   } else {
-    return scene;
+    return CosimVehicleSetup{resolveVehicle(scene), cc::couplingConfig(scene)};
   }
   throw std::runtime_error(os.str());
 }
 
-}  // namespace
-
-CosimVehicle::CosimVehicle(const core::Scene& scene, const SimulatorSettings& settings)
-    : track_step_(checkCosimScene(scene).solver.track_step), config_(cc::couplingConfig(scene)) {
+CosimVehicle::CosimVehicle(CosimVehicleSetup setup, const SimulatorSettings& settings)
+    : track_step_(setup.coupling.track_step), config_(setup.coupling) {
   source_ = std::make_unique<CouplingSource>();
   SimulatorSettings s = settings;
   s.wheel_wrench_source = source_.get();
-  sim_ = std::make_unique<VehicleSimulator>(scene, s);
+  const std::string source = setup.vehicle.source;
+  sim_ = std::make_unique<VehicleSimulator>(std::move(setup.vehicle), s);
   const int n_wheels = sim_->contactModel().nWheels();
-  if (n_wheels != scene.wheelCount() || n_wheels != config_.wheel_count) {
+  if (n_wheels != config_.wheel_count) {
     std::ostringstream os;
-    os << scene.file << ": the vehicle has " << n_wheels << " wheels, the scene's frames carry " << scene.wheelCount();
+    os << source << ": the vehicle has " << n_wheels << " wheels, the scene's frames carry " << config_.wheel_count;
     throw std::runtime_error(os.str());
   }
   data_ = std::make_unique<VehicleData>(sim_->model());
@@ -73,8 +70,8 @@ CosimVehicle::CosimVehicle(const core::Scene& scene, const SimulatorSettings& se
   for (std::size_t i = 0; i < wheel_s_.size(); ++i) wheel_s_[i] = sim_->wheels()[i].arc_length;
 }
 
-CosimVehicle::CosimVehicle(const core::Scene& scene, cc::FrameTransport& transport, const SimulatorSettings& settings)
-    : CosimVehicle(scene, settings) {
+CosimVehicle::CosimVehicle(CosimVehicleSetup setup, cc::FrameTransport& transport, const SimulatorSettings& settings)
+    : CosimVehicle(std::move(setup), settings) {
   connect(transport);
 }
 

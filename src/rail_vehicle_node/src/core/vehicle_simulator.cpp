@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "rail_vehicle_node/multibody_dynamics.hpp"
 #include "rail_vehicle_node/vehicle_loader.hpp"
@@ -223,30 +224,51 @@ Eigen::VectorXd placeOnTrack(const VehicleModel& model, const rc::TrackGeometry&
   return y;
 }
 
-VehicleSimulator::VehicleSimulator(const core::Scene& scene, const SimulatorSettings& settings) {
-  build(scene, nullptr, settings);
+VehicleSetup resolveVehicle(const core::Scene& scene) {
+  if (!scene.has_vehicle) throw std::runtime_error(scene.file + ": the scene has no vehicle");
+  VehicleSetup v;
+  v.source = scene.file;
+  v.data_file = scene.vehicle.data.path;
+  v.wheelsets = scene.vehicle.wheelsets;
+  v.start_arc_length = scene.vehicle.start_arc_length;
+  v.speed = scene.vehicle.speed;
+  v.nominal_radius = scene.vehicle.nominal_radius;
+  v.back_to_back = scene.vehicle.back_to_back;
+  v.end = scene.solver.end;
+  v.solver = scene.solver;
+  v.track = core::buildTrackGeometry(scene);
+  v.wheel_profile = core::wheelProfile(scene);
+  v.rail_profile = core::railProfileCurve(scene);
+  v.contact = core::sceneContact(scene);
+  v.floor_acceleration_output = scene.effects.floor_acceleration_output;
+  v.energy_output = scene.effects.energy_output;
+  return v;
 }
 
-VehicleSimulator::VehicleSimulator(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
+VehicleSimulator::VehicleSimulator(VehicleSetup setup, const SimulatorSettings& settings) {
+  build(std::move(setup), nullptr, settings);
+}
+
+VehicleSimulator::VehicleSimulator(VehicleSetup setup, const std::function<void(VehicleModel&)>& build_model,
                                    const SimulatorSettings& settings) {
-  build(scene, build_model, settings);
+  build(std::move(setup), build_model, settings);
 }
 
 VehicleSimulator::~VehicleSimulator() = default;
 
-void VehicleSimulator::build(const core::Scene& scene, const std::function<void(VehicleModel&)>& build_model,
+void VehicleSimulator::build(VehicleSetup setup, const std::function<void(VehicleModel&)>& build_model,
                              const SimulatorSettings& settings) {
-  if (!scene.has_vehicle) throw std::runtime_error(scene.file + ": the scene has no vehicle");
-  end_ = scene.solver.end;
-  start_arc_length_ = scene.vehicle.start_arc_length;
-  speed_ = scene.vehicle.speed;
+  if (!setup.track) throw std::invalid_argument(setup.source + ": the vehicle setup has no track geometry");
+  end_ = setup.end;
+  start_arc_length_ = setup.start_arc_length;
+  speed_ = setup.speed;
   settings_ = settings;
-  const std::string& data_file = scene.vehicle.data.path;
+  const std::string& data_file = setup.data_file;
 
   // Track, profiles.
-  track_ = std::make_unique<rc::TrackGeometry>(core::buildTrackGeometry(scene));
-  wheel_profile_ = core::wheelProfile(scene);
-  rail_profile_ = core::railProfileCurve(scene);
+  track_ = std::make_unique<rc::TrackGeometry>(std::move(*setup.track));
+  wheel_profile_ = std::move(setup.wheel_profile);
+  rail_profile_ = std::move(setup.rail_profile);
 
   // Vehicle.
   if (build_model) {
@@ -279,12 +301,12 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
     return model_.bodies()[static_cast<std::size_t>(a)].r_reference.x() >
            model_.bodies()[static_cast<std::size_t>(b)].r_reference.x();
   });
-  if (static_cast<int>(wheelset_bodies_.size()) != scene.vehicle.wheelsets) {
+  if (static_cast<int>(wheelset_bodies_.size()) != setup.wheelsets) {
     throw std::runtime_error(source + ": " + std::to_string(wheelset_bodies_.size()) +
                              " wheelsets (bodies with two wheel centres), the scene says vehicle.wheelsets: " +
-                             std::to_string(scene.vehicle.wheelsets));
+                             std::to_string(setup.wheelsets));
   }
-  const double taping_y = 0.5 * scene.vehicle.back_to_back + rc::kTapingLineFromFlangeBack;
+  const double taping_y = 0.5 * setup.back_to_back + rc::kTapingLineFromFlangeBack;
   std::vector<WheelDefinition> wheels;
   for (std::size_t w = 0; w < wheelset_bodies_.size(); ++w) {
     const int body = wheelset_bodies_[w];
@@ -306,10 +328,10 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   }
 
   // Contact: the scene's effects and contact section over the caller's numerical settings.
-  const rc::WheelContactOptions options = core::contactOptions(scene, settings.contact);
-  nominal_height_ = scene.vehicle.nominal_radius;
+  const rc::WheelContactOptions options = setup.contact.over(settings.contact);
+  nominal_height_ = setup.nominal_radius;
   contact_model_ =
-      std::make_unique<WheelRailContactModel>(*track_, wheel_profile_, scene.vehicle.nominal_radius, rail_profile_,
+      std::make_unique<WheelRailContactModel>(*track_, wheel_profile_, setup.nominal_radius, rail_profile_,
                                               rc::railSectionCentre(rail_profile_), options, std::move(wheels));
   contact_data_ = std::make_unique<WheelRailContactData>(*contact_model_);
   skip_far_searches_ = settings.skip_far_searches;
@@ -325,9 +347,9 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
 
   // Load the rails carry at rest: minus the vertical sum of the applied forces without contact.
   const int n_ws = static_cast<int>(wheelset_bodies_.size());
-  rolling_radius_.assign(static_cast<std::size_t>(n_ws), scene.vehicle.nominal_radius);
-  const double s0 = scene.vehicle.start_arc_length;
-  const double speed = scene.vehicle.speed;
+  rolling_radius_.assign(static_cast<std::size_t>(n_ws), setup.nominal_radius);
+  const double s0 = setup.start_arc_length;
+  const double speed = setup.speed;
   Eigen::VectorXd y = placeOnTrack(model_, *track_, wheelset_bodies_, s0, speed, 0.0, rolling_radius_);
   contact_data_->enabled = false;
   computeKinematics(model_, y, *data_);
@@ -362,7 +384,7 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   }
   if (!(f_lo >= 0.0 && f_hi <= 0.0)) {
     std::ostringstream os;
-    os << scene.file << ": the vehicle cannot be settled on the rails at vehicle.start_arc_length = " << s0
+    os << setup.source << ": the vehicle cannot be settled on the rails at vehicle.start_arc_length = " << s0
        << " m (wheel loads " << f_lo + static_load_ << " N at " << lo * 1e3 << " mm, " << f_hi + static_load_
        << " N at " << hi * 1e3 << " mm, static load " << static_load_ << " N)";
     throw std::runtime_error(os.str());
@@ -400,16 +422,16 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
 
   // Integrator.
   IntegratorSettings is;
-  is.rtol = scene.solver.vehicle_rtol;
-  is.atol = scene.solver.vehicle_atol;
+  is.rtol = setup.solver.vehicle_rtol;
+  is.atol = setup.solver.vehicle_atol;
   // The track step caps the vehicle step in co-simulation only; alone, the physics (error control) decides.
   const bool cosimulation = settings.wheel_wrench_source != nullptr;
-  max_step_ = cosimulation ? scene.solver.vehicle_max_step : scene.solver.standalone_max_step;
+  max_step_ = cosimulation ? setup.solver.vehicle_max_step : setup.solver.standalone_max_step;
   is.max_step = max_step_;
   is.jacobian = settings.jacobian;
   // Where BDF gives up (some flange onsets below rtol 1e-6), Adams at the scene's step cap finishes the
   // output interval: the former setting of the vehicle alone.
-  is.fallback_max_step = scene.solver.vehicle_max_step;
+  is.fallback_max_step = setup.solver.vehicle_max_step;
   // Rotations use p / |p| and p_dot = 1/2 p (x) (0, omega') is the same rotation rate at any |p|, so the norm's
   // drift has no physical effect; BDF's damping of the spinning wheelsets' p shrinks it by ~6e-6 per ms, and a
   // 1e-6 threshold re-initialised CVODE (a new Jacobian, order 1) every output interval.
@@ -427,9 +449,9 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
       if (symmetric) is.spin_bodies.push_back(body);
     }
   }
-  core::Solver solver = scene.solver;
+  core::Solver solver = setup.solver;
   solver.vehicle_max_step = max_step_;
-  method_ = chooseMethod(solver, scene.vehicle.speed, cosimulation);
+  method_ = chooseMethod(solver, setup.speed, cosimulation);
   is.method = method_;
   is.max_order = method_ == IntegrationMethod::kBdf ? 5 : 12;
   is.accept_steps =
@@ -462,11 +484,11 @@ void VehicleSimulator::build(const core::Scene& scene, const std::function<void(
   }
   body_out_.assign(static_cast<std::size_t>(model_.nBodies()), BodyPose());
   measurement_out_.assign(model_.measurementPoints().size(), MeasurementOutput());
-  measure_ = scene.effects.floor_acceleration_output;
-  energy_ = scene.effects.energy_output;
+  measure_ = setup.floor_acceleration_output;
+  energy_ = setup.energy_output;
   if (measure_ && measurement_out_.empty()) {
-    throw std::runtime_error(scene.file + ": effects.floor_acceleration_output is on but the vehicle data file " +
-                             scene.vehicle.data.path + " has no measurement_points");
+    throw std::runtime_error(setup.source + ": effects.floor_acceleration_output is on but the vehicle data file " +
+                             setup.data_file + " has no measurement_points");
   }
   for (int b = 0; b < model_.nBodies(); ++b) {
     body_out_[static_cast<std::size_t>(b)].name = model_.bodies()[static_cast<std::size_t>(b)].name;

@@ -41,9 +41,9 @@ int runVehicleSide(const Scene& scene) {
   std::unique_ptr<VehicleSimulator> alone;
   try {
     if (cosim) {
-      cosim_vehicle = std::make_unique<CosimVehicle>(scene, settings);
+      cosim_vehicle = std::make_unique<CosimVehicle>(resolveCosimVehicle(scene), settings);
     } else {
-      alone = std::make_unique<VehicleSimulator>(scene, settings);
+      alone = std::make_unique<VehicleSimulator>(resolveVehicle(scene), settings);
     }
   } catch (const std::exception& e) {
     ROS_FATAL("%s: cannot build the %svehicle: %s", node.c_str(), cosim ? "co-simulated " : "", e.what());
