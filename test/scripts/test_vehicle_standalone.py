@@ -13,6 +13,7 @@ import rosbag
 import rospy
 import rostest
 from rail_msgs.msg import ContactPoints, ContactWrenches, WheelStates, WheelsetKinematics
+from visualization_msgs.msg import MarkerArray
 
 TEST_DIR = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))  # the railsim_tests package
 SCENE = os.path.join(TEST_DIR, "scenes", "vehicle_rigid_short.yaml")
@@ -118,6 +119,70 @@ class VehicleStandalone(unittest.TestCase):
         self.assertIn("~wait_for_subscribers names /rail_deflections, which this node does not publish", out)
         self.assertIn("/wheel_states", out)  # what it does publish
         self.assertEqual(os.listdir(out_dir), [], out)  # refused before its bag was opened
+
+    def test_markers_draw_the_scenes_local_defects(self):
+        # The coach over a dipped joint with a flat on both wheels of its leading wheelset: the markers draw
+        # the joint on each rail with its label and the two flats on their rims.
+        scene = """name: vehicle_defects_short
+track:
+  gauge: 1.668
+  cant_reference_width: 1.733
+  rail_inclination: 1/20
+  segments:
+    - {type: straight, length: 60.0}
+  defects:
+    - {type: dipped_joint, s: 40.0, length: 1.0, dip_angle: 0.01, rail: both}
+vehicle:
+  data: ../../config/vehicle/paper_coach.yaml
+  start_arc_length: 25.0
+  speed: 30.5556
+  back_to_back: 1.592
+  wheel_defects:
+    - {type: flat, wheelset: 0, side: both, length: 0.05, shape: new, angle: -1.5708}
+effects:
+  track_model: rigid
+  track_defects: true
+  wheel_defects: true
+  rviz_markers: true
+solver:
+  end: {time: 0.05}
+output:
+  rate: 100.0
+"""
+        rospy.set_param("/vd/scene_yaml", scene)
+        rospy.set_param("/vd/scene_file", SCENE)  # relative data paths from test/scenes
+        arrays = []
+        lock = threading.Lock()
+
+        def keep(msg):
+            with lock:
+                arrays.append(msg)
+
+        sub = rospy.Subscriber("/vehicle_markers", MarkerArray, keep)
+        out_dir = tempfile.mkdtemp(prefix="railsim_vehicle_")
+        proc = subprocess.Popen(["rosrun", "rail_vehicle_node", "vehicle_node", "__name:=rail_vehicle_d",
+                                 "_scene_ns:=/vd", "_output_dir:=" + out_dir,
+                                 "_wait_for_subscribers:=vehicle_markers", "_subscriber_timeout:=60"],
+                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        out, _ = proc.communicate(timeout=240)
+        rospy.sleep(0.5)
+        sub.unregister()
+        self.assertEqual(proc.returncode, 0, out)
+        with lock:
+            self.assertGreater(len(arrays), 0, out)
+            markers = arrays[0].markers
+        by_ns = {}
+        for m in markers:
+            by_ns.setdefault(m.ns, []).append(m)
+        self.assertEqual(len(by_ns.get("wheel_defects", [])), 2, sorted(by_ns))
+        self.assertEqual(len(by_ns.get("rail_defects", [])), 2, sorted(by_ns))  # one line per rail
+        labels = [m.text for m in by_ns.get("defect_labels", [])]
+        self.assertEqual(labels, ["dipped joint 10.0 mrad"] * 2)
+        for line in by_ns["rail_defects"]:
+            xs = [p.x for p in line.points]
+            # Along the joint's metre of rail (straight track from x = 0).
+            self.assertAlmostEqual(min(xs), 39.5, delta=0.6)
+            self.assertAlmostEqual(max(xs), 40.5, delta=0.6)
 
 
 if __name__ == "__main__":

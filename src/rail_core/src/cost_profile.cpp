@@ -68,13 +68,13 @@ bool directChild(const CostProfile::FinerLine& l, bool track_side) {
 }
 }  // namespace
 
-std::string CostProfile::toYaml(const std::string& node, const Scene& scene, double loop_wall, double simulated,
-                                const CostClock* clock) const {
+std::string CostProfile::toYaml(const std::string& node, const std::string& scene_file, const Effects& effects,
+                                double loop_wall, double simulated, const CostClock* clock) const {
   std::ostringstream o;
   o.precision(6);
   o << "# Where the wall time of " << node << " went (s; share of the run loop's wall time)\n";
   o << "node: " << node << "\n";
-  o << "scene: " << scene.file << "\n";
+  o << "scene: " << scene_file << "\n";
   o << "simulated_time: " << simulated << "   # s\n";
   o << "loop_wall_time: " << loop_wall << "   # s, the run loop (set-up excluded)\n";
   o << "wall_per_simulated_second: " << (simulated > 0 ? loop_wall / simulated : 0.0) << "\n";
@@ -126,7 +126,7 @@ std::string CostProfile::toYaml(const std::string& node, const Scene& scene, dou
       o << "  " << CostClock::name(static_cast<CostClock::Count>(c)) << ": "
         << clock->counts[static_cast<std::size_t>(c)] << "\n";
   }
-  const Effects& e = scene.effects;
+  const Effects& e = effects;
   o << "effects:\n"
     << "  track_model: " << toString(e.track_model) << "\n"
     << "  creep_law: " << toString(e.creep_law) << "\n";

@@ -37,7 +37,7 @@ TEST(CostProfile, YamlListsEveryComponentTheCountsAndTheEffects) {
   Scene scene;
   scene.file = "s.yaml";
   scene.effects.flange_contact = false;
-  const std::string y = p.toYaml("/v", scene, 5.0, 2.0);
+  const std::string y = p.toYaml("/v", scene.file, scene.effects, 5.0, 2.0);
   EXPECT_NE(y.find("wall_per_simulated_second: 2.5"), std::string::npos) << y;
   EXPECT_NE(y.find("vehicle_integration: {seconds: 3, share: 0.6, calls: 1}"), std::string::npos) << y;
   EXPECT_NE(y.find("track_step: {seconds: 0, share: 0, calls: 0}"), std::string::npos) << y;
@@ -107,7 +107,7 @@ TEST(CostClock, ASolveBesideTheLoopIsReportedBesideIt) {
   k.add(CostClock::kTrackSolveWait, 0.25);
   Scene scene;
   scene.file = "s.yaml";
-  const std::string y = p.toYaml("/t", scene, 10.0, 1.0, &k);
+  const std::string y = p.toYaml("/t", scene.file, scene.effects, 10.0, 1.0, &k);
   EXPECT_NE(y.find("track_solve: {seconds: 1.5, share: 0.15, calls: 1, within: beside_track_step}"), std::string::npos)
       << y;
   EXPECT_NE(y.find("track_solve_wait: {seconds: 0.25, share: 0.025, calls: 1, within: track_step}"), std::string::npos)
@@ -130,7 +130,7 @@ TEST(CostClock, FinerSplitAddsUpWithinItsComponent) {
   k.add(CostClock::kRailDeflection, 0.25);
   Scene scene;
   scene.file = "s.yaml";
-  const std::string y = p.toYaml("/t", scene, 10.0, 1.0, &k);
+  const std::string y = p.toYaml("/t", scene.file, scene.effects, 10.0, 1.0, &k);
   EXPECT_NE(y.find("contact_detection: {seconds: 1, share: 0.1, calls: 8, within: track_step}"), std::string::npos)
       << y;
   EXPECT_NE(y.find("track_solve: {seconds: 1.5, share: 0.15, calls: 1, within: track_step}"), std::string::npos) << y;
@@ -145,7 +145,7 @@ TEST(CostClock, FinerSplitAddsUpWithinItsComponent) {
   kv.add(CostClock::kVehicleRhs, 2.0);
   kv.contact.detection_seconds = 1.0;
   kv.contact.evaluations = 8;
-  const std::string yv = v.toYaml("/v", scene, 4.0, 1.0, &kv);
+  const std::string yv = v.toYaml("/v", scene.file, scene.effects, 4.0, 1.0, &kv);
   EXPECT_NE(yv.find("contact_detection: {seconds: 1, share: 0.25, calls: 8, within: vehicle_integration}"),
             std::string::npos)
       << yv;

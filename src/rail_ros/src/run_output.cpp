@@ -57,10 +57,6 @@ std::string besideBag(const std::string& bag_path, const std::string& suffix) {
   return (has_extension ? bag_path.substr(0, dot) : bag_path) + suffix;
 }
 
-bool records(const core::Scene& scene, const std::string& topic) {
-  return std::find(scene.output.topics.begin(), scene.output.topics.end(), topic) != scene.output.topics.end();
-}
-
 OutputBag::~OutputBag() {
   if (!isOpen()) return;
   try {
@@ -70,18 +66,18 @@ OutputBag::~OutputBag() {
   }
 }
 
-bool OutputBag::open(const std::string& node, const core::Scene& scene, const std::string& path) {
+bool OutputBag::open(const std::string& node, const std::string& scene_file, const std::string& path) {
   const std::size_t slash = path.rfind('/');
   const std::string dir = slash == std::string::npos ? std::string() : path.substr(0, slash);
   if (!dir.empty() && !makeDirs(dir)) {
-    ROS_FATAL("%s: %s: output.bag: cannot create the directory %s", node.c_str(), scene.file.c_str(), dir.c_str());
+    ROS_FATAL("%s: %s: output.bag: cannot create the directory %s", node.c_str(), scene_file.c_str(), dir.c_str());
     return false;
   }
   try {
     bag_ = std::make_unique<rosbag::Bag>(path, rosbag::bagmode::Write);
   } catch (const std::exception& e) {
     bag_.reset();
-    ROS_FATAL("%s: %s: output.bag: cannot write %s: %s", node.c_str(), scene.file.c_str(), path.c_str(), e.what());
+    ROS_FATAL("%s: %s: output.bag: cannot write %s: %s", node.c_str(), scene_file.c_str(), path.c_str(), e.what());
     return false;
   }
   path_ = path;

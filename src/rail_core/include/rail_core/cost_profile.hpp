@@ -138,12 +138,12 @@ class CostProfile {
   void setCount(const std::string& what, double value) { counts_.emplace_back(what, value); }
 
   // The profile as YAML: node, wall time of the run loop, simulated time, each component's time, share
-  // of the loop's wall time and calls (components never used show 0), the counts, and the scene's
-  // effects (what was on).
+  // of the loop's wall time and calls (components never used show 0), the counts, and the scene's file
+  // and effects (what was on).
   // clock: the finer split (nested in the components as CostClock says), with per parent "other" =
   // parent - its parts, so that the shares add up at each level; null: none.
-  std::string toYaml(const std::string& node, const Scene& scene, double loop_wall, double simulated,
-                     const CostClock* clock = nullptr) const;
+  std::string toYaml(const std::string& node, const std::string& scene_file, const Effects& effects, double loop_wall,
+                     double simulated, const CostClock* clock = nullptr) const;
   // The same as a few console lines.
   std::string toText(const std::string& node, double loop_wall, double simulated,
                      const CostClock* clock = nullptr) const;

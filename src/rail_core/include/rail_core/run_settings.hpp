@@ -1,9 +1,13 @@
-// What the run loop of each side (the track's CosimTrackRun, the vehicle's VehicleRun) takes from a scene,
-// resolved once from the validated scene (the loader checked each value's rule), so that the loops hold
-// typed settings rather than the Scene.
+// What the run loop of each side (the track's CosimTrackRun, the vehicle's VehicleRun) and the nodes'
+// outputs take from a scene, resolved once from the validated scene (the loader checked each value's
+// rule), so that they hold typed settings rather than the Scene.
 #pragma once
 
+#include <algorithm>
+#include <cstdint>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "rail_core/coupling/protocol.hpp"
 #include "rail_core/scene.hpp"
@@ -25,6 +29,36 @@ inline RunSettings runSettings(const Scene& scene) {
   r.output_period = 1.0 / scene.output.rate;
   if (scene.solver.end.kind == EndKind::kTime) r.end_time = scene.solver.end.value;
   return r;
+}
+
+// What a node's outputs take from a scene, resolved once: which outputs the effects call for, the output
+// section (bag, rate, recorded topics, deflection sections, pad-force margin), the scene's file and hash
+// for messages and frames, and what the vehicle's pictures draw.
+struct OutputSettings {
+  std::string source;            // the scene file; messages about the outputs name it
+  std::uint64_t scene_hash = 0;  // stamped on the published frames
+  Effects effects;
+  Output output;
+  double nominal_radius = 0.0;                            // m, the wheels drawn (with a vehicle)
+  std::vector<rail::contact::WheelDefect> wheel_defects;  // with effects.wheel_defects on, else empty
+
+  // True when output.topics names `topic` (without its leading slash).
+  bool records(const std::string& topic) const {
+    return std::find(output.topics.begin(), output.topics.end(), topic) != output.topics.end();
+  }
+};
+
+inline OutputSettings outputSettings(const Scene& scene) {
+  OutputSettings o;
+  o.source = scene.file;
+  o.scene_hash = scene.hash;
+  o.effects = scene.effects;
+  o.output = scene.output;
+  if (scene.has_vehicle) {
+    o.nominal_radius = scene.vehicle.nominal_radius;
+    if (scene.effects.wheel_defects) o.wheel_defects = scene.vehicle.wheel_defects;
+  }
+  return o;
 }
 
 }  // namespace rail::core

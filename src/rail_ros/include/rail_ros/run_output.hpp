@@ -32,9 +32,6 @@ std::string bagPath(const ros::NodeHandle& pnh, const std::string& name);
 // "run.cost.yaml").
 std::string besideBag(const std::string& bag_path, const std::string& suffix);
 
-// True when the scene's output.topics names `topic` (without its leading slash).
-bool records(const core::Scene& scene, const std::string& topic);
-
 // The bag a node records to. open() creates its directory; close() (or the destructor) closes it, so that
 // a stopped run leaves a readable bag. A write that fails (disk full, file gone or unwritable) makes
 // failed() true and skips the later writes: the caller stops the run, close() keeps what is readable.
@@ -47,7 +44,7 @@ class OutputBag {
 
   // Opens `path` for writing, creating its directory. False after one FATAL line naming the node, the scene
   // file and output.bag, with the reason.
-  bool open(const std::string& node, const core::Scene& scene, const std::string& path);
+  bool open(const std::string& node, const std::string& scene_file, const std::string& path);
   bool isOpen() const { return bag_ && bag_->isOpen(); }
   const std::string& path() const { return path_; }
 

@@ -1,6 +1,7 @@
 #include "cosim_outputs.hpp"
 
 #include <algorithm>
+#include <utility>
 
 #include <rail_core/exit_codes.hpp>
 #include <rail_ros/contact_point_message.hpp>
@@ -11,23 +12,23 @@ namespace rail::track {
 
 using core::CostProfile;
 
-CosimTrackOutputs::CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const core::Scene& scene,
-                                     const CosimTrack& track, CostProfile& cost, core::CostClock& clock)
-    : scene_(scene), track_(track), cost_(cost), clock_(clock) {
-  using rail::ros_glue::records;
-  deflections_ = scene.effects.rail_deflection_output && !scene.output.deflection_sections.empty();
+CosimTrackOutputs::CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, core::OutputSettings settings,
+                                     const CosimTrack& track, core::CostProfile& cost, core::CostClock& clock)
+    : settings_(std::move(settings)), track_(track), cost_(cost), clock_(clock) {
+  deflections_ = settings_.effects.rail_deflection_output && !settings_.output.deflection_sections.empty();
   // Pad forces under the train: the sleepers from output.pad_force_margin behind the rearmost wheel to as
   // far ahead of the foremost one.
-  pads_ = scene.effects.pad_force_output && track.flexible();
-  energy_ = scene.effects.energy_output && track.flexible();
+  pads_ = settings_.effects.pad_force_output && track.flexible();
+  energy_ = settings_.effects.energy_output && track.flexible();
   // The rigid FE track has no mesh to draw.
-  markers_on_ = scene.effects.rviz_markers && track.flexible();
-  rec_points_ = scene.effects.contact_point_output && records(scene, "contact_points");
-  rec_deflection_ = deflections_ && records(scene, "rail_deflection");
-  rec_pads_ = pads_ && records(scene, "pad_forces");
-  rec_energy_ = energy_ && records(scene, "track_energy");
+  markers_on_ = settings_.effects.rviz_markers && track.flexible();
+  rec_points_ = settings_.effects.contact_point_output && settings_.records("contact_points");
+  rec_deflection_ = deflections_ && settings_.records("rail_deflection");
+  rec_pads_ = pads_ && settings_.records("pad_forces");
+  rec_energy_ = energy_ && settings_.records("track_energy");
 
-  if (scene.effects.contact_point_output) points_pub_ = nh.advertise<rail_msgs::ContactPoints>("/contact_points", 100);
+  if (settings_.effects.contact_point_output)
+    points_pub_ = nh.advertise<rail_msgs::ContactPoints>("/contact_points", 100);
   if (deflections_) deflection_pub_ = nh.advertise<rail_msgs::RailDeflection>("/rail_deflection", 100);
   if (pads_) pads_pub_ = nh.advertise<rail_msgs::RailPadForces>("/pad_forces", 100);
   if (energy_) energy_pub_ = nh.advertise<rail_msgs::Energy>("/track_energy", 100);
@@ -50,7 +51,7 @@ CosimTrackOutputs::CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, 
   if (markers_on_) {
     marker_pub_ = nh.advertise<visualization_msgs::MarkerArray>("/markers", 2, true);
     if (track.trackWindow() == nullptr) markers_ = makeMarkers(track.sceneTrack()->model);
-    marker_period_ = marker_params_.period(scene.output.rate);
+    marker_period_ = marker_params_.period(settings_.output.rate);
   }
 }
 
@@ -60,16 +61,16 @@ std::unique_ptr<TrackMarkers> CosimTrackOutputs::makeMarkers(const TrackModel& m
 }
 
 bool CosimTrackOutputs::openBag(const std::string& node, ros::NodeHandle& pnh) {
-  if (scene_.output.bag.empty() || !(rec_points_ || rec_deflection_ || rec_pads_ || rec_energy_)) return true;
-  const std::string path = rail::ros_glue::besideBag(rail::ros_glue::bagPath(pnh, scene_.output.bag), ".track.bag");
-  if (!bag_.open(node, scene_, path)) return false;
+  if (settings_.output.bag.empty() || !(rec_points_ || rec_deflection_ || rec_pads_ || rec_energy_)) return true;
+  const std::string path = rail::ros_glue::besideBag(rail::ros_glue::bagPath(pnh, settings_.output.bag), ".track.bag");
+  if (!bag_.open(node, settings_.source, path)) return false;
   ROS_INFO("%s: recording the track's outputs to %s", node.c_str(), path.c_str());
   return true;
 }
 
 void CosimTrackOutputs::publish(const ros::Time& stamp, const core::coupling::WheelStateFrame& states) {
   CostProfile::Scope timing(cost_, CostProfile::kPublish);
-  core::timedOutput(&clock_, core::CostClock::kContactPointOutput, scene_.effects.contact_point_output, [&] {
+  core::timedOutput(&clock_, core::CostClock::kContactPointOutput, settings_.effects.contact_point_output, [&] {
     points_msg_.header.stamp = stamp;
     for (int id = 0; id < track_.wheelCount(); ++id) {
       for (int k = 0; k < rail::contact::kContactSlots; ++k) {
@@ -101,7 +102,7 @@ void CosimTrackOutputs::publish(const ros::Time& stamp, const core::coupling::Wh
       s_min = std::min(s_min, states.wheels[i].arc_length);
       s_max = std::max(s_max, states.wheels[i].arc_length);
     }
-    const int n = track_.padForces(s_min - scene_.output.pad_force_margin, s_max + scene_.output.pad_force_margin,
+    const int n = track_.padForces(s_min - settings_.output.pad_force_margin, s_max + settings_.output.pad_force_margin,
                                    pad_samples_.data(), static_cast<int>(pad_samples_.size()));
     pads_msg_.header.stamp = stamp;
     const auto size = static_cast<std::size_t>(n);  // within the reserved capacity: no allocation
@@ -169,8 +170,9 @@ void CosimTrackOutputs::close(const std::string& node, const CosimTrackRun& run,
   }
   ROS_INFO_STREAM(cost_.toText(node, wall, run.time(), &clock_));
   bag_.close(node);
-  bag_.writeBeside(node, ".cost.yaml",
-                   cost_.toYaml(node, scene_, wall, run.time(), &clock_));  // <stem>.track.cost.yaml
+  bag_.writeBeside(
+      node, ".cost.yaml",
+      cost_.toYaml(node, settings_.source, settings_.effects, wall, run.time(), &clock_));  // <stem>.track.cost.yaml
   ROS_INFO("%s: %s after %llu steps (t = %.4f s), %ld Newmark steps, %.2f s wall", node.c_str(),
            exit_code == core::kExitOk ? "finished" : "stopped", static_cast<unsigned long long>(run.steps()),
            run.time(), track_.newmarkSteps(), wall);

@@ -17,7 +17,7 @@
 #include <rail_msgs/RailPadForces.h>
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/frames.hpp>
-#include <rail_core/scene.hpp>
+#include <rail_core/run_settings.hpp>
 #include <rail_ros/run_output.hpp>
 
 #include "rail_track_node/cosim_track.hpp"
@@ -28,8 +28,8 @@ namespace rail::track {
 
 class CosimTrackOutputs {
  public:
-  // Advertises what the scene's effects call for. track, cost and clock must outlive the outputs.
-  CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const core::Scene& scene, const CosimTrack& track,
+  // Advertises what the settings' effects call for. track, cost and clock must outlive the outputs.
+  CosimTrackOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, core::OutputSettings settings, const CosimTrack& track,
                     core::CostProfile& cost, core::CostClock& clock);
 
   // Opens the companion bag when output.bag is set and output.topics names a track output. False after a
@@ -49,7 +49,7 @@ class CosimTrackOutputs {
  private:
   void publishMarkers(const ros::Time& stamp);
 
-  const core::Scene& scene_;
+  const core::OutputSettings settings_;
   const CosimTrack& track_;
   core::CostProfile& cost_;
   core::CostClock& clock_;

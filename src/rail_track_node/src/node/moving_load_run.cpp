@@ -9,6 +9,7 @@
 
 #include <rail_msgs/RailDeflection.h>
 #include <rail_core/exit_codes.hpp>
+#include <rail_core/run_settings.hpp>
 #include <rail_ros/node_scaffold.hpp>
 #include <rail_ros/run_output.hpp>
 
@@ -87,12 +88,13 @@ int runMovingLoads(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene
 
   ros_glue::OutputBag bag;
   bool bag_deflection = false, bag_markers = false, bag_clock = false;
-  if (!scene.output.bag.empty()) {
-    if (!bag.open(me, scene, ros_glue::bagPath(pnh, scene.output.bag))) return kExitBadInput;
-    bag_deflection = deflections && ros_glue::records(scene, "rail_deflection");
-    bag_markers = markers && ros_glue::records(scene, "markers");
-    bag_clock = ros_glue::records(scene, "clock");
-    for (const std::string& t : scene.output.topics)
+  const core::OutputSettings outputs = core::outputSettings(scene);
+  if (!outputs.output.bag.empty()) {
+    if (!bag.open(me, outputs.source, ros_glue::bagPath(pnh, outputs.output.bag))) return kExitBadInput;
+    bag_deflection = deflections && outputs.records("rail_deflection");
+    bag_markers = markers && outputs.records("markers");
+    bag_clock = outputs.records("clock");
+    for (const std::string& t : outputs.output.topics)
       if (t != "rail_deflection" && t != "markers" && t != "clock")
         ROS_WARN("%s: output.topics: %s has no source in a moving-load run; not recorded", me.c_str(), t.c_str());
     ROS_INFO("%s: recording to %s", me.c_str(), bag.path().c_str());

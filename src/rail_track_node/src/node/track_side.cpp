@@ -9,6 +9,7 @@
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/replay_transport.hpp>
 #include <rail_core/exit_codes.hpp>
+#include <rail_core/run_settings.hpp>
 #include <rail_ros/cosim_transport.hpp>
 #include <rail_ros/node_scaffold.hpp>
 #include <rail_ros/replay_bag.hpp>
@@ -79,7 +80,7 @@ int runCosim(ros::NodeHandle& nh, ros::NodeHandle& pnh, const Scene& scene, cons
   ROS_INFO("%s: %s track built (%d wheels); serving the %s transport, track step %g s", me.c_str(),
            track->flexible() ? "flexible" : "rigid", track->wheelCount(), toString(scene.solver.transport),
            scene.solver.track_step);
-  CosimTrackOutputs outputs(nh, pnh, scene, *track, cost, clock);
+  CosimTrackOutputs outputs(nh, pnh, outputSettings(scene), *track, cost, clock);
   if (!outputs.openBag(me, pnh)) return kExitBadInput;
 
   CosimTrackRun run(runSettings(scene), *track, *transport, {peer, !replay_bag.empty(), &cost});

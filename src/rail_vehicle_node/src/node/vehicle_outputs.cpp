@@ -11,6 +11,7 @@
 #include <iterator>
 #include <sstream>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <rail_msgs/ContactPoints.h>
@@ -47,13 +48,13 @@ struct OutputMessages {
   rosgraph_msgs::Clock clock;
   rail::contact::TrackPoint track_point_;  // scratch of Update
 
-  OutputMessages(const VehicleSimulator& sim, const core::Scene& scene) {
+  OutputMessages(const VehicleSimulator& sim, std::uint64_t scene_hash) {
     const std::size_t n = sim.wheels().size();
     wheel_states.wheels.resize(n);
-    wheel_states.scene_hash = scene.hash;
+    wheel_states.scene_hash = scene_hash;
     contact_points.points.resize(contact::kContactSlots * n);
     contact_wrenches.wrenches.resize(n);
-    contact_wrenches.scene_hash = scene.hash;
+    contact_wrenches.scene_hash = scene_hash;
     kinematics.wheelsets.resize(sim.wheelsets().size());
     const auto& points = sim.model().measurementPoints();
     floor.header.frame_id = "carbody";
@@ -172,7 +173,8 @@ struct VehicleMarkers {
   std::vector<int> flat_marker;             // per wheel flat: the spot on its wheel's rim
   std::vector<contact::WheelDefect> flats;  // the flats, in flat_marker's order
 
-  VehicleMarkers(const VehicleSimulator& sim, const core::Scene& scene, double radius, double scale)
+  VehicleMarkers(const VehicleSimulator& sim, const std::vector<core::DefectOutline>& outlines,
+                 const std::vector<contact::WheelDefect>& wheel_defects, double radius, double scale)
       : force_scale(scale), wheel_radius(radius) {
     const std::size_t nb = sim.bodies().size();
     body_marker.assign(nb, -1);
@@ -213,7 +215,7 @@ struct VehicleMarkers {
     }
     // Local defects where they are (static): rail defects along the rail heads, support zones as a band at
     // the sleepers, each labelled; wheel flats as a spot on their wheel's rim (turning with it).
-    for (const core::DefectOutline& o : core::defectOutlines(scene, sim.track())) {
+    for (const core::DefectOutline& o : outlines) {
       const bool rail = o.kind == core::DefectOutline::Kind::kRailDefect;
       const Vector3 lift(0.0, 0.0, rail ? 0.02 : -0.25);
       const int line = rail ? add("rail_defects", visualization_msgs::Marker::LINE_STRIP, 0.12, 0, 0, 1.0f, 0.5f, 0.0f)
@@ -227,13 +229,11 @@ struct VehicleMarkers {
       t.text = o.label;
       fill(t.pose.position, o.points[o.points.size() / 2] + Vector3(0.0, 0.0, rail ? 1.2 : 0.8));
     }
-    if (scene.effects.wheel_defects) {
-      for (const contact::WheelDefect& d : scene.vehicle.wheel_defects) {
-        if (d.shape != contact::WheelDefectShape::kFlat || d.wheel >= sim.wheels().size()) continue;
-        flats.push_back(d);
-        flat_marker.push_back(
-            add("wheel_defects", visualization_msgs::Marker::SPHERE, 0.09, 0.09, 0.09, 1.0f, 0.1f, 0.1f));
-      }
+    for (const contact::WheelDefect& d : wheel_defects) {
+      if (d.shape != contact::WheelDefectShape::kFlat || d.wheel >= sim.wheels().size()) continue;
+      flats.push_back(d);
+      flat_marker.push_back(
+          add("wheel_defects", visualization_msgs::Marker::SPHERE, 0.09, 0.09, 0.09, 1.0f, 0.1f, 0.1f));
     }
   }
 
@@ -276,13 +276,18 @@ struct VehicleMarkers {
   }
 };
 
-VehicleOutputs::VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const core::Scene& scene,
-                               const VehicleSimulator& sim, bool cosim, core::CostProfile& cost, core::CostClock& clock)
-    : scene_(scene), sim_(sim), cost_(cost), clock_(clock), out_(std::make_unique<OutputMessages>(sim, scene)) {
+VehicleOutputs::VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, core::OutputSettings settings,
+                               const std::vector<core::DefectOutline>& defect_outlines, const VehicleSimulator& sim,
+                               bool cosim, core::CostProfile& cost, core::CostClock& clock)
+    : settings_(std::move(settings)),
+      sim_(sim),
+      cost_(cost),
+      clock_(clock),
+      out_(std::make_unique<OutputMessages>(sim, settings_.scene_hash)) {
   // In a co-simulation the contact is evaluated by the track node, which publishes the contact points.
-  own_points_ = scene.effects.contact_point_output && !cosim;
-  own_floor_ = scene.effects.floor_acceleration_output;  // at the data file's measurement points
-  own_energy_ = scene.effects.energy_output;
+  own_points_ = settings_.effects.contact_point_output && !cosim;
+  own_floor_ = settings_.effects.floor_acceleration_output;  // at the data file's measurement points
+  own_energy_ = settings_.effects.energy_output;
   pub_clock_ = nh.advertise<rosgraph_msgs::Clock>("/clock", 10);
   pub_states_ = nh.advertise<rail_msgs::WheelStates>("wheel_states", 100);
   if (own_points_) pub_points_ = nh.advertise<rail_msgs::ContactPoints>("contact_points", 100);
@@ -291,11 +296,12 @@ VehicleOutputs::VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const 
   if (own_floor_) pub_floor_ = nh.advertise<rail_msgs::FloorAccelerations>("floor_accelerations", 100);
   if (own_energy_) pub_energy_ = nh.advertise<rail_msgs::Energy>("vehicle_energy", 100);
   // rviz markers (effects.rviz_markers): built only when on, published at ~marker_rate (default 25 Hz).
-  if (scene.effects.rviz_markers) {
+  if (settings_.effects.rviz_markers) {
     pub_markers_ = nh.advertise<visualization_msgs::MarkerArray>("/vehicle_markers", 2);
     const rail::ros_glue::MarkerParams m = rail::ros_glue::markerParams(pnh);
-    markers_ = std::make_unique<VehicleMarkers>(sim, scene, scene.vehicle.nominal_radius, m.force_scale);
-    marker_period_ = m.period(scene.output.rate);
+    markers_ = std::make_unique<VehicleMarkers>(sim, defect_outlines, settings_.wheel_defects, settings_.nominal_radius,
+                                                m.force_scale);
+    marker_period_ = m.period(settings_.output.rate);
   }
 }
 
@@ -374,20 +380,19 @@ bool VehicleOutputs::waitForSubscribers(const std::string& node, ros::NodeHandle
 }
 
 bool VehicleOutputs::openBag(const std::string& node, ros::NodeHandle& pnh) {
-  if (scene_.output.bag.empty()) return true;
-  if (!bag_.open(node, scene_, rail::ros_glue::bagPath(pnh, scene_.output.bag))) return false;
+  if (settings_.output.bag.empty()) return true;
+  if (!bag_.open(node, settings_.source, rail::ros_glue::bagPath(pnh, settings_.output.bag))) return false;
   std::string topics;
-  for (const std::string& t : scene_.output.topics) topics += (topics.empty() ? "" : ", ") + t;
+  for (const std::string& t : settings_.output.topics) topics += (topics.empty() ? "" : ", ") + t;
   ROS_INFO("%s: recording [%s] to %s", node.c_str(), topics.c_str(), bag_.path().c_str());
-  using rail::ros_glue::records;
-  rec_states_ = records(scene_, "wheel_states");
-  rec_points_ = records(scene_, "contact_points") && own_points_;
-  rec_wrenches_ = records(scene_, "contact_wrenches");
-  rec_kinematics_ = records(scene_, "wheelset_kinematics");
-  rec_floor_ = records(scene_, "floor_accelerations") && own_floor_;
-  rec_energy_ = records(scene_, "vehicle_energy") && own_energy_;
-  rec_tf_ = records(scene_, "tf");
-  rec_clock_ = records(scene_, "clock");
+  rec_states_ = settings_.records("wheel_states");
+  rec_points_ = settings_.records("contact_points") && own_points_;
+  rec_wrenches_ = settings_.records("contact_wrenches");
+  rec_kinematics_ = settings_.records("wheelset_kinematics");
+  rec_floor_ = settings_.records("floor_accelerations") && own_floor_;
+  rec_energy_ = settings_.records("vehicle_energy") && own_energy_;
+  rec_tf_ = settings_.records("tf");
+  rec_clock_ = settings_.records("clock");
   return true;
 }
 
@@ -436,7 +441,8 @@ void VehicleOutputs::close(const std::string& node, const CosimVehicle* cosim, d
   cost_.setCount("projections", static_cast<double>(c.projections));
   if (cosim != nullptr) cost_.setCount("exchanges", static_cast<double>(cosim->stepsExchanged()));
   ROS_INFO_STREAM(cost_.toText(node, wall, sim_.time(), &clock_));
-  bag_.writeBeside(node, ".cost.yaml", cost_.toYaml(node, scene_, wall, sim_.time(), &clock_));
+  bag_.writeBeside(node, ".cost.yaml",
+                   cost_.toYaml(node, settings_.source, settings_.effects, wall, sim_.time(), &clock_));
   ROS_INFO(
       "%s: %s at t = %.4f s, leading wheelset at s = %.3f m; %.2f s wall (%.2f s per simulated s); CVODE "
       "%ld steps, %ld RHS + %ld for %ld Jacobians (%ld carried with the wheelsets' spin), %ld projections, %ld "

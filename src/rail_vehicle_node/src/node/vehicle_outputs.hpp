@@ -11,9 +11,11 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <rail_core/cost_profile.hpp>
-#include <rail_core/scene.hpp>
+#include <rail_core/geometry_builder.hpp>
+#include <rail_core/run_settings.hpp>
 #include <rail_ros/run_output.hpp>
 #include <rail_vehicle_node/cosim_vehicle.hpp>
 #include <rail_vehicle_node/vehicle_simulator.hpp>
@@ -25,15 +27,17 @@ struct VehicleMarkers;
 
 class VehicleOutputs {
  public:
-  // Advertises what the scene calls for; sim, cost and clock must outlive the outputs. cosim: the contact
-  // points are then the track node's.
-  VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const core::Scene& scene, const VehicleSimulator& sim,
-                 bool cosim, core::CostProfile& cost, core::CostClock& clock);
+  // Advertises what the settings call for; sim, cost and clock must outlive the outputs. cosim: the contact
+  // points are then the track node's. defect_outlines: the local defects the markers draw
+  // (core::defectOutlines on the simulator's track).
+  VehicleOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, core::OutputSettings settings,
+                 const std::vector<core::DefectOutline>& defect_outlines, const VehicleSimulator& sim, bool cosim,
+                 core::CostProfile& cost, core::CostClock& clock);
   ~VehicleOutputs();
   VehicleOutputs(const VehicleOutputs&) = delete;
   VehicleOutputs& operator=(const VehicleOutputs&) = delete;
 
-  // Opens output.bag when the scene names one. False after a FATAL line naming the scene's output.bag.
+  // Opens output.bag when the settings name one. False after a FATAL line naming the scene's output.bag.
   bool openBag(const std::string& node, ros::NodeHandle& pnh);
 
   // ~wait_for_subscribers (a topic or a list of them, default none): before the first step, waits until each
@@ -55,7 +59,7 @@ class VehicleOutputs {
   const rail::ros_glue::OutputBag& bag() const { return bag_; }
 
  private:
-  const core::Scene& scene_;
+  const core::OutputSettings settings_;
   const VehicleSimulator& sim_;
   core::CostProfile& cost_;
   core::CostClock& clock_;

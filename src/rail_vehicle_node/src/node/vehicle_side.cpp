@@ -10,6 +10,8 @@
 #include <rail_core/cost_profile.hpp>
 #include <rail_core/coupling/timed_transport.hpp>
 #include <rail_core/exit_codes.hpp>
+#include <rail_core/geometry_builder.hpp>
+#include <rail_core/run_settings.hpp>
 #include <rail_ros/cosim_transport.hpp>
 #include <rail_ros/node_scaffold.hpp>
 #include <rail_ros/run_output.hpp>
@@ -73,7 +75,7 @@ int runVehicleSide(const Scene& scene) {
                ", track step " + rail::contact::formatNumber(scene.solver.track_step) + " s")
                   .c_str()
             : "");
-  VehicleOutputs outputs(nh, pnh, scene, sim, cosim, cost, clock);
+  VehicleOutputs outputs(nh, pnh, outputSettings(scene), defectOutlines(scene, sim.track()), sim, cosim, cost, clock);
   const auto viewer0 = std::chrono::steady_clock::now();  // a wait for viewers is not the vehicle's set-up
   if (!outputs.waitForSubscribers(node, nh, pnh, stop.requested)) return kExitBadInput;
   node_run.excludeFromSetUp(std::chrono::duration<double>(std::chrono::steady_clock::now() - viewer0).count());
