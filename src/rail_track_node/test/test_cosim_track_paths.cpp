@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <rail_contact/profile.hpp>
@@ -166,6 +167,16 @@ TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
   // The step in two parts does the same arithmetic in the same order as in one.
   EXPECT_EQ(largestDifference(split.force, fast.force), 0.0);
   EXPECT_EQ(largestDifference(split.deflection, fast.deflection), 0.0);
+  // The factor in two parts, its solve shared by both threads: the reference's figures as the simplicial
+  // path's, and exactly those of the same factor solved whole inside the step (the same operations).
+  const PathRun two = runPath(true, rt::CholeskyLayout::kSimplicialTwoParts, steps);
+  const PathRun two_whole = runPath(false, rt::CholeskyLayout::kSimplicialTwoParts, steps);
+  ASSERT_EQ(two.refused, 0);
+  EXPECT_EQ(two.flange_steps, ref.flange_steps);
+  EXPECT_LT(largestDifference(two.force, ref.force), 1e-6 * kQ);
+  EXPECT_LT(largestDifference(two.deflection, ref.deflection), 1e-9 * peak);
+  EXPECT_EQ(largestDifference(two.force, two_whole.force), 0.0);
+  EXPECT_EQ(largestDifference(two.deflection, two_whole.deflection), 0.0);
   std::printf(
       "[ figures  ] %ld steps, %d moves (%d rebuilt), %d steps with flange contact, largest wheel force "
       "%.0f N: forces differ by %.3g N (fast) and %.3g N (simplicial in the step), rail displacement by "
@@ -216,5 +227,49 @@ TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleS
     EXPECT_LT((many.col(c) - x).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << "column " << c;
     EXPECT_LT((one.col(0) - x).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << "column " << c;
     EXPECT_LT((ref.col(c) - x).cwiseAbs().maxCoeff(), 1e-9 * x.cwiseAbs().maxCoeff()) << "column " << c;
+  }
+}
+
+// The factor in two parts: parts independent in L, a separator of one plane of the track, about the fill of
+// CHOLMOD's own ordering, and the solve in phases on two threads equal to the whole solve.
+TEST(SparseCholeskySolves, TwoPartsSolvedOnTwoThreadsEqualTheWholeSolve) {
+  const Scene sc = curveScene();
+  rt::CosimTrackOptions o;
+  o.window.vehicle_length = 21.7;
+  o.solve_beside = false;
+  rt::CosimTrack track(rt::resolveCosimTrack(sc), o);
+  const rt::LinearSystem& sys = track.trackWindow()->model().system;
+  const Eigen::SparseMatrix<double> K_eff = sys.K + (4.0 / 4e-10) * sys.M + (2.0 / 2e-5) * sys.C;
+  rt::SparseCholesky whole(K_eff, rt::CholeskyLayout::kSimplicial);
+  rt::SparseCholesky two(K_eff, rt::CholeskyLayout::kSimplicialTwoParts);
+  rt::SparseCholesky supernodal(K_eff, rt::CholeskyLayout::kSupernodal);
+  const int n = K_eff.rows();
+  EXPECT_EQ(two.layout(), rt::CholeskyLayout::kSimplicialTwoParts);
+  EXPECT_EQ(two.partRows(0) + two.partRows(1) + two.separatorRows(), n);
+  EXPECT_EQ(two.partRows(0), n / 2);
+  // One cross-section of the track: each rail's node where the halves meet (6 DOFs each), and at most a
+  // sleeper's nodes with their pads.
+  EXPECT_GT(two.separatorRows(), 0);
+  EXPECT_LE(two.separatorRows(), 60);
+  EXPECT_EQ(whole.partRows(0) + whole.separatorRows(), 0);
+  // Fill within a quarter of CHOLMOD's unconstrained ordering's.
+  EXPECT_LT(two.factorNonZeros(), 1.25 * whole.factorNonZeros());
+  std::printf("[ figures  ] %d DOFs: parts %d and %d, separator %d; nnz(L) %.0f against %.0f\n", n, two.partRows(0),
+              two.partRows(1), two.separatorRows(), two.factorNonZeros(), whole.factorNonZeros());
+
+  const Eigen::VectorXd b = Eigen::VectorXd::Random(n) * 1e5;
+  Eigen::VectorXd x_whole(n), x_ref(n), x_parts = Eigen::VectorXd::Zero(n);
+  two.solve(b, x_whole);
+  supernodal.solve(b, x_ref);
+  EXPECT_LT((x_whole - x_ref).norm(), 1e-9 * x_ref.norm());
+  for (int repeat = 0; repeat < 20; ++repeat) {
+    std::thread other([&] { two.forwardPart(1, b); });
+    two.forwardPart(0, b);
+    other.join();
+    two.solveSeparator(b, x_parts);
+    std::thread other_back([&] { two.backwardPart(1, x_parts); });
+    two.backwardPart(0, x_parts);
+    other_back.join();
+    ASSERT_EQ((x_parts - x_whole).cwiseAbs().maxCoeff(), 0.0) << "repeat " << repeat;
   }
 }

@@ -10,7 +10,7 @@
 // moves, one on the straight (moves reuse the factor) and one on the R = 500 m curve (every move
 // refactorises): the median step without moves, the move steps (move + the influence columns solved
 // again) and the moves' own time.
-//   bench_cosim_track [steps] [window_steps] [cost 0|1]
+//   bench_cosim_track [steps] [window_steps] [cost 0|1] [solve_beside 0|1] [factor 0|1|2]
 // (defaults 500, 20000 and 0; window_steps 0 skips the window runs; cost 1 passes a cost clock to the track,
 // as the node does, so that the clock's own overhead can be measured against cost 0)
 #include <Eigen/Geometry>
@@ -38,11 +38,24 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 const char* const kUsage =
-    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1] [solve_beside 0|1] [supernodal 0|1]\n"
+    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1] [solve_beside 0|1] [factor 0|1|2]\n"
     "Wall time of one co-simulation track step with the paper coach's 8 wheels on the paper scene: rigid_fe,\n"
     "flexible (semi-implicit and explicit coupling), and the moving track window (straight and curve runs\n"
     "of window_steps each). Defaults: 500, 20000, 0 (cost clock off), 1 (the next step's solve on a second\n"
-    "thread), 0 (the simplicial factor; 1: CHOLMOD's supernodal solve, the reference).\n";
+    "thread), 0 (factor: 0 simplicial, 1 CHOLMOD's supernodal solve (the reference), 2 simplicial in two\n"
+    "parts, each solve shared by both threads).\n";
+
+const char* layoutName(rt::CholeskyLayout layout) {
+  switch (layout) {
+    case rt::CholeskyLayout::kSimplicial:
+      return "simplicial";
+    case rt::CholeskyLayout::kSupernodal:
+      return "supernodal";
+    case rt::CholeskyLayout::kSimplicialTwoParts:
+      return "simplicial in two parts";
+  }
+  return "?";
+}
 }  // namespace
 
 // First to last wheelset of the paper coach (Table 3), m: the track window's vehicle length.
@@ -114,7 +127,8 @@ static void benchWindowSolves(const rt::TrackWindow& w, double h, int repeats) {
     std::sort(t.begin(), t.end());
     return 1e6 * t[t.size() / 2];
   };
-  for (rt::CholeskyLayout layout : {rt::CholeskyLayout::kSimplicial, rt::CholeskyLayout::kSupernodal}) {
+  for (rt::CholeskyLayout layout :
+       {rt::CholeskyLayout::kSimplicial, rt::CholeskyLayout::kSupernodal, rt::CholeskyLayout::kSimplicialTwoParts}) {
     rt::NewmarkIntegrator integ(sys, h, false, nullptr, 0, layout);
     const double one = median([&] { integ.solveEffective(b, x); });
     const double six = median([&] {
@@ -124,8 +138,7 @@ static void benchWindowSolves(const rt::TrackWindow& w, double h, int repeats) {
     std::printf(
         "%-22s K_eff solves, %s factor (nnz(L) %.0f), median of %d, warm: one right-hand side %.1f us; a rail "
         "node's 6 influence columns one by one %.1f us, in one pass %.1f us\n",
-        "window", layout == rt::CholeskyLayout::kSimplicial ? "simplicial" : "supernodal",
-        integ.factor().factorNonZeros(), repeats, one, six, many);
+        "window", layoutName(layout), integ.factor().factorNonZeros(), repeats, one, six, many);
   }
 }
 
@@ -238,10 +251,16 @@ int main(int argc, char** argv) {
   const int window_steps = static_cast<int>(rail::tools::positionalNumber(argc, argv, 2, 20000, 0, kUsage));
   g_cost = rail::tools::positionalNumber(argc, argv, 3, 0, 0, kUsage) != 0;
   g_beside = rail::tools::positionalNumber(argc, argv, 4, 1, 0, kUsage) != 0;
-  if (rail::tools::positionalNumber(argc, argv, 5, 0, 0, kUsage) != 0) g_layout = rt::CholeskyLayout::kSupernodal;
+  const int factor = static_cast<int>(rail::tools::positionalNumber(argc, argv, 5, 0, 0, kUsage));
+  if (factor > 2) {
+    std::fprintf(stderr, "bench_cosim_track: factor must be 0, 1 or 2, got %d\n%s", factor, kUsage);
+    return 2;
+  }
+  const rt::CholeskyLayout layouts[3] = {rt::CholeskyLayout::kSimplicial, rt::CholeskyLayout::kSupernodal,
+                                         rt::CholeskyLayout::kSimplicialTwoParts};
+  g_layout = layouts[factor];
   std::printf("cost clock %s, next solve %s, %s factor\n", g_cost ? "on" : "off",
-              g_beside ? "beside (second thread)" : "in the step",
-              g_layout == rt::CholeskyLayout::kSimplicial ? "simplicial" : "supernodal");
+              g_beside ? "beside (second thread)" : "in the step", layoutName(g_layout));
   const rail::core::Scene scene =
       rail::core::loadSceneFile(rail::core::fixtures::configDir() + "/scenes/paper_demo.yaml");
   run(scene, rail::core::TrackModel::kRigidFe, rt::CosimCoupling::kExplicit, steps);

@@ -111,7 +111,9 @@ struct CosimTrackOptions {
   /// results equal the one-thread path's to rounding. false: the solve runs inside step().
   bool solve_beside = true;
   /// How K_eff is factorised and solved (SparseCholesky); the supernodal CHOLMOD solve is the reference.
-  CholeskyLayout factor_layout = CholeskyLayout::kSimplicial;
+  /// kSimplicialTwoParts with solve_beside: the loop's thread, once its contacts are found, solves the
+  /// second part of each triangular pass of the base solve while the worker solves the first.
+  CholeskyLayout factor_layout = CholeskyLayout::kSimplicialTwoParts;
   /// kSemiImplicit: an influence column K_eff^{-1} e_j is stored over the DOF window where it exceeds this
   /// fraction of its largest entry (the DOFs are numbered plane by plane along the track).
   double influence_tolerance = 1e-12;
@@ -279,8 +281,11 @@ class CosimTrack {
   // the second thread (startBaseSolve, then awaitBaseSolve) or here (solveBase). With finish, the two
   // threads first complete the step (column loads, Newmark completion), each over half of the DOFs
   // (completionSplit()); the second thread solves once both halves are done, finishStep awaits its half
-  // (awaitCompletion).
-  void solveBase() noexcept;
+  // (awaitCompletion). shared (the worker's call): with a factor in two parts the loop's thread, waiting in
+  // awaitBaseSolve, takes the second part of each triangular solve (helpBaseSolve).
+  void solveBase(bool shared = false) noexcept;
+  void sharePart(int phase) noexcept;
+  bool helpBaseSolve() noexcept;
   // The loop's thread completes the DOFs below, the worker the rest (the DOF count changes only at a move).
   int completionSplit() const noexcept { return static_cast<int>(st().d.size()) / 2; }
   void startBaseSolve(bool finish) noexcept;
@@ -342,6 +347,12 @@ class CosimTrack {
   // worker_job_, worker_completed_ and worker_done_ as each side spins on them before it sleeps (no lock).
   std::atomic<bool> worker_posted_{false}, worker_completed_flag_{false}, worker_done_flag_{false};
   rail::core::CostClock worker_cost_;
+  // A base solve shared by both threads (CholeskyLayout::kSimplicialTwoParts): the worker opens phase 0
+  // (forward) after the right-hand side and phase 1 (backward) after the separator (solve_stage_ = 1, 2);
+  // the second part of each phase goes to whichever thread claims it first.
+  bool split_solve_ = false;
+  std::atomic<int> solve_stage_{0};
+  std::atomic<bool> part_claimed_[2] = {false, false}, part_done_[2] = {false, false};
   rail::core::CostClock completion_cost_;  // the worker's completion of a step (awaitCompletion takes it)
   // The loads of the hanging sleepers in the step being solved (the base solve's, or the explicit step's
   // beside the contact loads).

@@ -84,6 +84,13 @@ class NewmarkIntegrator {
   /// stepDisplacement() without changing state. A caller may then correct stepDisplacement() (e.g. by the
   /// response K_eff^{-1} f to extra loads f found after the solve) before completeStep(). No allocation.
   void solveStep(const NewmarkState& state, const NodalLoads& loads, const NodalLoads* more = nullptr);
+  /// solveStep() in phases, for a factor in two parts (CholeskyLayout::kSimplicialTwoParts): buildRhs(),
+  /// then forwardPart(0) and forwardPart(1) (at once on two threads), solveSeparator(), then backwardPart(0)
+  /// and backwardPart(1) (at once). The same result as solveStep(). The parts are not timed. No allocation.
+  void buildRhs(const NewmarkState& state, const NodalLoads& loads, const NodalLoads* more = nullptr);
+  void forwardPart(int part) noexcept { factor_->forwardPart(part, rhs_); }
+  void solveSeparator() noexcept { factor_->solveSeparator(rhs_, d_new_); }
+  void backwardPart(int part) noexcept { factor_->backwardPart(part, d_new_); }
   /// d_{n+1} of the last solveStep() (m, rad over the free DOFs), writable.
   Eigen::VectorXd& stepDisplacement() { return d_new_; }
   /// Second half of step(): a_{n+1}, v_{n+1} from stepDisplacement() and state; state becomes t + dt.

@@ -18,6 +18,11 @@ enum class CholeskyLayout {
   /// CHOLMOD's supernodal L L' solved by cholmod_solve2: the reference of the simplicial solve, and the
   /// faster factorisation of long tracks.
   kSupernodal,
+  /// kSimplicial on an ordering in two independent parts and a separator (rows of A below n/2, rows above,
+  /// and the rows of the second half coupled to the first; CAMD within each): the parts of each triangular
+  /// solve can run on two threads (forwardPart, solveSeparator, backwardPart). For matrices numbered along a
+  /// line, such as the track's (plane by plane), the separator is one plane.
+  kSimplicialTwoParts,
 };
 
 class SparseCholesky {
@@ -37,6 +42,17 @@ class SparseCholesky {
   static constexpr int kMaxUnitColumns = 6;
   void solveUnitColumns(const int* unit, int count, Eigen::MatrixXd& x);
 
+  /// kSimplicialTwoParts: the solve of b in three phases. forwardPart(0, b) and forwardPart(1, b) may run
+  /// at once on two threads, then solveSeparator(b, x) after both, then backwardPart(0, x) and
+  /// backwardPart(1, x) at once; together they give solve(b, x) exactly (the same operations in the same
+  /// order). x must have rows() entries. No allocation.
+  void forwardPart(int part, const Eigen::VectorXd& b) noexcept;
+  void solveSeparator(const Eigen::VectorXd& b, Eigen::VectorXd& x) noexcept;
+  void backwardPart(int part, Eigen::VectorXd& x) noexcept;
+  /// Rows of the two parts and of the separator (0 for the other layouts).
+  int partRows(int part) const;
+  int separatorRows() const;
+
   int rows() const;
   bool isSupernodal() const;
   CholeskyLayout layout() const;
@@ -47,6 +63,8 @@ class SparseCholesky {
   struct Impl;
   template <int K>
   static void unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x);
+  static void forwardRows(Impl& s, const Eigen::VectorXd& b, int begin, int end) noexcept;
+  static void backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int end) noexcept;
   std::unique_ptr<Impl> impl_;
 };
 

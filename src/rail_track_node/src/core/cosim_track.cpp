@@ -326,7 +326,8 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
     // The integrators time their right-hand sides and solves into the worker's clock; the loop's thread
     // adds it to cost_ when it takes a result.
     solve_beside_ = true;
-    columns_beside_ = options.factor_layout == CholeskyLayout::kSimplicial;
+    columns_beside_ = options.factor_layout != CholeskyLayout::kSupernodal;
+    split_solve_ = options.factor_layout == CholeskyLayout::kSimplicialTwoParts;
     if (cost_ != nullptr) {
       cost_->track_solve_beside = true;
       fe_->setCostClock(&worker_cost_);
@@ -347,9 +348,47 @@ CosimTrack::~CosimTrack() {
   }
 }
 
-void CosimTrack::solveBase() noexcept {
+void CosimTrack::solveBase(bool shared) noexcept {
   fillHangingLoads();
-  integ().solveStep(st(), hanging_loads_);
+  if (!shared || !split_solve_) {
+    integ().solveStep(st(), hanging_loads_);
+    return;
+  }
+  NewmarkIntegrator& ig = integ();
+  ig.buildRhs(st(), hanging_loads_);
+  rail::core::CostClock::Scope timing(cost_ != nullptr ? &worker_cost_ : nullptr, rail::core::CostClock::kTrackSolve);
+  solve_stage_.store(1, std::memory_order_release);
+  ig.forwardPart(0);
+  sharePart(0);
+  ig.solveSeparator();
+  solve_stage_.store(2, std::memory_order_release);
+  ig.backwardPart(0);
+  sharePart(1);
+}
+
+// The worker's side of a phase's second part: solve it unless the loop's thread has claimed it, else wait
+// (awake first) until that thread has solved it.
+void CosimTrack::sharePart(int phase) noexcept {
+  const std::size_t k = static_cast<std::size_t>(phase);
+  if (!part_claimed_[k].exchange(true, std::memory_order_acq_rel)) {
+    phase == 0 ? integ().forwardPart(1) : integ().backwardPart(1);
+    return;
+  }
+  while (!awaitFlag(part_done_[k], true, kSolveSpin)) std::this_thread::yield();
+}
+
+// The loop's side: solves an open phase's second part if no thread has claimed it yet. True if it did.
+bool CosimTrack::helpBaseSolve() noexcept {
+  const int stage = solve_stage_.load(std::memory_order_acquire);
+  for (int phase = 0; phase < stage; ++phase) {
+    const std::size_t k = static_cast<std::size_t>(phase);
+    if (part_claimed_[k].load(std::memory_order_relaxed) || part_claimed_[k].exchange(true, std::memory_order_acq_rel))
+      continue;
+    phase == 0 ? integ().forwardPart(1) : integ().backwardPart(1);
+    part_done_[k].store(true, std::memory_order_release);
+    return true;
+  }
+  return false;
 }
 
 const HangingSupports* CosimTrack::hanging() const { return fe_ ? fe_->hanging() : nullptr; }
@@ -398,7 +437,7 @@ void CosimTrack::workerLoop() noexcept {
       // The next right-hand side reads every DOF: wait (awake; the loop's thread is at it) for the other half.
       while (!awaitFlag(lower_completed_, true, kSolveSpin)) std::this_thread::yield();
     }
-    solveBase();
+    solveBase(true);
     lock.lock();
     worker_done_ = true;
     worker_done_flag_.store(true, std::memory_order_release);
@@ -418,6 +457,11 @@ void CosimTrack::startBaseSolve(bool finish) noexcept {
     worker_completed_flag_.store(false, std::memory_order_relaxed);
     worker_finish_ = finish;
     lower_completed_.store(false, std::memory_order_relaxed);
+    solve_stage_.store(0, std::memory_order_relaxed);
+    for (std::size_t k = 0; k < 2; ++k) {
+      part_claimed_[k].store(false, std::memory_order_relaxed);
+      part_done_[k].store(false, std::memory_order_relaxed);
+    }
     worker_job_ = true;
     worker_posted_.store(true, std::memory_order_release);
   }
@@ -441,7 +485,20 @@ void CosimTrack::awaitBaseSolve() noexcept {
   if (base_ != BaseSolve::kRunning) return;
   {
     rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolveWait);
-    awaitFlag(worker_done_flag_, true, kSolveSpin);
+    if (split_solve_) {
+      // Awake, taking a part of the solve when one is open, for kSolveSpin after the last part taken.
+      auto until = std::chrono::steady_clock::now() + kSolveSpin;
+      for (int i = 1; !worker_done_flag_.load(std::memory_order_acquire); ++i) {
+        if (helpBaseSolve()) {
+          until = std::chrono::steady_clock::now() + kSolveSpin;
+          continue;
+        }
+        __builtin_ia32_pause();
+        if (i % 32 == 0 && std::chrono::steady_clock::now() > until) break;
+      }
+    } else {
+      awaitFlag(worker_done_flag_, true, kSolveSpin);
+    }
     std::unique_lock<std::mutex> lock(worker_mutex_);
     worker_cv_.wait(lock, [this] { return worker_done_; });
   }

@@ -102,6 +102,12 @@ void NewmarkIntegrator::step(NewmarkState& st, const NodalLoads& loads, const No
 }
 
 void NewmarkIntegrator::solveStep(const NewmarkState& st, const NodalLoads& loads, const NodalLoads* more) {
+  buildRhs(st, loads, more);
+  rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolve);
+  factor_->solve(rhs_, d_new_);
+}
+
+void NewmarkIntegrator::buildRhs(const NewmarkState& st, const NodalLoads& loads, const NodalLoads* more) {
   const double h = dt_;
   const double c0 = 4.0 / (h * h), c1 = 4.0 / h, c2 = 2.0 / h;
   {
@@ -147,8 +153,6 @@ void NewmarkIntegrator::solveStep(const NewmarkState& st, const NodalLoads& load
     if (more != nullptr)
       for (int k = 0; k < more->size(); ++k) rhs_(more->index(k)) += more->value(k);
   }
-  rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolve);
-  factor_->solve(rhs_, d_new_);
 }
 
 void NewmarkIntegrator::completeStep(NewmarkState& st) {

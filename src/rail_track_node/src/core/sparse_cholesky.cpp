@@ -28,12 +28,15 @@ struct SparseCholesky::Impl {
   std::vector<int> row;        // row index of each entry
   std::vector<double> value;   // entry
   // The same L by rows (diagonal last, as its reciprocal): the forward solve gathers instead of scattering.
-  std::vector<int> l_row_start;    // n + 1
-  std::vector<int> l_col;          // column index of each entry
-  std::vector<double> l_value;     // entry
-  std::vector<double> y;           // permuted solution, reused
-  std::vector<int> inverse;        // row of P A P' that holds row i of A
-  std::vector<double> y_many;      // solveUnitColumns: rows x kMaxUnitColumns, row-major
+  std::vector<int> l_row_start;  // n + 1
+  std::vector<int> l_col;        // column index of each entry
+  std::vector<double> l_value;   // entry
+  std::vector<double> y;         // permuted solution, reused
+  std::vector<int> inverse;      // row of P A P' that holds row i of A
+  std::vector<double> y_many;    // solveUnitColumns: rows x kMaxUnitColumns, row-major
+  // kSimplicialTwoParts: rows [0, part_end[0]) and [part_end[0], part_end[1]) of P A P' are the two
+  // independent parts, [part_end[1], n) the separator.
+  int part_end[2] = {0, 0};
   Eigen::VectorXd unit_b, unit_x;  // supernodal solveUnitColumns: one unit right-hand side and its solution
 };
 
@@ -66,7 +69,37 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
   view.sorted = 1;
   view.packed = 1;
 
-  s.L = cholmod_analyze(&view, &s.common);
+  std::vector<int> given;  // kSimplicialTwoParts: the ordering
+  if (layout == CholeskyLayout::kSimplicialTwoParts) {
+    // Rows below n/2 are part 0, the others part 1, except those of part 1 coupled to part 0: the
+    // separator (constraint set 2, ordered last). CAMD orders within each set.
+    const int half = s.n / 2;
+    std::vector<int> member(static_cast<std::size_t>(s.n), 0);
+    for (int i = half; i < s.n; ++i) member[static_cast<std::size_t>(i)] = 1;
+    for (int j = 0; j < s.n; ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(A, j); it; ++it) {
+        const int i = static_cast<int>(it.row());
+        if ((i < half) != (j < half)) member[static_cast<std::size_t>(std::max(i, j))] = 2;
+      }
+    const int separator = static_cast<int>(std::count(member.begin(), member.end(), 2));
+    s.part_end[0] = half;
+    s.part_end[1] = s.n - separator;
+    given.resize(static_cast<std::size_t>(s.n));
+    bool ordered = cholmod_camd(&view, nullptr, 0, member.data(), given.data(), &s.common) != 0;
+    for (int k = 0; k < s.n && ordered; ++k)  // set 0, then set 1, then the separator
+      ordered = member[static_cast<std::size_t>(given[static_cast<std::size_t>(k)])] == (k < s.part_end[0]   ? 0
+                                                                                         : k < s.part_end[1] ? 1
+                                                                                                             : 2);
+    if (!ordered) {
+      cholmod_finish(&s.common);
+      throw std::runtime_error("SparseCholesky: cholmod_camd did not order the two parts and the separator");
+    }
+    s.common.nmethods = 1;
+    s.common.method[0].ordering = CHOLMOD_GIVEN;
+    s.common.postorder = 0;  // keep the parts contiguous
+  }
+  s.L =
+      given.empty() ? cholmod_analyze(&view, &s.common) : cholmod_analyze_p(&view, given.data(), nullptr, 0, &s.common);
   if (!s.L || s.common.status < CHOLMOD_OK) {
     cholmod_finish(&s.common);
     throw std::runtime_error("SparseCholesky: cholmod_analyze failed (status " + std::to_string(s.common.status) + ")");
@@ -86,7 +119,7 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
     throw std::runtime_error("SparseCholesky: cholmod_factorize failed (status " + std::to_string(status) + ")");
   }
 
-  if (layout == CholeskyLayout::kSimplicial) {
+  if (layout != CholeskyLayout::kSupernodal) {
     if (s.L->is_super || !s.L->is_ll || s.L->xtype != CHOLMOD_REAL) {
       cholmod_free_factor(&s.L, &s.common);
       cholmod_finish(&s.common);
@@ -133,6 +166,18 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
     s.inverse.assign(static_cast<std::size_t>(s.n), 0);
     for (int j = 0; j < s.n; ++j) s.inverse[static_cast<std::size_t>(s.perm[static_cast<std::size_t>(j)])] = j;
     s.y_many.assign(static_cast<std::size_t>(s.n) * kMaxUnitColumns, 0.0);
+    if (!given.empty()) {
+      // The parts must not meet in L: no row of part 1 reads a column of part 0.
+      for (int i = s.part_end[0]; i < s.part_end[1]; ++i)
+        for (int q = s.l_row_start[static_cast<std::size_t>(i)]; q < s.l_row_start[static_cast<std::size_t>(i) + 1];
+             ++q)
+          if (s.l_col[static_cast<std::size_t>(q)] < s.part_end[0]) {
+            cholmod_free_factor(&s.L, &s.common);
+            cholmod_finish(&s.common);
+            throw std::runtime_error("SparseCholesky: the two parts of the ordering are coupled in L (row " +
+                                     std::to_string(i) + ")");
+          }
+    }
     return;
   }
   s.unit_b = Eigen::VectorXd::Zero(s.n);
@@ -186,23 +231,65 @@ void SparseCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
     x = Eigen::Map<const Eigen::VectorXd>(static_cast<const double*>(s.X->x), s.n);
     return;
   }
-  const int n = s.n;
+  if (x.size() != s.n) x.resize(s.n);
+  forwardRows(s, b, 0, s.n);
+  backwardRows(s, x, 0, s.n);
+}
+
+// L y = P b over rows [begin, end), each unknown a dot product with its row (rows before begin that it reads
+// are solved).
+void SparseCholesky::forwardRows(Impl& s, const Eigen::VectorXd& b, int begin, int end) noexcept {
   const int* perm = s.perm.data();
-  const int* start = s.col_start.data();
-  const int* row = s.row.data();
-  const double* value = s.value.data();
   const int* row_start = s.l_row_start.data();
   const int* col = s.l_col.data();
   const double* l_value = s.l_value.data();
   double* y = s.y.data();
-  // L y = P b, each unknown a dot product with its row; L' z = y, each a dot product with its column.
-  for (int i = 0; i < n; ++i) {
+  for (int i = begin; i < end; ++i) {
     const int diag = row_start[i + 1] - 1;
     y[i] = minusDot(b[perm[i]], l_value, col, row_start[i], diag, y) * l_value[diag];
   }
-  for (int j = n - 1; j >= 0; --j) y[j] = minusDot(y[j], value, row, start[j] + 1, start[j + 1], y) * value[start[j]];
-  if (x.size() != n) x.resize(n);
-  for (int k = 0; k < n; ++k) x[perm[k]] = y[k];
+}
+
+// L' z = y over rows [begin, end), descending, each a dot product with its column (rows after it that it
+// reads are solved); then x = P' z over those rows.
+void SparseCholesky::backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int end) noexcept {
+  const int* perm = s.perm.data();
+  const int* start = s.col_start.data();
+  const int* row = s.row.data();
+  const double* value = s.value.data();
+  double* y = s.y.data();
+  for (int j = end - 1; j >= begin; --j)
+    y[j] = minusDot(y[j], value, row, start[j] + 1, start[j + 1], y) * value[start[j]];
+  for (int k = begin; k < end; ++k) x[perm[k]] = y[k];
+}
+
+void SparseCholesky::forwardPart(int part, const Eigen::VectorXd& b) noexcept {
+  Impl& s = *impl_;
+  const int begin = part == 0 ? 0 : s.part_end[0], end = s.part_end[part == 0 ? 0 : 1];
+  forwardRows(s, b, begin, end);
+}
+
+void SparseCholesky::solveSeparator(const Eigen::VectorXd& b, Eigen::VectorXd& x) noexcept {
+  Impl& s = *impl_;
+  forwardRows(s, b, s.part_end[1], s.n);
+  backwardRows(s, x, s.part_end[1], s.n);
+}
+
+void SparseCholesky::backwardPart(int part, Eigen::VectorXd& x) noexcept {
+  Impl& s = *impl_;
+  const int begin = part == 0 ? 0 : s.part_end[0], end = s.part_end[part == 0 ? 0 : 1];
+  backwardRows(s, x, begin, end);
+}
+
+int SparseCholesky::partRows(int part) const {
+  const Impl& s = *impl_;
+  if (s.layout != CholeskyLayout::kSimplicialTwoParts) return 0;
+  return part == 0 ? s.part_end[0] : s.part_end[1] - s.part_end[0];
+}
+
+int SparseCholesky::separatorRows() const {
+  const Impl& s = *impl_;
+  return s.layout == CholeskyLayout::kSimplicialTwoParts ? s.n - s.part_end[1] : 0;
 }
 
 // solveUnitColumns on the simplicial factor with K right-hand sides, rows interleaved (y[i * K + c]) so
@@ -293,7 +380,7 @@ bool SparseCholesky::isSupernodal() const { return impl_->L->is_super != 0; }
 CholeskyLayout SparseCholesky::layout() const { return impl_->layout; }
 
 double SparseCholesky::factorNonZeros() const {
-  return impl_->layout == CholeskyLayout::kSimplicial ? static_cast<double>(impl_->value.size()) : impl_->common.lnz;
+  return impl_->layout != CholeskyLayout::kSupernodal ? static_cast<double>(impl_->value.size()) : impl_->common.lnz;
 }
 
 }  // namespace track
