@@ -126,11 +126,10 @@ std::string CostProfile::toYaml(const std::string& node, const std::string& scen
       o << "  " << CostClock::name(static_cast<CostClock::Count>(c)) << ": "
         << clock->counts[static_cast<std::size_t>(c)] << "\n";
   }
-  const Effects& e = effects;
   o << "effects:\n"
-    << "  track_model: " << toString(e.track_model) << "\n"
-    << "  creep_law: " << toString(e.creep_law) << "\n";
-  for (const EffectSwitch& sw : kEffectSwitches) o << "  " << sw.key << ": " << onOff(e.*sw.on) << "\n";
+    << "  track_model: " << toString(effects.track_model) << "\n"
+    << "  creep_law: " << toString(effects.creep_law) << "\n";
+  for (const EffectSwitch& sw : kEffectSwitches) o << "  " << sw.key << ": " << onOff(effects.*sw.on) << "\n";
   return o.str();
 }
 

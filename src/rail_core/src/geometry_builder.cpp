@@ -94,10 +94,6 @@ rc::WheelContactOptions SceneContact::over(rc::WheelContactOptions base) const {
   return base;
 }
 
-rc::WheelContactOptions contactOptions(const Scene& scene, rc::WheelContactOptions base) {
-  return sceneContact(scene).over(std::move(base));
-}
-
 std::vector<DefectOutline> defectOutlines(const Scene& scene, const rc::TrackGeometry& geometry) {
   std::vector<DefectOutline> out;
   auto samples = [](double from, double to, double spacing) {

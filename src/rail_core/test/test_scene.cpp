@@ -427,8 +427,8 @@ TEST(Scene, WheelDefectsRoundTripAndAreSummarised) {
   const Scene off = load(replaced(text, "  wheel_defects: true", "  wheel_defects: false"));
   EXPECT_NE(off.hash, s.hash);
   EXPECT_EQ(describe(off, Role::kValidator).find("wheel defect 0"), std::string::npos);
-  EXPECT_EQ(contactOptions(s, rail::contact::WheelContactOptions()).wheel_defects.defects().size(), 4u);
-  EXPECT_TRUE(contactOptions(off, rail::contact::WheelContactOptions()).wheel_defects.empty());
+  EXPECT_EQ(sceneContact(s).over(rail::contact::WheelContactOptions()).wheel_defects.defects().size(), 4u);
+  EXPECT_TRUE(sceneContact(off).over(rail::contact::WheelContactOptions()).wheel_defects.empty());
 }
 
 // Support zones: the print-out loads back to the same hash, the summary lists them, and the FE track data

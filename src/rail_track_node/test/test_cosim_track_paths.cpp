@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -138,6 +139,20 @@ double largestDifference(const std::vector<double>& a, const std::vector<double>
   return a.size() == b.size() ? d : HUGE_VAL;
 }
 
+// The curve scene's first track window, its solve inside the step.
+std::unique_ptr<rt::CosimTrack> curveWindowTrack() {
+  rt::CosimTrackOptions o;
+  o.window.vehicle_length = 21.7;
+  o.solve_beside = false;
+  return std::make_unique<rt::CosimTrack>(rt::resolveCosimTrack(curveScene()), o);
+}
+
+// K_eff = K + 4/h^2 M + 2/h C of the track's window at h = 2e-5 s.
+Eigen::SparseMatrix<double> effectiveStiffness(const rt::CosimTrack& track) {
+  const rt::LinearSystem& sys = track.trackWindow()->model().system;
+  return sys.K + (4.0 / 4e-10) * sys.M + (2.0 / 2e-5) * sys.C;
+}
+
 double largestMagnitude(const std::vector<double>& a) {
   double m = 0.0;
   for (double x : a) m = std::max(m, std::abs(x));
@@ -187,13 +202,8 @@ TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
 // The simplicial factor's solves against CHOLMOD's supernodal solve on a track's K_eff; the influence
 // columns of a rail node in one pass against one solve each.
 TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleSolves) {
-  const Scene sc = curveScene();
-  rt::CosimTrackOptions o;
-  o.window.vehicle_length = 21.7;
-  o.solve_beside = false;
-  rt::CosimTrack track(rt::resolveCosimTrack(sc), o);
-  const rt::LinearSystem& sys = track.trackWindow()->model().system;
-  const Eigen::SparseMatrix<double> K_eff = sys.K + (4.0 / 4e-10) * sys.M + (2.0 / 2e-5) * sys.C;
+  const std::unique_ptr<rt::CosimTrack> track = curveWindowTrack();
+  const Eigen::SparseMatrix<double> K_eff = effectiveStiffness(*track);
   rt::SparseCholesky simplicial(K_eff, rt::CholeskyLayout::kSimplicial);
   rt::SparseCholesky supernodal(K_eff, rt::CholeskyLayout::kSupernodal);
   EXPECT_EQ(simplicial.layout(), rt::CholeskyLayout::kSimplicial);
@@ -212,7 +222,7 @@ TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleS
   simplicial.solve(x3, x3);
   EXPECT_EQ((x3 - x1).cwiseAbs().maxCoeff(), 0.0);
 
-  const rt::TrackMesh& mesh = track.trackWindow()->mesh();
+  const rt::TrackMesh& mesh = track->trackWindow()->mesh();
   const int node = mesh.rail_nodes[1][mesh.rail_nodes[1].size() / 3];
   int dofs[6];
   for (int j = 0; j < 6; ++j) dofs[j] = mesh.dofIndex(node, j);
@@ -233,13 +243,8 @@ TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleS
 // The factor in two parts: parts independent in L, a separator of one plane of the track, about the fill of
 // CHOLMOD's own ordering, and the solve in phases on two threads equal to the whole solve.
 TEST(SparseCholeskySolves, TwoPartsSolvedOnTwoThreadsEqualTheWholeSolve) {
-  const Scene sc = curveScene();
-  rt::CosimTrackOptions o;
-  o.window.vehicle_length = 21.7;
-  o.solve_beside = false;
-  rt::CosimTrack track(rt::resolveCosimTrack(sc), o);
-  const rt::LinearSystem& sys = track.trackWindow()->model().system;
-  const Eigen::SparseMatrix<double> K_eff = sys.K + (4.0 / 4e-10) * sys.M + (2.0 / 2e-5) * sys.C;
+  const std::unique_ptr<rt::CosimTrack> track = curveWindowTrack();
+  const Eigen::SparseMatrix<double> K_eff = effectiveStiffness(*track);
   rt::SparseCholesky whole(K_eff, rt::CholeskyLayout::kSimplicial);
   rt::SparseCholesky two(K_eff, rt::CholeskyLayout::kSimplicialTwoParts);
   rt::SparseCholesky supernodal(K_eff, rt::CholeskyLayout::kSupernodal);

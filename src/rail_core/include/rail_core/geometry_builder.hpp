@@ -39,9 +39,6 @@ struct SceneContact {
 };
 SceneContact sceneContact(const Scene& scene);
 
-// sceneContact(scene).over(base).
-rail::contact::WheelContactOptions contactOptions(const Scene& scene, rail::contact::WheelContactOptions base);
-
 // Where a scene's local defects are, for the picture (rviz): a dipped joint or a weld as a line along the
 // top of each rail it is on, a support zone as a line along the centre line at the sleepers' level, each with
 // a short label. Only the effects that are on; empty when none is. Points at most 0.1 m (rail defects) or

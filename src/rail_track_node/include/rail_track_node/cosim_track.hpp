@@ -284,6 +284,7 @@ class CosimTrack {
   // (awaitCompletion). shared (the worker's call): with a factor in two parts the loop's thread, waiting in
   // awaitBaseSolve, takes the second part of each triangular solve (helpBaseSolve).
   void solveBase(bool shared = false) noexcept;
+  bool claimSecondPart(int phase) noexcept;
   void sharePart(int phase) noexcept;
   bool helpBaseSolve() noexcept;
   // The loop's thread completes the DOFs below, the worker the rest (the DOF count changes only at a move).

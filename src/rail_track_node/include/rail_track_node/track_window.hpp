@@ -212,7 +212,6 @@ class TrackWindow final : public FeTrack {
   TrackWindowSettings settings_;
   rail::contact::TrackGeometry geometry_;
   TrackData data_;                                        // scene applied, absorbing ends off (the window adds its own)
-  double rail_height_ = 0.0;                              // m, foot to head top
   Eigen::Vector3d g_in_world_ = Eigen::Vector3d::Zero();  // gravity, m/s^2
   bool line_ends_absorb_ = false;
   Vector6d c_end_;                         // window-end dashpots (rail local frame)

@@ -162,27 +162,27 @@ CosimTrackSetup resolveCosimTrack(const Scene& scene, const SceneTrackOptions& t
     throw SceneError(scene.file +
                      ": effects.track_model: rigid runs the vehicle alone; the track side needs "
                      "rigid_fe or flexible");
-  CosimTrackSetup m;
-  m.source = scene.file;
-  m.wheel_count = scene.wheelCount();
-  if (m.wheel_count <= 0) {
+  CosimTrackSetup setup;
+  setup.source = scene.file;
+  setup.wheel_count = scene.wheelCount();
+  if (setup.wheel_count <= 0) {
     std::ostringstream os;
     os << scene.file << ": vehicle.wheelsets: must be > 0, got " << scene.vehicle.wheelsets;
     throw SceneError(os.str());
   }
-  m.start_arc_length = scene.vehicle.start_arc_length;
-  m.track_step = scene.solver.track_step;
-  m.window = scene.solver.track_window;
+  setup.start_arc_length = scene.vehicle.start_arc_length;
+  setup.track_step = scene.solver.track_step;
+  setup.window = scene.solver.track_window;
   if (scene.runsFeIntegration())
-    m.line = resolveTrackLine(scene, track);
+    setup.line = resolveTrackLine(scene, track);
   else
-    m.rigid_geometry = rail::core::buildTrackGeometry(scene);
+    setup.rigid_geometry = rail::core::buildTrackGeometry(scene);
   // Contact model data, resolved from the scene as the vehicle side resolves them (rail_core's builder).
-  m.wheel_profile = rail::core::wheelProfile(scene);
-  m.rail_profile = rail::core::railProfileCurve(scene);
-  m.nominal_radius = scene.vehicle.nominal_radius;
-  m.contact = rail::core::sceneContact(scene);
-  return m;
+  setup.wheel_profile = rail::core::wheelProfile(scene);
+  setup.rail_profile = rail::core::railProfileCurve(scene);
+  setup.nominal_radius = scene.vehicle.nominal_radius;
+  setup.contact = rail::core::sceneContact(scene);
+  return setup;
 }
 
 CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
@@ -196,9 +196,9 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
 
   // Geometry (both cases), FE track (flexible only).
   double section_depth = rc::uic60::kCentroidDepth;  // rail section centre below the head top, as the vehicle
-  double rail_height = 0.0;
+  const double rail_height = setup.line ? setup.line->rail_height : 0.0;
   if (setup.line && setup.window.enabled) {
-    // Moving window: the model's window settings, the vehicle's wheel span from the options, first
+    // Moving window: the setup's window settings, the vehicle's wheel span from the options, first
     // window around the vehicle's start position (leading wheelset at start_arc_length).
     TrackWindowSettings ws = options.window;
     ws.behind = setup.window.behind;
@@ -217,7 +217,6 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
       throw std::invalid_argument(os.str());
     }
     const double s_front = setup.start_arc_length;
-    rail_height = setup.line->rail_height;
     auto window = std::make_unique<TrackWindow>(std::move(*setup.line), ws, s_front - ws.vehicle_length, s_front);
     window_ = window.get();
     fe_ = std::move(window);
@@ -228,7 +227,6 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
     fs.include_gravity = options.include_gravity;
     fs.cost = options.cost;
     fs.factor_layout = options.factor_layout;
-    rail_height = setup.line->rail_height;
     auto full = std::make_unique<FullLengthTrack>(std::move(*setup.line), fs);
     full_ = full.get();
     fe_ = std::move(full);
@@ -366,28 +364,28 @@ void CosimTrack::solveBase(bool shared) noexcept {
   sharePart(1);
 }
 
+// Solves the second part of a phase (0 forward, 1 backward) if no thread has claimed it yet. True if it did.
+bool CosimTrack::claimSecondPart(int phase) noexcept {
+  const std::size_t k = static_cast<std::size_t>(phase);
+  if (part_claimed_[k].load(std::memory_order_relaxed) || part_claimed_[k].exchange(true, std::memory_order_acq_rel))
+    return false;
+  phase == 0 ? integ().forwardPart(1) : integ().backwardPart(1);
+  part_done_[k].store(true, std::memory_order_release);
+  return true;
+}
+
 // The worker's side of a phase's second part: solve it unless the loop's thread has claimed it, else wait
 // (awake first) until that thread has solved it.
 void CosimTrack::sharePart(int phase) noexcept {
-  const std::size_t k = static_cast<std::size_t>(phase);
-  if (!part_claimed_[k].exchange(true, std::memory_order_acq_rel)) {
-    phase == 0 ? integ().forwardPart(1) : integ().backwardPart(1);
-    return;
-  }
-  while (!awaitFlag(part_done_[k], true, kSolveSpin)) std::this_thread::yield();
+  if (claimSecondPart(phase)) return;
+  while (!awaitFlag(part_done_[static_cast<std::size_t>(phase)], true, kSolveSpin)) std::this_thread::yield();
 }
 
 // The loop's side: solves an open phase's second part if no thread has claimed it yet. True if it did.
 bool CosimTrack::helpBaseSolve() noexcept {
   const int stage = solve_stage_.load(std::memory_order_acquire);
-  for (int phase = 0; phase < stage; ++phase) {
-    const std::size_t k = static_cast<std::size_t>(phase);
-    if (part_claimed_[k].load(std::memory_order_relaxed) || part_claimed_[k].exchange(true, std::memory_order_acq_rel))
-      continue;
-    phase == 0 ? integ().forwardPart(1) : integ().backwardPart(1);
-    part_done_[k].store(true, std::memory_order_release);
-    return true;
-  }
+  for (int phase = 0; phase < stage; ++phase)
+    if (claimSecondPart(phase)) return true;
   return false;
 }
 

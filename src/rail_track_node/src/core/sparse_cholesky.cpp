@@ -265,8 +265,7 @@ void SparseCholesky::backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int en
 
 void SparseCholesky::forwardPart(int part, const Eigen::VectorXd& b) noexcept {
   Impl& s = *impl_;
-  const int begin = part == 0 ? 0 : s.part_end[0], end = s.part_end[part == 0 ? 0 : 1];
-  forwardRows(s, b, begin, end);
+  forwardRows(s, b, part == 0 ? 0 : s.part_end[0], s.part_end[part]);
 }
 
 void SparseCholesky::solveSeparator(const Eigen::VectorXd& b, Eigen::VectorXd& x) noexcept {
@@ -277,8 +276,7 @@ void SparseCholesky::solveSeparator(const Eigen::VectorXd& b, Eigen::VectorXd& x
 
 void SparseCholesky::backwardPart(int part, Eigen::VectorXd& x) noexcept {
   Impl& s = *impl_;
-  const int begin = part == 0 ? 0 : s.part_end[0], end = s.part_end[part == 0 ? 0 : 1];
-  backwardRows(s, x, begin, end);
+  backwardRows(s, x, part == 0 ? 0 : s.part_end[0], s.part_end[part]);
 }
 
 int SparseCholesky::partRows(int part) const {

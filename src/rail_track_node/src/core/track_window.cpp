@@ -98,7 +98,6 @@ TrackWindow::TrackWindow(TrackLine line, const TrackWindowSettings& settings, do
     : settings_(settings),
       geometry_(std::move(line.geometry)),
       data_(std::move(line.data)),
-      rail_height_(line.rail_height),
       g_in_world_(line.g_in_world) {
   const TrackWindowSettings& S = settings_;
   const std::string& source = line.source;
@@ -136,7 +135,7 @@ TrackWindow::TrackWindow(TrackLine line, const TrackWindowSettings& settings, do
     c_end_ = absorbingEndDashpots(data_.rail, k_lat, k_vert, 2.0 * kPi * data_.absorbing_ends.design_frequency);
   }
   data_.absorbing_ends.enabled = false;  // the window places its own end dashpots (buildWindow)
-  seat_below_centre_ = seatPlaneBelowCentreLine(data_, rail_height_);
+  seat_below_centre_ = seatPlaneBelowCentreLine(data_, line.rail_height);
   if (S.condensed_ends) {
     if (!(S.boundary_length >= data_.layout.sleeper_spacing) || !std::isfinite(S.boundary_length))
       refuse("boundary_length",

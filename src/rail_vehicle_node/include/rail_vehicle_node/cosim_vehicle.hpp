@@ -73,7 +73,7 @@ class CosimVehicle {
   core::coupling::Status exchangeStatus() const { return exchange_status_; }
   double time() const { return sim_->time(); }
   std::uint64_t stepsExchanged() const { return coupling_ ? coupling_->nextStep() : 0; }  // exchanges done so far
-  double trackStep() const { return track_step_; }                                        // h [s]
+  double trackStep() const { return config_.track_step; }                                 // h [s]
   // Largest internal CVODE step seen after any advanceTo (last step of each call) [s].
   double maxInternalStep() const { return max_internal_step_; }
 
@@ -94,7 +94,6 @@ class CosimVehicle {
   class CouplingSource;
   RunStatus exchange();
 
-  double track_step_ = 0.0;
   core::coupling::CouplingConfig config_;
   std::unique_ptr<core::coupling::VehicleCoupling> coupling_;  // null until connect()
   std::unique_ptr<CouplingSource> source_;

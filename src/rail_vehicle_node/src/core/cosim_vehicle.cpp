@@ -51,8 +51,7 @@ CosimVehicleSetup resolveCosimVehicle(const core::Scene& scene) {
   throw std::runtime_error(os.str());
 }
 
-CosimVehicle::CosimVehicle(CosimVehicleSetup setup, const SimulatorSettings& settings)
-    : track_step_(setup.coupling.track_step), config_(setup.coupling) {
+CosimVehicle::CosimVehicle(CosimVehicleSetup setup, const SimulatorSettings& settings) : config_(setup.coupling) {
   source_ = std::make_unique<CouplingSource>();
   SimulatorSettings s = settings;
   s.wheel_wrench_source = source_.get();
