@@ -91,6 +91,8 @@ class NewmarkIntegrator {
   void forwardPart(int part) noexcept { factor_->forwardPart(part, rhs_); }
   void solveSeparator() noexcept { factor_->solveSeparator(rhs_, d_new_); }
   void backwardPart(int part) noexcept { factor_->backwardPart(part, d_new_); }
+  /// The right-hand side of the last buildRhs() or solveStep() (N, N m over the free DOFs).
+  const Eigen::VectorXd& rightHandSide() const { return rhs_; }
   /// d_{n+1} of the last solveStep() (m, rad over the free DOFs), writable.
   Eigen::VectorXd& stepDisplacement() { return d_new_; }
   /// Second half of step(): a_{n+1}, v_{n+1} from stepDisplacement() and state; state becomes t + dt.
@@ -121,10 +123,15 @@ class NewmarkIntegrator {
   rail::core::CostClock* cost_;
   int end_dashpots_;
   std::unique_ptr<SparseCholesky> factor_;
-  // M and C row by row over the union of their patterns, so that M x1 + C x2 is one pass.
-  std::vector<int> row_start_, col_;
-  std::vector<double> m_, c_;
-  Eigen::VectorXd rhs_, x1_, x2_, d_new_;  // per-step work vectors
+  // M and C in 6 x 6 blocks of DOFs (block rows of 6 rows, each block stored column by column): per row the
+  // products add the same terms in the same order as a row-by-row product, two or three rows at once.
+  struct BlockRows {
+    std::vector<int> start, col;  // per block row: its blocks [start[I], start[I + 1]); block column
+    std::vector<double> values;   // 36 per block
+    void build(const Eigen::SparseMatrix<double, Eigen::RowMajor>& A, int block_rows);
+  };
+  BlockRows m_blocks_, c_blocks_;
+  Eigen::VectorXd rhs_, x1_, x2_, d_new_;  // per-step work vectors (x1_, x2_ padded to whole blocks)
 };
 
 /// Static equilibrium d = K^{-1} f (factorises K; call at set-up).

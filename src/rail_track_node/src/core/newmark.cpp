@@ -1,5 +1,7 @@
 #include "rail_track_node/newmark.hpp"
 
+#include <emmintrin.h>
+
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -33,6 +35,53 @@ int countEndDashpots(const TrackMesh& mesh) {
   return n;
 }
 
+namespace {
+
+constexpr int kBlock = 6;
+
+// acc[r] += sum over the blocks [b0, b1) of A(r, j) x[j], j ascending, for the 6 rows r of a block row:
+// each lane adds its row's products one by one, as a scalar row loop would (no fused multiply-add).
+inline void addBlockRow(const int* col, const double* values, int b0, int b1, const double* x, __m128d acc[3]) {
+  for (int b = b0; b < b1; ++b) {
+    const double* B = values + static_cast<std::ptrdiff_t>(b) * kBlock * kBlock;
+    const double* xb = x + static_cast<std::ptrdiff_t>(col[b]) * kBlock;
+    for (int j = 0; j < kBlock; ++j) {
+      const __m128d xj = _mm_set1_pd(xb[j]);
+      acc[0] = _mm_add_pd(acc[0], _mm_mul_pd(_mm_loadu_pd(B + kBlock * j), xj));
+      acc[1] = _mm_add_pd(acc[1], _mm_mul_pd(_mm_loadu_pd(B + kBlock * j + 2), xj));
+      acc[2] = _mm_add_pd(acc[2], _mm_mul_pd(_mm_loadu_pd(B + kBlock * j + 4), xj));
+    }
+  }
+}
+
+}  // namespace
+
+void NewmarkIntegrator::BlockRows::build(const Eigen::SparseMatrix<double, Eigen::RowMajor>& A, int block_rows) {
+  start.assign(static_cast<std::size_t>(block_rows) + 1, 0);
+  col.clear();
+  values.clear();
+  std::vector<int> slot(static_cast<std::size_t>(block_rows), -1);  // block column -> block in this block row
+  for (int I = 0; I < block_rows; ++I) {
+    const int first = static_cast<int>(col.size());
+    for (int r = 0; r < kBlock && I * kBlock + r < A.rows(); ++r)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(A, I * kBlock + r); it; ++it)
+        if (it.value() != 0.0 && slot[static_cast<std::size_t>(it.col() / kBlock)] < 0) {
+          slot[static_cast<std::size_t>(it.col() / kBlock)] = 0;
+          col.push_back(static_cast<int>(it.col() / kBlock));
+        }
+    std::sort(col.begin() + first, col.end());
+    for (int b = first; b < static_cast<int>(col.size()); ++b) slot[static_cast<std::size_t>(col[b])] = b;
+    values.resize(col.size() * kBlock * kBlock, 0.0);
+    for (int r = 0; r < kBlock && I * kBlock + r < A.rows(); ++r)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(A, I * kBlock + r); it; ++it)
+        if (it.value() != 0.0)
+          values[static_cast<std::size_t>(slot[static_cast<std::size_t>(it.col() / kBlock)]) * kBlock * kBlock +
+                 static_cast<std::size_t>(it.col() % kBlock) * kBlock + static_cast<std::size_t>(r)] = it.value();
+    for (int b = first; b < static_cast<int>(col.size()); ++b) slot[static_cast<std::size_t>(col[b])] = -1;
+    start[static_cast<std::size_t>(I) + 1] = static_cast<int>(col.size());
+  }
+}
+
 NewmarkIntegrator::NewmarkIntegrator(const LinearSystem& sys, double dt, bool include_gravity,
                                      rail::core::CostClock* cost, int end_dashpots, CholeskyLayout layout)
     : sys_(sys),
@@ -48,34 +97,12 @@ NewmarkIntegrator::NewmarkIntegrator(const LinearSystem& sys, double dt, bool in
     throw std::runtime_error("NewmarkIntegrator: M, C, K and f_gravity sizes differ");
   const Eigen::SparseMatrix<double> K_eff = sys.K + (4.0 / (dt * dt)) * sys.M + (2.0 / dt) * sys.C;
   factor_.reset(new SparseCholesky(K_eff, layout));
-  // Rows of M and C merged over the union of their column indices (zeros where only one has an entry).
-  const Eigen::SparseMatrix<double, Eigen::RowMajor> M_rows = sys.M, C_rows = sys.C;
-  row_start_.assign(static_cast<std::size_t>(n) + 1, 0);
-  col_.reserve(static_cast<std::size_t>(M_rows.nonZeros() + C_rows.nonZeros()));
-  m_.reserve(col_.capacity());
-  c_.reserve(col_.capacity());
-  for (int i = 0; i < n; ++i) {
-    Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator pm(M_rows, i), pc(C_rows, i);
-    while (pm || pc) {
-      const int j = !pc ? pm.col() : !pm ? pc.col() : std::min(pm.col(), pc.col());
-      double m = 0.0, c = 0.0;
-      if (pm && pm.col() == j) {
-        m = pm.value();
-        ++pm;
-      }
-      if (pc && pc.col() == j) {
-        c = pc.value();
-        ++pc;
-      }
-      col_.push_back(j);
-      m_.push_back(m);
-      c_.push_back(c);
-    }
-    row_start_[static_cast<std::size_t>(i) + 1] = static_cast<int>(col_.size());
-  }
+  const int block_rows = (n + kBlock - 1) / kBlock;
+  m_blocks_.build(sys.M, block_rows);
+  c_blocks_.build(sys.C, block_rows);
   rhs_.setZero(n);
-  x1_.setZero(n);
-  x2_.setZero(n);
+  x1_.setZero(static_cast<Eigen::Index>(block_rows) * kBlock);
+  x2_.setZero(static_cast<Eigen::Index>(block_rows) * kBlock);
   d_new_.setZero(n);
 }
 
@@ -123,31 +150,33 @@ void NewmarkIntegrator::buildRhs(const NewmarkState& st, const NodalLoads& loads
       x1[i] = c0 * d[i] + c1 * v[i] + a[i];
       x2[i] = c2 * d[i] + v[i];
     }
-    const int* start = row_start_.data();
-    const int* col = col_.data();
-    const double* m = m_.data();
-    const double* c = c_.data();
     const double* g = include_gravity_ ? sys_.f_gravity.data() : nullptr;
     double* rhs = rhs_.data();
-    if (damped_) {
-      for (int i = 0; i < n; ++i) {
-        double sum_m = 0.0, sum_c = 0.0;  // two chains of additions
-        for (int p = start[i]; p < start[i + 1]; ++p) {
-          sum_m += m[p] * x1[col[p]];
-          sum_c += c[p] * x2[col[p]];
-        }
-        rhs[i] = (g ? g[i] : 0.0) + (sum_m + sum_c);
+    const int block_rows = static_cast<int>(m_blocks_.start.size()) - 1;
+    alignas(16) double sum_m[kBlock], sum_c[kBlock];
+    for (int I = 0; I < block_rows; ++I) {
+      const int i0 = I * kBlock, rows = std::min(kBlock, n - i0);
+      __m128d acc_m[3] = {_mm_setzero_pd(), _mm_setzero_pd(), _mm_setzero_pd()};
+      if (!damped_ && g != nullptr) {  // the sum starts at the gravity load, as a row loop's would
+        for (int r = 0; r < rows; ++r) sum_m[r] = g[i0 + r];
+        for (int r = rows; r < kBlock; ++r) sum_m[r] = 0.0;
+        for (int k = 0; k < 3; ++k) acc_m[k] = _mm_load_pd(sum_m + 2 * k);
       }
-      if (cost_ != nullptr) {
-        ++cost_->counts[rail::core::CostClock::kDampingProducts];
-        cost_->counts[rail::core::CostClock::kEndDashpotForces] += end_dashpots_;
+      addBlockRow(m_blocks_.col.data(), m_blocks_.values.data(), m_blocks_.start[I], m_blocks_.start[I + 1], x1, acc_m);
+      for (int k = 0; k < 3; ++k) _mm_store_pd(sum_m + 2 * k, acc_m[k]);
+      if (damped_) {
+        __m128d acc_c[3] = {_mm_setzero_pd(), _mm_setzero_pd(), _mm_setzero_pd()};
+        addBlockRow(c_blocks_.col.data(), c_blocks_.values.data(), c_blocks_.start[I], c_blocks_.start[I + 1], x2,
+                    acc_c);
+        for (int k = 0; k < 3; ++k) _mm_store_pd(sum_c + 2 * k, acc_c[k]);
+        for (int r = 0; r < rows; ++r) rhs[i0 + r] = (g ? g[i0 + r] : 0.0) + (sum_m[r] + sum_c[r]);
+      } else {
+        for (int r = 0; r < rows; ++r) rhs[i0 + r] = sum_m[r];
       }
-    } else {
-      for (int i = 0; i < n; ++i) {
-        double sum = g ? g[i] : 0.0;
-        for (int p = start[i]; p < start[i + 1]; ++p) sum += m[p] * x1[col[p]];
-        rhs[i] = sum;
-      }
+    }
+    if (damped_ && cost_ != nullptr) {
+      ++cost_->counts[rail::core::CostClock::kDampingProducts];
+      cost_->counts[rail::core::CostClock::kEndDashpotForces] += end_dashpots_;
     }
     for (int k = 0; k < loads.size(); ++k) rhs_(loads.index(k)) += loads.value(k);
     if (more != nullptr)
