@@ -78,9 +78,11 @@ inline std::unique_ptr<rail::core::coupling::FrameTransport> makeTransport(const
       o.run_id = shmRunId(pnh);
       o.attach_timeout = scene.solver.handshake_timeout;
       o.interrupt = interrupt;
-      // The vehicle's wait for a flexible track step (hundreds of us, on two threads) sleeps at once:
-      // spinning or yielding would take a core from the track's solve; a futex wake-up costs ~10 us.
-      if (role == coupling::Role::kVehicle && scene.runsFeIntegration()) o.spin_time = o.yield_time = 0.0;
+      // With a flexible track both waits sleep at once: the vehicle's for a track step (hundreds of us, on
+      // two threads), the track's for the vehicle's integration (the track's second thread solves the next
+      // base step meanwhile). Spinning or yielding took a core from the threads at work; a futex wake-up
+      // costs ~10 us.
+      if (scene.runsFeIntegration()) o.spin_time = o.yield_time = 0.0;
       auto t = std::make_unique<coupling::ShmTransport>(o);
       if (!t->replacedStale().empty()) {  // a crashed run's region: say so, the run goes on
         ROS_WARN("%s: shm transport: %s", ros::this_node::getName().c_str(), t->replacedStale().c_str());

@@ -90,12 +90,8 @@ TrackRunStatus CosimTrackRun::step() {
     std::snprintf(text, sizeof(text), "step %llu: the vehicle's frame was refused (", step);
     return fail(core::kExitPeerRefused, text + std::string(describe(status)) + ")");
   }
-  const cc::Result w = coupling_.send();
-  if (!w) {
-    std::snprintf(text, sizeof(text), "sending the wrenches of step %llu to the vehicle node ", step);
-    return fail(cc::exitCode(w.status), text + options_.peer + " failed: " + w.message);
-  }
-  // The rest of the track's step while the vehicle integrates its next one.
+  // The rest of the track's step (the Newmark completion with the step's contact loads) before the
+  // vehicle's integration; the next base solve runs beside that integration.
   if (options_.cost != nullptr) {
     const auto t0 = std::chrono::steady_clock::now();
     track_.finishStep();
@@ -103,6 +99,11 @@ TrackRunStatus CosimTrackRun::step() {
                               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   } else {
     track_.finishStep();
+  }
+  const cc::Result w = coupling_.send();
+  if (!w) {
+    std::snprintf(text, sizeof(text), "sending the wrenches of step %llu to the vehicle node ", step);
+    return fail(cc::exitCode(w.status), text + options_.peer + " failed: " + w.message);
   }
   return TrackRunStatus::kRunning;
 }
