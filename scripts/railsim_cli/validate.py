@@ -16,8 +16,16 @@ def validator(args, cwd=None):
     """railsim_validate_scene's output for args; its error on stderr and exit 1 when the scene is refused."""
     p = subprocess.run([VALIDATE] + list(args), cwd=cwd, stdout=subprocess.PIPE, text=True)
     if p.returncode != 0:
+        crashed(VALIDATE, p.returncode)
         raise Stop(1)
     return p.stdout
+
+
+def crashed(program, returncode):
+    """Says so when a checker ended by a signal (it wrote no error of its own): a broken build or library."""
+    if returncode < 0:
+        log("%s ended by signal %d before it checked the scene (a broken build? rebuild with ./railsim setup)"
+            % (program, -returncode))
 
 
 def check_data(args, cwd=None):
@@ -33,6 +41,7 @@ def check_data(args, cwd=None):
                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     if p.returncode != 0:
         sys.stderr.write(p.stdout)
+        crashed(CHECK_INPUTS, p.returncode)
         raise Stop(1)
 
 

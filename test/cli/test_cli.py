@@ -286,6 +286,29 @@ class TestCli(unittest.TestCase):
             self.assertEqual(rc, 1, "%s: run: %s" % (what, text))
             self.assertIn(msg, text, what)
 
+    def test_a_checker_that_crashed_is_named(self):
+        # A checker ended by a signal writes no error of its own: the command says which one, and exits 1.
+        sys.path.insert(0, os.path.join(ROOT, "scripts"))
+        import contextlib
+        import io
+        from railsim_cli import common, validate
+        crash = os.path.join(self.dir, "crashing_checker")
+        with open(crash, "w") as f:
+            f.write("#!/bin/sh\nkill -SEGV $$\n")
+        os.chmod(crash, 0o755)
+        saved = validate.CHECK_INPUTS, validate.VALIDATE
+        try:
+            for name in ("CHECK_INPUTS", "VALIDATE"):
+                validate.CHECK_INPUTS, validate.VALIDATE = saved
+                setattr(validate, name, crash)
+                err = io.StringIO()
+                with contextlib.redirect_stderr(err), self.assertRaises(common.Stop) as stop:
+                    validate.check_data([SHORT]) if name == "CHECK_INPUTS" else validate.validator([SHORT])
+                self.assertEqual(stop.exception.code, 1, name)
+                self.assertIn("crashing_checker ended by signal 11 before it checked the scene", err.getvalue(), name)
+        finally:
+            validate.CHECK_INPUTS, validate.VALIDATE = saved
+
     def test_data_file_key_given_twice_refused(self):
         # The vehicle's and the track's data files: yaml-cpp would keep the first value without a word.
         def copy_with(src, name, old, new):
