@@ -192,6 +192,19 @@ TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
   EXPECT_LT(largestDifference(two.deflection, ref.deflection), 1e-9 * peak);
   EXPECT_EQ(largestDifference(two.force, two_whole.force), 0.0);
   EXPECT_EQ(largestDifference(two.deflection, two_whole.deflection), 0.0);
+  // The same ordering's supernodal factor in blocks (the default): the same, to rounding, as the others.
+  const PathRun blocked = runPath(true, rt::CholeskyLayout::kBlockedTwoParts, steps);
+  const PathRun blocked_whole = runPath(false, rt::CholeskyLayout::kBlockedTwoParts, steps);
+  ASSERT_EQ(blocked.refused, 0);
+  EXPECT_EQ(blocked.moves, ref.moves);
+  EXPECT_EQ(blocked.flange_steps, ref.flange_steps);
+  const double db = largestDifference(blocked.force, ref.force);
+  const double db_rail = largestDifference(blocked.deflection, ref.deflection);
+  EXPECT_LT(db, 1e-6 * kQ);
+  EXPECT_LT(db_rail, 1e-9 * peak);
+  EXPECT_EQ(largestDifference(blocked.force, blocked_whole.force), 0.0);
+  EXPECT_EQ(largestDifference(blocked.deflection, blocked_whole.deflection), 0.0);
+  std::printf("[ figures  ] blocked factor: forces differ by %.3g N, rail displacement by %.3g m\n", db, db_rail);
   std::printf(
       "[ figures  ] %ld steps, %d moves (%d rebuilt), %d steps with flange contact, largest wheel force "
       "%.0f N: forces differ by %.3g N (fast) and %.3g N (simplicial in the step), rail displacement by "
@@ -206,7 +219,9 @@ TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleS
   const Eigen::SparseMatrix<double> K_eff = effectiveStiffness(*track);
   rt::SparseCholesky simplicial(K_eff, rt::CholeskyLayout::kSimplicial);
   rt::SparseCholesky supernodal(K_eff, rt::CholeskyLayout::kSupernodal);
+  rt::SparseCholesky blocked(K_eff, rt::CholeskyLayout::kBlockedTwoParts);
   EXPECT_EQ(simplicial.layout(), rt::CholeskyLayout::kSimplicial);
+  EXPECT_FALSE(blocked.isSupernodal());
   EXPECT_FALSE(simplicial.isSupernodal());
   EXPECT_TRUE(supernodal.isSupernodal());
   const int n = K_eff.rows();
@@ -221,35 +236,53 @@ TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleS
   Eigen::VectorXd x3 = b;
   simplicial.solve(x3, x3);
   EXPECT_EQ((x3 - x1).cwiseAbs().maxCoeff(), 0.0);
+  // The blocks (inverted diagonal blocks: their own rounding) solve the same system as closely.
+  Eigen::VectorXd x4(n), x5 = b;
+  blocked.solve(b, x4);
+  EXPECT_LT((K_eff.selfadjointView<Eigen::Upper>() * x4 - b).norm(), 1e-12 * b.norm() * 1e3);
+  EXPECT_LT((x4 - x2).norm(), 1e-9 * x2.norm());
+  blocked.solve(x5, x5);
+  EXPECT_EQ((x5 - x4).cwiseAbs().maxCoeff(), 0.0);
 
   const rt::TrackMesh& mesh = track->trackWindow()->mesh();
   const int node = mesh.rail_nodes[1][mesh.rail_nodes[1].size() / 3];
   int dofs[6];
   for (int j = 0; j < 6; ++j) dofs[j] = mesh.dofIndex(node, j);
-  Eigen::MatrixXd many(n, 6), one(n, 1), ref(n, 6);
+  Eigen::MatrixXd many(n, 6), one(n, 1), ref(n, 6), blocked_many(n, 6), blocked_one(n, 1);
   simplicial.solveUnitColumns(dofs, 6, many);
   supernodal.solveUnitColumns(dofs, 6, ref);
+  blocked.solveUnitColumns(dofs, 6, blocked_many);
   for (int c = 0; c < 6; ++c) {
-    Eigen::VectorXd e = Eigen::VectorXd::Zero(n), x(n);
+    Eigen::VectorXd e = Eigen::VectorXd::Zero(n), x(n), x_blocked(n);
     e(dofs[c]) = 1.0;
     simplicial.solve(e, x);
     simplicial.solveUnitColumns(dofs + c, 1, one);
     EXPECT_LT((many.col(c) - x).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << "column " << c;
     EXPECT_LT((one.col(0) - x).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << "column " << c;
     EXPECT_LT((ref.col(c) - x).cwiseAbs().maxCoeff(), 1e-9 * x.cwiseAbs().maxCoeff()) << "column " << c;
+    // The blocks' columns (their forward pass skips the blocks off the unit row's path) against the blocks'
+    // own solve, and against the simplicial factor's.
+    blocked.solve(e, x_blocked);
+    blocked.solveUnitColumns(dofs + c, 1, blocked_one);
+    EXPECT_LT((blocked_many.col(c) - x_blocked).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << c;
+    EXPECT_LT((blocked_one.col(0) - x_blocked).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << c;
+    EXPECT_LT((x_blocked - x).cwiseAbs().maxCoeff(), 1e-9 * x.cwiseAbs().maxCoeff()) << "column " << c;
   }
 }
 
 // The factor in two parts: parts independent in L, a separator of one plane of the track, about the fill of
 // CHOLMOD's own ordering, and the solve in phases on two threads equal to the whole solve.
-TEST(SparseCholeskySolves, TwoPartsSolvedOnTwoThreadsEqualTheWholeSolve) {
+// Both layouts in two parts (the simplicial one and the blocks).
+class TwoPartsLayout : public ::testing::TestWithParam<rt::CholeskyLayout> {};
+
+TEST_P(TwoPartsLayout, SolvedOnTwoThreadsEqualsTheWholeSolve) {
   const std::unique_ptr<rt::CosimTrack> track = curveWindowTrack();
   const Eigen::SparseMatrix<double> K_eff = effectiveStiffness(*track);
   rt::SparseCholesky whole(K_eff, rt::CholeskyLayout::kSimplicial);
-  rt::SparseCholesky two(K_eff, rt::CholeskyLayout::kSimplicialTwoParts);
+  rt::SparseCholesky two(K_eff, GetParam());
   rt::SparseCholesky supernodal(K_eff, rt::CholeskyLayout::kSupernodal);
   const int n = K_eff.rows();
-  EXPECT_EQ(two.layout(), rt::CholeskyLayout::kSimplicialTwoParts);
+  EXPECT_EQ(two.layout(), GetParam());
   EXPECT_EQ(two.partRows(0) + two.partRows(1) + two.separatorRows(), n);
   EXPECT_EQ(two.partRows(0), n / 2);
   // One cross-section of the track: each rail's node where the halves meet (6 DOFs each), and at most a
@@ -278,3 +311,7 @@ TEST(SparseCholeskySolves, TwoPartsSolvedOnTwoThreadsEqualTheWholeSolve) {
     ASSERT_EQ((x_parts - x_whole).cwiseAbs().maxCoeff(), 0.0) << "repeat " << repeat;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(SparseCholeskySolves, TwoPartsLayout,
+                         ::testing::Values(rt::CholeskyLayout::kSimplicialTwoParts,
+                                           rt::CholeskyLayout::kBlockedTwoParts));

@@ -111,9 +111,10 @@ struct CosimTrackOptions {
   /// results equal the one-thread path's to rounding. false: the solve runs inside step().
   bool solve_beside = true;
   /// How K_eff is factorised and solved (SparseCholesky); the supernodal CHOLMOD solve is the reference.
-  /// kSimplicialTwoParts with solve_beside: the loop's thread, once its contacts are found, solves the
-  /// second part of each triangular pass of the base solve while the worker solves the first.
-  CholeskyLayout factor_layout = CholeskyLayout::kSimplicialTwoParts;
+  /// kBlockedTwoParts or kSimplicialTwoParts with solve_beside: the loop's thread, once its contacts are
+  /// found, solves the second part of each triangular pass of the base solve while the worker solves the
+  /// first.
+  CholeskyLayout factor_layout = CholeskyLayout::kBlockedTwoParts;
   /// kSemiImplicit: an influence column K_eff^{-1} e_j is stored over the DOF window where it exceeds this
   /// fraction of its largest entry (the DOFs are numbered plane by plane along the track).
   double influence_tolerance = 1e-12;

@@ -325,7 +325,8 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
     // adds it to cost_ when it takes a result.
     solve_beside_ = true;
     columns_beside_ = options.factor_layout != CholeskyLayout::kSupernodal;
-    split_solve_ = options.factor_layout == CholeskyLayout::kSimplicialTwoParts;
+    split_solve_ = options.factor_layout == CholeskyLayout::kSimplicialTwoParts ||
+                   options.factor_layout == CholeskyLayout::kBlockedTwoParts;
     if (cost_ != nullptr) {
       cost_->track_solve_beside = true;
       fe_->setCostClock(&worker_cost_);

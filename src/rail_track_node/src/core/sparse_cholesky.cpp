@@ -38,7 +38,107 @@ struct SparseCholesky::Impl {
   // independent parts, [part_end[1], n) the separator.
   int part_end[2] = {0, 0};
   Eigen::VectorXd unit_b, unit_x;  // supernodal solveUnitColumns: one unit right-hand side and its solution
+  // kBlockedTwoParts: per supernode of CHOLMOD's factor, the inverse of its diagonal block (lower triangle,
+  // packed by columns) followed by the block below it (column-major), in block_value.
+  struct Block {
+    int first = 0;             // first row (and column) of the supernode in P A P'
+    int cols = 0;              // its columns
+    int below = 0;             // rows below its diagonal block
+    int below_own = 0;         // of them, those in its own region (the others are rows of the separator)
+    int row_at = 0;            // its rows below the diagonal block start at block_row[row_at]
+    std::size_t value_at = 0;  // its values start at block_value[value_at]
+  };
+  std::vector<Block> blocks;
+  std::vector<int> block_row;
+  std::vector<double> block_value;
+  int block_end[3] = {0, 0, 0};  // the blocks of part 0, part 1 and the separator end here
+  int max_cols = 0, max_below = 0;
+  std::vector<double> separator_sum[2];  // the forward updates of the separator's rows by each part
+  std::vector<double> scratch[3];        // per region (part 0, part 1, separator): a block's v and t
+  std::vector<double> unit_scratch;      // solveUnitColumns: a block's v, u and t for kMaxUnitColumns
 };
+
+namespace {
+// The region of row i of P A P' in the two-part ordering: 0 and 1 the parts, 2 the separator.
+inline int regionOf(const int* part_end, int i) { return i < part_end[0] ? 0 : i < part_end[1] ? 1 : 2; }
+
+}  // namespace
+
+// kBlockedTwoParts: the blocks of the supernodal factor s.L (see Impl::Block), a supernode that spans two
+// regions (CHOLMOD may merge a part's last columns into the separator's) split at the region's end. Throws
+// when the parts meet.
+void SparseCholesky::buildBlocks(Impl& s) {
+  const cholmod_factor* L = s.L;
+  if (!L->is_super || !L->is_ll || L->xtype != CHOLMOD_REAL || L->itype != CHOLMOD_INT)
+    throw std::runtime_error("SparseCholesky: CHOLMOD did not return a supernodal real L L' factor");
+  const int* super = static_cast<const int*>(L->super);
+  const int* pi = static_cast<const int*>(L->pi);
+  const int* px = static_cast<const int*>(L->px);
+  const int* ls = static_cast<const int*>(L->s);
+  const double* lx = static_cast<const double*>(L->x);
+  const int* P = static_cast<const int*>(L->Perm);
+  const int nsuper = static_cast<int>(L->nsuper);
+  s.perm.resize(static_cast<std::size_t>(s.n));
+  for (int j = 0; j < s.n; ++j) s.perm[static_cast<std::size_t>(j)] = P ? P[j] : j;
+  int region_before = 0;
+  for (int k = 0; k < nsuper; ++k) {
+    const int first = super[k], cols = super[k + 1] - super[k], rows = pi[k + 1] - pi[k];
+    const int* R = ls + pi[k];
+    const double* Lk = lx + px[k];
+    bool ordered = true;
+    for (int i = 0; i < rows && ordered; ++i) ordered = i < cols ? R[i] == first + i : R[i] > R[i - 1];
+    if (!ordered)
+      throw std::runtime_error("SparseCholesky: the rows of supernode " + std::to_string(k) + " are not ascending");
+    for (int c0 = 0; c0 < cols;) {  // the piece of columns [c0, c1) of the supernode that lies in one region
+      const int region = regionOf(s.part_end, first + c0);
+      const int region_end = region == 2 ? s.n : s.part_end[region];
+      const int c1 = std::min(cols, region_end - first);
+      if (region < region_before)
+        throw std::runtime_error("SparseCholesky: supernode " + std::to_string(k) +
+                                 " lies before a region it does not belong to");
+      region_before = region;
+      Impl::Block blk;
+      blk.first = first + c0;
+      blk.cols = c1 - c0;
+      blk.below = rows - c1;
+      blk.below_own = 0;
+      for (int i = c1; i < rows; ++i) {
+        const int r = regionOf(s.part_end, R[i]);
+        if (r != region && r != 2)
+          throw std::runtime_error("SparseCholesky: the two parts of the ordering are coupled in L (row " +
+                                   std::to_string(R[i]) + " of supernode " + std::to_string(k) + ")");
+        if (r == region) ++blk.below_own;
+      }
+      blk.row_at = static_cast<int>(s.block_row.size());
+      s.block_row.insert(s.block_row.end(), R + c1, R + rows);
+      blk.value_at = s.block_value.size();
+      Eigen::MatrixXd D = Eigen::MatrixXd::Zero(blk.cols, blk.cols);
+      for (int j = 0; j < blk.cols; ++j)
+        for (int i = j; i < blk.cols; ++i) D(i, j) = Lk[static_cast<std::ptrdiff_t>(c0 + j) * rows + c0 + i];
+      const Eigen::MatrixXd D_inv =
+          D.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(blk.cols, blk.cols));
+      for (int j = 0; j < blk.cols; ++j)
+        for (int i = j; i < blk.cols; ++i) s.block_value.push_back(D_inv(i, j));
+      for (int j = 0; j < blk.cols; ++j)
+        for (int i = c1; i < rows; ++i) s.block_value.push_back(Lk[static_cast<std::ptrdiff_t>(c0 + j) * rows + i]);
+      s.blocks.push_back(blk);
+      s.block_end[region] = static_cast<int>(s.blocks.size());
+      s.max_cols = std::max(s.max_cols, blk.cols);
+      s.max_below = std::max(s.max_below, blk.below);
+      c0 = c1;
+    }
+  }
+  s.block_end[1] = std::max(s.block_end[1], s.block_end[0]);
+  s.block_end[2] = std::max(s.block_end[2], s.block_end[1]);
+  const int separator = s.n - s.part_end[1];
+  for (auto& sum : s.separator_sum) sum.assign(static_cast<std::size_t>(separator), 0.0);
+  for (auto& work : s.scratch) work.assign(static_cast<std::size_t>(s.max_cols + s.max_below), 0.0);
+  s.unit_scratch.assign(static_cast<std::size_t>(2 * s.max_cols + s.max_below) * SparseCholesky::kMaxUnitColumns, 0.0);
+  s.y.assign(static_cast<std::size_t>(s.n), 0.0);
+  s.inverse.assign(static_cast<std::size_t>(s.n), 0);
+  for (int j = 0; j < s.n; ++j) s.inverse[static_cast<std::size_t>(s.perm[static_cast<std::size_t>(j)])] = j;
+  s.y_many.assign(static_cast<std::size_t>(s.n) * SparseCholesky::kMaxUnitColumns, 0.0);
+}
 
 SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, CholeskyLayout layout) : impl_(new Impl) {
   Impl& s = *impl_;
@@ -51,7 +151,10 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
   A.makeCompressed();
 
   cholmod_start(&s.common);
-  s.common.supernodal = layout == CholeskyLayout::kSupernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
+  const bool two_parts = layout == CholeskyLayout::kSimplicialTwoParts || layout == CholeskyLayout::kBlockedTwoParts;
+  s.common.supernodal = layout == CholeskyLayout::kSupernodal || layout == CholeskyLayout::kBlockedTwoParts
+                            ? CHOLMOD_SUPERNODAL
+                            : CHOLMOD_SIMPLICIAL;
   s.common.final_ll = 1;  // simplicial: L L', not L D L'
 
   cholmod_sparse view;
@@ -69,8 +172,8 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
   view.sorted = 1;
   view.packed = 1;
 
-  std::vector<int> given;  // kSimplicialTwoParts: the ordering
-  if (layout == CholeskyLayout::kSimplicialTwoParts) {
+  std::vector<int> given;  // two parts: the ordering
+  if (two_parts) {
     // Rows below n/2 are part 0, the others part 1, except those of part 1 coupled to part 0: the
     // separator (constraint set 2, ordered last). CAMD orders within each set.
     const int half = s.n / 2;
@@ -119,6 +222,16 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
     throw std::runtime_error("SparseCholesky: cholmod_factorize failed (status " + std::to_string(status) + ")");
   }
 
+  if (layout == CholeskyLayout::kBlockedTwoParts) {
+    try {
+      buildBlocks(s);
+    } catch (...) {
+      cholmod_free_factor(&s.L, &s.common);
+      cholmod_finish(&s.common);
+      throw;
+    }
+    return;
+  }
   if (layout != CholeskyLayout::kSupernodal) {
     if (s.L->is_super || !s.L->is_ll || s.L->xtype != CHOLMOD_REAL) {
       cholmod_free_factor(&s.L, &s.common);
@@ -232,8 +345,106 @@ void SparseCholesky::solve(const Eigen::VectorXd& b, Eigen::VectorXd& x) {
     return;
   }
   if (x.size() != s.n) x.resize(s.n);
+  if (s.layout == CholeskyLayout::kBlockedTwoParts) {
+    for (int region = 0; region < 3; ++region) forwardBlocks(s, region, b);
+    backwardBlocks(s, 2, x);
+    backwardBlocks(s, 0, x);
+    backwardBlocks(s, 1, x);
+    return;
+  }
   forwardRows(s, b, 0, s.n);
   backwardRows(s, x, 0, s.n);
+}
+
+// kBlockedTwoParts, L y = P b over the rows of one region (0, 1: the parts, 2: the separator), block by
+// block: the block's unknowns are its inverse diagonal block times its right-hand side, then the block
+// below them updates the rows below (a part's updates of the separator's rows are summed apart, so that
+// the two parts can run at once; the separator subtracts part 0's sums, then part 1's).
+void SparseCholesky::forwardBlocks(Impl& s, int region, const Eigen::VectorXd& b) noexcept {
+  const int row_begin = region == 0 ? 0 : s.part_end[region - 1];
+  const int row_end = region == 2 ? s.n : s.part_end[region];
+  const int* perm = s.perm.data();
+  double* y = s.y.data();
+  double* separator_sum = nullptr;  // indexed by row of P A P'
+  if (region < 2) {
+    for (int i = row_begin; i < row_end; ++i) y[i] = b[perm[i]];
+    std::fill(s.separator_sum[region].begin(), s.separator_sum[region].end(), 0.0);
+    separator_sum = s.separator_sum[region].data() - s.part_end[1];
+  } else {
+    const double* sum0 = s.separator_sum[0].data() - row_begin;
+    const double* sum1 = s.separator_sum[1].data() - row_begin;
+    for (int i = row_begin; i < row_end; ++i) y[i] = (b[perm[i]] - sum0[i]) - sum1[i];
+  }
+  double* v = s.scratch[region].data();
+  double* t = v + s.max_cols;
+  const int* block_row = s.block_row.data();
+  for (int k = region == 0 ? 0 : s.block_end[region - 1]; k < s.block_end[region]; ++k) {
+    const Impl::Block& blk = s.blocks[static_cast<std::size_t>(k)];
+    const int nc = blk.cols, nb = blk.below;
+    const double* value = s.block_value.data() + blk.value_at;
+    double* yk = y + blk.first;
+    for (int i = 0; i < nc; ++i) v[i] = 0.0;
+    for (int j = 0; j < nc; ++j) {  // v = D^{-1} y_k, by the columns of D^{-1}
+      const double yj = yk[j];
+      for (int i = j; i < nc; ++i) v[i] += value[i - j] * yj;
+      value += nc - j;
+    }
+    for (int i = 0; i < nc; ++i) yk[i] = v[i];
+    if (nb == 0) continue;
+    for (int i = 0; i < nb; ++i) t[i] = 0.0;
+    for (int j = 0; j < nc; ++j, value += nb) {  // t = B v
+      const double vj = v[j];
+      for (int i = 0; i < nb; ++i) t[i] += value[i] * vj;
+    }
+    const int* R = block_row + blk.row_at;
+    for (int i = 0; i < blk.below_own; ++i) y[R[i]] -= t[i];
+    for (int i = blk.below_own; i < nb; ++i) separator_sum[R[i]] += t[i];
+  }
+}
+
+// kBlockedTwoParts, L' z = y over the rows of one region, blocks descending (the rows below a block are
+// solved: its own region's and the separator's), then x = P' z over those rows.
+void SparseCholesky::backwardBlocks(Impl& s, int region, Eigen::VectorXd& x) noexcept {
+  const int row_begin = region == 0 ? 0 : s.part_end[region - 1];
+  const int row_end = region == 2 ? s.n : s.part_end[region];
+  double* y = s.y.data();
+  double* u = s.scratch[region].data();
+  double* t = u + s.max_cols;
+  const int* block_row = s.block_row.data();
+  for (int k = s.block_end[region] - 1; k >= (region == 0 ? 0 : s.block_end[region - 1]); --k) {
+    const Impl::Block& blk = s.blocks[static_cast<std::size_t>(k)];
+    const int nc = blk.cols, nb = blk.below;
+    const double* inverse = s.block_value.data() + blk.value_at;
+    const double* below = inverse + static_cast<std::ptrdiff_t>(nc) * (nc + 1) / 2;
+    double* yk = y + blk.first;
+    const int* R = block_row + blk.row_at;
+    for (int i = 0; i < nb; ++i) t[i] = y[R[i]];
+    for (int j = 0; j < nc; ++j, below += nb) {  // u = y_k - B' t
+      double sum0 = 0.0, sum1 = 0.0, sum2 = 0.0, sum3 = 0.0;
+      int i = 0;
+      for (; i + 3 < nb; i += 4) {
+        sum0 += below[i] * t[i];
+        sum1 += below[i + 1] * t[i + 1];
+        sum2 += below[i + 2] * t[i + 2];
+        sum3 += below[i + 3] * t[i + 3];
+      }
+      for (; i < nb; ++i) sum0 += below[i] * t[i];
+      u[j] = yk[j] - ((sum0 + sum1) + (sum2 + sum3));
+    }
+    for (int i = 0; i < nc; ++i) {  // y_k = D^{-T} u: column i of D^{-1} (rows i and below) times u
+      double sum0 = 0.0, sum1 = 0.0;
+      int q = i;
+      for (; q + 1 < nc; q += 2) {
+        sum0 += inverse[q - i] * u[q];
+        sum1 += inverse[q + 1 - i] * u[q + 1];
+      }
+      if (q < nc) sum0 += inverse[q - i] * u[q];
+      yk[i] = sum0 + sum1;
+      inverse += nc - i;
+    }
+  }
+  const int* perm = s.perm.data();
+  for (int i = row_begin; i < row_end; ++i) x[perm[i]] = y[i];
 }
 
 // L y = P b over rows [begin, end), each unknown a dot product with its row (rows before begin that it reads
@@ -265,29 +476,38 @@ void SparseCholesky::backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int en
 
 void SparseCholesky::forwardPart(int part, const Eigen::VectorXd& b) noexcept {
   Impl& s = *impl_;
+  if (s.layout == CholeskyLayout::kBlockedTwoParts) return forwardBlocks(s, part, b);
   forwardRows(s, b, part == 0 ? 0 : s.part_end[0], s.part_end[part]);
 }
 
 void SparseCholesky::solveSeparator(const Eigen::VectorXd& b, Eigen::VectorXd& x) noexcept {
   Impl& s = *impl_;
+  if (s.layout == CholeskyLayout::kBlockedTwoParts) {
+    forwardBlocks(s, 2, b);
+    backwardBlocks(s, 2, x);
+    return;
+  }
   forwardRows(s, b, s.part_end[1], s.n);
   backwardRows(s, x, s.part_end[1], s.n);
 }
 
 void SparseCholesky::backwardPart(int part, Eigen::VectorXd& x) noexcept {
   Impl& s = *impl_;
+  if (s.layout == CholeskyLayout::kBlockedTwoParts) return backwardBlocks(s, part, x);
   backwardRows(s, x, part == 0 ? 0 : s.part_end[0], s.part_end[part]);
 }
 
 int SparseCholesky::partRows(int part) const {
   const Impl& s = *impl_;
-  if (s.layout != CholeskyLayout::kSimplicialTwoParts) return 0;
+  if (s.layout != CholeskyLayout::kSimplicialTwoParts && s.layout != CholeskyLayout::kBlockedTwoParts) return 0;
   return part == 0 ? s.part_end[0] : s.part_end[1] - s.part_end[0];
 }
 
 int SparseCholesky::separatorRows() const {
   const Impl& s = *impl_;
-  return s.layout == CholeskyLayout::kSimplicialTwoParts ? s.n - s.part_end[1] : 0;
+  return s.layout == CholeskyLayout::kSimplicialTwoParts || s.layout == CholeskyLayout::kBlockedTwoParts
+             ? s.n - s.part_end[1]
+             : 0;
 }
 
 // solveUnitColumns on the simplicial factor with K right-hand sides, rows interleaved (y[i * K + c]) so
@@ -344,8 +564,93 @@ void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
   }
 }
 
+// solveUnitColumns on the blocks with K right-hand sides, rows interleaved (y[i * K + c]). The forward pass
+// skips the blocks whose right-hand sides are still zero (those off the unit rows' paths to the root).
+template <int K>
+void SparseCholesky::blockedUnitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
+  const int n = s.n;
+  double* y = s.y_many.data();
+  std::fill(y, y + static_cast<std::ptrdiff_t>(n) * K, 0.0);
+  for (int c = 0; c < K; ++c)
+    y[static_cast<std::ptrdiff_t>(s.inverse[static_cast<std::size_t>(unit[c])]) * K + c] = 1.0;
+  double* v = s.unit_scratch.data();
+  double* u = v + static_cast<std::ptrdiff_t>(s.max_cols) * K;
+  double* t = u + static_cast<std::ptrdiff_t>(s.max_cols) * K;
+  const int* block_row = s.block_row.data();
+  const int blocks = static_cast<int>(s.blocks.size());
+  for (int k = 0; k < blocks; ++k) {
+    const Impl::Block& blk = s.blocks[static_cast<std::size_t>(k)];
+    const int nc = blk.cols, nb = blk.below;
+    double* yk = y + static_cast<std::ptrdiff_t>(blk.first) * K;
+    bool zero = true;
+    for (int i = 0; i < nc * K && zero; ++i) zero = yk[i] == 0.0;
+    if (zero) continue;
+    const double* value = s.block_value.data() + blk.value_at;
+    std::fill(v, v + nc * K, 0.0);
+    for (int j = 0; j < nc; ++j) {
+      for (int i = j; i < nc; ++i)
+        for (int c = 0; c < K; ++c) v[i * K + c] += value[i - j] * yk[j * K + c];
+      value += nc - j;
+    }
+    std::copy(v, v + nc * K, yk);
+    std::fill(t, t + nb * K, 0.0);
+    for (int j = 0; j < nc; ++j, value += nb)
+      for (int i = 0; i < nb; ++i)
+        for (int c = 0; c < K; ++c) t[i * K + c] += value[i] * v[j * K + c];
+    const int* R = block_row + blk.row_at;
+    for (int i = 0; i < nb; ++i) {
+      double* yi = y + static_cast<std::ptrdiff_t>(R[i]) * K;
+      for (int c = 0; c < K; ++c) yi[c] -= t[i * K + c];
+    }
+  }
+  for (int k = blocks - 1; k >= 0; --k) {
+    const Impl::Block& blk = s.blocks[static_cast<std::size_t>(k)];
+    const int nc = blk.cols, nb = blk.below;
+    const double* inverse = s.block_value.data() + blk.value_at;
+    const double* below = inverse + static_cast<std::ptrdiff_t>(nc) * (nc + 1) / 2;
+    double* yk = y + static_cast<std::ptrdiff_t>(blk.first) * K;
+    const int* R = block_row + blk.row_at;
+    for (int i = 0; i < nb; ++i) {
+      const double* yi = y + static_cast<std::ptrdiff_t>(R[i]) * K;
+      for (int c = 0; c < K; ++c) t[i * K + c] = yi[c];
+    }
+    std::copy(yk, yk + nc * K, u);
+    for (int j = 0; j < nc; ++j, below += nb)
+      for (int i = 0; i < nb; ++i)
+        for (int c = 0; c < K; ++c) u[j * K + c] -= below[i] * t[i * K + c];
+    for (int i = 0; i < nc; ++i) {
+      double sum[K] = {};
+      for (int q = i; q < nc; ++q)
+        for (int c = 0; c < K; ++c) sum[c] += inverse[q - i] * u[q * K + c];
+      for (int c = 0; c < K; ++c) yk[i * K + c] = sum[c];
+      inverse += nc - i;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    const double* yi = y + static_cast<std::ptrdiff_t>(i) * K;
+    const int r = s.perm[static_cast<std::size_t>(i)];
+    for (int c = 0; c < K; ++c) x(r, c) = yi[c];
+  }
+}
+
 void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixXd& x) {
   Impl& s = *impl_;
+  if (s.layout == CholeskyLayout::kBlockedTwoParts) {
+    switch (count) {
+      case 1:
+        return blockedUnitColumns<1>(s, unit, x);
+      case 2:
+        return blockedUnitColumns<2>(s, unit, x);
+      case 3:
+        return blockedUnitColumns<3>(s, unit, x);
+      case 4:
+        return blockedUnitColumns<4>(s, unit, x);
+      case 5:
+        return blockedUnitColumns<5>(s, unit, x);
+      default:
+        return blockedUnitColumns<6>(s, unit, x);
+    }
+  }
   if (s.layout == CholeskyLayout::kSupernodal) {
     for (int c = 0; c < count; ++c) {
       s.unit_b(unit[c]) = 1.0;
@@ -373,12 +678,15 @@ void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixX
 
 int SparseCholesky::rows() const { return impl_->n; }
 
-bool SparseCholesky::isSupernodal() const { return impl_->L->is_super != 0; }
+bool SparseCholesky::isSupernodal() const { return impl_->layout == CholeskyLayout::kSupernodal; }
 
 CholeskyLayout SparseCholesky::layout() const { return impl_->layout; }
 
 double SparseCholesky::factorNonZeros() const {
-  return impl_->layout != CholeskyLayout::kSupernodal ? static_cast<double>(impl_->value.size()) : impl_->common.lnz;
+  const Impl& s = *impl_;
+  return s.layout == CholeskyLayout::kSupernodal || s.layout == CholeskyLayout::kBlockedTwoParts
+             ? s.common.lnz
+             : static_cast<double>(s.value.size());
 }
 
 }  // namespace track
