@@ -383,16 +383,31 @@ void SparseCholesky::forwardBlocks(Impl& s, int region, const Eigen::VectorXd& b
     const int nc = blk.cols, nb = blk.below;
     const double* value = s.block_value.data() + blk.value_at;
     double* yk = y + blk.first;
+    // v = D^{-1} y_k and t = B v by the columns, two and four at a time: each sum's chain of dependent
+    // additions is the pass's critical path.
     for (int i = 0; i < nc; ++i) v[i] = 0.0;
-    for (int j = 0; j < nc; ++j) {  // v = D^{-1} y_k, by the columns of D^{-1}
-      const double yj = yk[j];
-      for (int i = j; i < nc; ++i) v[i] += value[i - j] * yj;
-      value += nc - j;
+    int j = 0;
+    for (; j + 1 < nc; j += 2) {
+      const double y0 = yk[j], y1 = yk[j + 1];
+      const double* c1 = value + (nc - j);
+      v[j] += value[0] * y0;
+      for (int i = j + 1; i < nc; ++i) v[i] += value[i - j] * y0 + c1[i - j - 1] * y1;
+      value = c1 + (nc - j - 1);
+    }
+    if (j < nc) {
+      v[j] += value[0] * yk[j];
+      value += 1;
     }
     for (int i = 0; i < nc; ++i) yk[i] = v[i];
     if (nb == 0) continue;
     for (int i = 0; i < nb; ++i) t[i] = 0.0;
-    for (int j = 0; j < nc; ++j, value += nb) {  // t = B v
+    j = 0;
+    for (; j + 3 < nc; j += 4, value += 4 * nb) {
+      const double v0 = v[j], v1 = v[j + 1], v2 = v[j + 2], v3 = v[j + 3];
+      const double *c0 = value, *c1 = value + nb, *c2 = value + 2 * nb, *c3 = value + 3 * nb;
+      for (int i = 0; i < nb; ++i) t[i] += (c0[i] * v0 + c1[i] * v1) + (c2[i] * v2 + c3[i] * v3);
+    }
+    for (; j < nc; ++j, value += nb) {
       const double vj = v[j];
       for (int i = 0; i < nb; ++i) t[i] += value[i] * vj;
     }
