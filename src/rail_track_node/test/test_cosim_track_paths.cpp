@@ -140,11 +140,24 @@ double largestDifference(const std::vector<double>& a, const std::vector<double>
 }
 
 // The curve scene's first track window, its solve inside the step.
-std::unique_ptr<rt::CosimTrack> curveWindowTrack() {
+std::unique_ptr<rt::CosimTrack> curveWindowTrack(const Scene& scene = curveScene()) {
   rt::CosimTrackOptions o;
   o.window.vehicle_length = 21.7;
   o.solve_beside = false;
-  return std::make_unique<rt::CosimTrack>(rt::resolveCosimTrack(curveScene()), o);
+  return std::make_unique<rt::CosimTrack>(rt::resolveCosimTrack(scene), o);
+}
+
+// curveScene with its coach on the straight instead (the window's rails and sleepers square to one line).
+Scene straightScene() {
+  const std::string text =
+      "name: p\ntrack:\n  gauge: 1.668\n  cant_reference_width: 1.733\n  data: ../track/paper_track.yaml\n"
+      "  segments:\n    - {type: straight, length: 100.0}\n"
+      "vehicle:\n  data: ../vehicle/paper_coach.yaml\n  start_arc_length: 55.0\n  speed: 30.0\n"
+      "  back_to_back: 1.592\n  nominal_radius: 0.445\n  wheelsets: 4\n"
+      "effects:\n  track_model: flexible\n"
+      "solver:\n  track_step: 2e-5\n  vehicle_max_step: 2e-5\n  end: {time: 1.0}\n"
+      "  track_window: {enabled: true, behind: 5.0, ahead: 5.0, shift: 0.6}\n";
+  return rail::core::fixtures::sceneFromText(text, "p.yaml");
 }
 
 // K_eff = K + 4/h^2 M + 2/h C of the track's window at h = 2e-5 s.
@@ -309,6 +322,46 @@ TEST_P(TwoPartsLayout, SolvedOnTwoThreadsEqualsTheWholeSolve) {
     two.backwardPart(0, x_parts);
     other_back.join();
     ASSERT_EQ((x_parts - x_whole).cwiseAbs().maxCoeff(), 0.0) << "repeat " << repeat;
+  }
+}
+
+// kBlockedTwoParts solves in blocks where they are dense (the curve's window) and with the simplicial loops
+// where a quarter of their values would be zeros (the straight's, whose rails' DOFs are partly uncoupled):
+// both against CHOLMOD's solve, and the straight's phases on two threads equal to its whole solve.
+TEST(SparseCholeskySolves, BlocksInTheCurveAndSimplicialLoopsOnTheStraight) {
+  const std::unique_ptr<rt::CosimTrack> curve = curveWindowTrack();
+  const std::unique_ptr<rt::CosimTrack> straight = curveWindowTrack(straightScene());
+  for (const rt::CosimTrack* track : {curve.get(), straight.get()}) {
+    const Eigen::SparseMatrix<double> K_eff = effectiveStiffness(*track);
+    rt::SparseCholesky blocked(K_eff, rt::CholeskyLayout::kBlockedTwoParts);
+    rt::SparseCholesky supernodal(K_eff, rt::CholeskyLayout::kSupernodal);
+    EXPECT_EQ(blocked.solvesInBlocks(), track == curve.get());
+    const int n = K_eff.rows();
+    const Eigen::VectorXd b = Eigen::VectorXd::Random(n) * 1e5;
+    Eigen::VectorXd x(n), x_ref(n), x_parts = Eigen::VectorXd::Zero(n);
+    blocked.solve(b, x);
+    supernodal.solve(b, x_ref);
+    EXPECT_LT((x - x_ref).norm(), 1e-9 * x_ref.norm());
+    std::thread other([&] { blocked.forwardPart(1, b); });
+    blocked.forwardPart(0, b);
+    other.join();
+    blocked.solveSeparator(b, x_parts);
+    std::thread other_back([&] { blocked.backwardPart(1, x_parts); });
+    blocked.backwardPart(0, x_parts);
+    other_back.join();
+    EXPECT_EQ((x_parts - x).cwiseAbs().maxCoeff(), 0.0);
+    const rt::TrackMesh& mesh = track->trackWindow()->mesh();
+    const int node = mesh.rail_nodes[0][mesh.rail_nodes[0].size() / 2];
+    int dofs[6];
+    for (int j = 0; j < 6; ++j) dofs[j] = mesh.dofIndex(node, j);
+    Eigen::MatrixXd columns(n, 6);
+    blocked.solveUnitColumns(dofs, 6, columns);
+    for (int c = 0; c < 6; ++c) {
+      Eigen::VectorXd e = Eigen::VectorXd::Zero(n), x_c(n);
+      e(dofs[c]) = 1.0;
+      supernodal.solve(e, x_c);
+      EXPECT_LT((columns.col(c) - x_c).cwiseAbs().maxCoeff(), 1e-9 * x_c.cwiseAbs().maxCoeff()) << "column " << c;
+    }
   }
 }
 

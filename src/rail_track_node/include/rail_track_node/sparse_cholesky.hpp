@@ -27,6 +27,8 @@ enum class CholeskyLayout {
   /// DOFs of a rail plane or of a node), each supernode stored once as the inverse of its triangular
   /// diagonal block and the dense block below it: both triangular passes read the same values, with one
   /// row index per block row, about half the bytes of a simplicial solve. Solved in the same three phases.
+  /// When a quarter or more of the blocks' values are zeros (a straight track: the rails' DOFs partly
+  /// uncoupled) the same factor is solved as kSimplicialTwoParts, without the zeros (solvesInBlocks()).
   kBlockedTwoParts,
 };
 
@@ -60,6 +62,8 @@ class SparseCholesky {
 
   int rows() const;
   bool isSupernodal() const;
+  /// kBlockedTwoParts: true when the factor is solved in blocks (false when too sparse for them).
+  bool solvesInBlocks() const;
   CholeskyLayout layout() const;
   /// Non-zeros of the factor L.
   double factorNonZeros() const;
