@@ -32,6 +32,7 @@ TOOLS = [
     ([os.path.join(LIB, "rail_track_node", "bench_newmark")], "usage"),
     ([os.path.join(LIB, "rail_track_node", "bench_track")], "usage"),
     ([os.path.join(LIB, "rail_track_node", "bench_track_window")], "usage"),
+    ([os.path.join(LIB, "rail_track_node", "bench_factor_solve")], "usage"),
     ([os.path.join(LIB, "rail_track_node", "track_end_reflection")], "usage"),
     ([os.path.join(LIB, "rail_track_node", "track_receptance")], "usage"),
     ([os.path.join(LIB, "rail_vehicle_node", "bench_vehicle_rhs")], "usage"),

@@ -10,7 +10,7 @@
 // moves, one on the straight (moves reuse the factor) and one on the R = 500 m curve (every move
 // refactorises): the median step without moves, the move steps (move + the influence columns solved
 // again) and the moves' own time.
-//   bench_cosim_track [steps] [window_steps] [cost 0|1] [solve_beside 0|1] [factor 0|1|2]
+//   bench_cosim_track [steps] [window_steps] [cost 0|1] [solve_beside 0|1] [factor 0|1|2|3]
 // (defaults 500, 20000 and 0; window_steps 0 skips the window runs; cost 1 passes a cost clock to the track,
 // as the node does, so that the clock's own overhead can be measured against cost 0)
 #include <Eigen/Geometry>
@@ -38,12 +38,12 @@ using Clock = std::chrono::steady_clock;
 
 namespace {
 const char* const kUsage =
-    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1] [solve_beside 0|1] [factor 0|1|2]\n"
+    "usage: bench_cosim_track [steps] [window_steps] [cost_clock 0|1] [solve_beside 0|1] [factor 0|1|2|3]\n"
     "Wall time of one co-simulation track step with the paper coach's 8 wheels on the paper scene: rigid_fe,\n"
     "flexible (semi-implicit and explicit coupling), and the moving track window (straight and curve runs\n"
     "of window_steps each). Defaults: 500, 20000, 0 (cost clock off), 1 (the next step's solve on a second\n"
     "thread), 0 (factor: 0 simplicial, 1 CHOLMOD's supernodal solve (the reference), 2 simplicial in two\n"
-    "parts, each solve shared by both threads).\n";
+    "parts, each solve shared by both threads, 3 in blocks in two parts, the co-simulation's default).\n";
 
 const char* layoutName(rt::CholeskyLayout layout) {
   switch (layout) {
@@ -53,6 +53,8 @@ const char* layoutName(rt::CholeskyLayout layout) {
       return "supernodal";
     case rt::CholeskyLayout::kSimplicialTwoParts:
       return "simplicial in two parts";
+    case rt::CholeskyLayout::kBlockedTwoParts:
+      return "blocks in two parts";
   }
   return "?";
 }
@@ -127,8 +129,8 @@ static void benchWindowSolves(const rt::TrackWindow& w, double h, int repeats) {
     std::sort(t.begin(), t.end());
     return 1e6 * t[t.size() / 2];
   };
-  for (rt::CholeskyLayout layout :
-       {rt::CholeskyLayout::kSimplicial, rt::CholeskyLayout::kSupernodal, rt::CholeskyLayout::kSimplicialTwoParts}) {
+  for (rt::CholeskyLayout layout : {rt::CholeskyLayout::kSimplicial, rt::CholeskyLayout::kSupernodal,
+                                    rt::CholeskyLayout::kSimplicialTwoParts, rt::CholeskyLayout::kBlockedTwoParts}) {
     rt::NewmarkIntegrator integ(sys, h, false, nullptr, 0, layout);
     const double one = median([&] { integ.solveEffective(b, x); });
     const double six = median([&] {
@@ -252,12 +254,12 @@ int main(int argc, char** argv) {
   g_cost = rail::tools::positionalNumber(argc, argv, 3, 0, 0, kUsage) != 0;
   g_beside = rail::tools::positionalNumber(argc, argv, 4, 1, 0, kUsage) != 0;
   const int factor = static_cast<int>(rail::tools::positionalNumber(argc, argv, 5, 0, 0, kUsage));
-  if (factor > 2) {
-    std::fprintf(stderr, "bench_cosim_track: factor must be 0, 1 or 2, got %d\n%s", factor, kUsage);
+  if (factor > 3) {
+    std::fprintf(stderr, "bench_cosim_track: factor must be 0, 1, 2 or 3, got %d\n%s", factor, kUsage);
     return 2;
   }
-  const rt::CholeskyLayout layouts[3] = {rt::CholeskyLayout::kSimplicial, rt::CholeskyLayout::kSupernodal,
-                                         rt::CholeskyLayout::kSimplicialTwoParts};
+  const rt::CholeskyLayout layouts[4] = {rt::CholeskyLayout::kSimplicial, rt::CholeskyLayout::kSupernodal,
+                                         rt::CholeskyLayout::kSimplicialTwoParts, rt::CholeskyLayout::kBlockedTwoParts};
   g_layout = layouts[factor];
   std::printf("cost clock %s, next solve %s, %s factor\n", g_cost ? "on" : "off",
               g_beside ? "beside (second thread)" : "in the step", layoutName(g_layout));
