@@ -471,11 +471,50 @@ class TestCli(unittest.TestCase):
             os.kill(pid, signal.SIGKILL)
         self.assertEqual(left, [])
         text = self.console()
-        self.assertIn("railsim_node_guard: roslaunch (pid %d) went away: stopping rail_vehicle" % p.pid, text)
+        # The vehicle's guard stops it, unless the vehicle ended on its own first (its peer stopped).
+        self.assertRegex(text, r"railsim_node_guard: roslaunch \(pid %d\) went away: (stopping rail_vehicle|"
+                               r"rail_vehicle had ended)" % p.pid)
         self.assertIn("bag closed", text)
         self.assertRegex(text, r"railsim_node_guard: stopping what roslaunch \(pid %d\) left running: "
                                r"rosmaster \(pid %d\), rosout \(pid \d+\)" % (p.pid, master[0]))
         # Bags are checked readable by tearDown.
+
+    def test_kill_9_of_a_bare_roslaunch_while_a_node_ends_leaves_nothing(self):
+        # The node of the lowest-pid guard (the one that stops what roslaunch started) ends on its own at
+        # the instant roslaunch dies: its guard, which then had no node to stop, still stops the master
+        # and rosout.
+        env = dict(self.env, ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.port)
+        env.pop("RAILSIM_STATUS_DIR", None)
+        self.log = os.path.join(self.dir, "console.log")
+        with open(self.log, "w") as f:
+            p = subprocess.Popen(["bash", "-c", 'source "$0/devel/setup.bash" && exec "$@"', ROOT, "roslaunch", "-p",
+                                  str(self.port), os.path.join(ROOT, "launch", "cosim.launch"), "scene:=" + COSIM,
+                                  "output_dir:=" + self.out, "overrides:=solver.end={time: 2.0}"],
+                                 stdout=f, stderr=subprocess.STDOUT, env=env, cwd=ROOT, start_new_session=True)
+        self.wait_for("integrating with")
+        guards = sorted(pid for pid, c in processes_naming(self.dir) if "railsim_node_guard" in c)
+        self.assertEqual(len(guards), 2, "a guard per node")
+
+        def parent_of(pid):
+            with open("/proc/%d/stat" % pid) as f:
+                return int(f.read().rsplit(")", 1)[1].split()[1])
+        node = [pid for pid, c in processes_naming(self.dir) if "railsim_node_guard" not in c and
+                parent_of(pid) == guards[0]]
+        self.assertEqual(len(node), 1, "the lowest guard's node")
+        os.kill(node[0], signal.SIGINT)
+        os.kill(p.pid, signal.SIGKILL)
+        p.wait()
+        deadline = time.monotonic() + 45.0
+        while processes_naming(self.dir) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        left = processes_naming(self.dir)
+        for pid, _ in left:
+            os.kill(pid, signal.SIGKILL)
+        self.assertEqual(left, [])
+        text = self.console()
+        self.assertIn("bag closed", text)
+        self.assertRegex(text, r"railsim_node_guard: stopping what roslaunch \(pid %d\) left running: "
+                               r"rosmaster \(pid \d+\), rosout \(pid \d+\)" % p.pid)
 
     def test_kill_9_of_the_runner_leaves_nothing(self):
         p = self.start("run", COSIM, "--set", "solver.end={time: 2.0}", "--out", self.out)

@@ -63,12 +63,13 @@ struct SparseCholesky::Impl {
 };
 
 namespace {
-// The region of row i of P A P' in the two-part ordering: 0 and 1 the parts, 2 the separator.
 // kBlockedTwoParts solves in blocks unless this fraction of the blocks' values or more are zeros: on the
 // paper track's window 14 % in a curve (blocks faster), 38 % on the straight (blocks slower).
 constexpr double kMaxBlockZeros = 0.25;
-constexpr int kPrefetchAhead = 2;  // blocks
+// The blocked passes ask for the values of the block this many blocks ahead.
+constexpr int kPrefetchAhead = 2;
 
+// The region of row i of P A P' in the two-part ordering: 0 and 1 the parts, 2 the separator.
 inline int regionOf(const int* part_end, int i) { return i < part_end[0] ? 0 : i < part_end[1] ? 1 : 2; }
 
 }  // namespace
