@@ -447,9 +447,8 @@ class TestCli(unittest.TestCase):
         self.assertIn("roslaunch left", self.console())
         self.assertIn("roslaunch was killed by SIGKILL", self.run_yaml("paper_demo_60m")["incomplete"])
 
-    def test_kill_9_of_a_bare_roslaunch_leaves_nothing(self):
-        # roslaunch used directly (README): its nodes' guards stop them when it dies, so they close their
-        # bags; then one guard stops the master and rosout that roslaunch had started.
+    def start_bare_roslaunch(self):
+        """roslaunch of the co-simulation used directly (no runner), until both nodes integrate."""
         env = dict(self.env, ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.port)
         env.pop("RAILSIM_STATUS_DIR", None)
         self.log = os.path.join(self.dir, "console.log")
@@ -459,17 +458,27 @@ class TestCli(unittest.TestCase):
                                   "output_dir:=" + self.out, "overrides:=solver.end={time: 2.0}"],
                                  stdout=f, stderr=subprocess.STDOUT, env=env, cwd=ROOT, start_new_session=True)
         self.wait_for("integrating with")
-        master = [pid for pid, c in processes_naming(self.dir) if "rosmaster" in c]
-        self.assertEqual(len(master), 1, "the master roslaunch started")
-        os.kill(p.pid, signal.SIGKILL)
-        p.wait()
-        deadline = time.monotonic() + 45.0
+        return p
+
+    def left_after(self, timeout):
+        """The case's processes still alive after up to timeout s (killed, so that none outlives the test)."""
+        deadline = time.monotonic() + timeout
         while processes_naming(self.dir) and time.monotonic() < deadline:
             time.sleep(0.2)
         left = processes_naming(self.dir)
         for pid, _ in left:
             os.kill(pid, signal.SIGKILL)
-        self.assertEqual(left, [])
+        return left
+
+    def test_kill_9_of_a_bare_roslaunch_leaves_nothing(self):
+        # roslaunch used directly (README): its nodes' guards stop them when it dies, so they close their
+        # bags; then one guard stops the master and rosout that roslaunch had started.
+        p = self.start_bare_roslaunch()
+        master = [pid for pid, c in processes_naming(self.dir) if "rosmaster" in c]
+        self.assertEqual(len(master), 1, "the master roslaunch started")
+        os.kill(p.pid, signal.SIGKILL)
+        p.wait()
+        self.assertEqual(self.left_after(45.0), [])
         text = self.console()
         # The vehicle's guard stops it, unless the vehicle ended on its own first (its peer stopped).
         self.assertRegex(text, r"railsim_node_guard: roslaunch \(pid %d\) went away: (stopping rail_vehicle|"
@@ -483,15 +492,7 @@ class TestCli(unittest.TestCase):
         # The node of the lowest-pid guard (the one that stops what roslaunch started) ends on its own at
         # the instant roslaunch dies: its guard, which then had no node to stop, still stops the master
         # and rosout.
-        env = dict(self.env, ROS_IP="127.0.0.1", ROS_MASTER_URI="http://127.0.0.1:%d" % self.port)
-        env.pop("RAILSIM_STATUS_DIR", None)
-        self.log = os.path.join(self.dir, "console.log")
-        with open(self.log, "w") as f:
-            p = subprocess.Popen(["bash", "-c", 'source "$0/devel/setup.bash" && exec "$@"', ROOT, "roslaunch", "-p",
-                                  str(self.port), os.path.join(ROOT, "launch", "cosim.launch"), "scene:=" + COSIM,
-                                  "output_dir:=" + self.out, "overrides:=solver.end={time: 2.0}"],
-                                 stdout=f, stderr=subprocess.STDOUT, env=env, cwd=ROOT, start_new_session=True)
-        self.wait_for("integrating with")
+        p = self.start_bare_roslaunch()
         guards = sorted(pid for pid, c in processes_naming(self.dir) if "railsim_node_guard" in c)
         self.assertEqual(len(guards), 2, "a guard per node")
 
@@ -504,13 +505,7 @@ class TestCli(unittest.TestCase):
         os.kill(node[0], signal.SIGINT)
         os.kill(p.pid, signal.SIGKILL)
         p.wait()
-        deadline = time.monotonic() + 45.0
-        while processes_naming(self.dir) and time.monotonic() < deadline:
-            time.sleep(0.2)
-        left = processes_naming(self.dir)
-        for pid, _ in left:
-            os.kill(pid, signal.SIGKILL)
-        self.assertEqual(left, [])
+        self.assertEqual(self.left_after(45.0), [])
         text = self.console()
         self.assertIn("bag closed", text)
         self.assertRegex(text, r"railsim_node_guard: stopping what roslaunch \(pid %d\) left running: "

@@ -166,6 +166,17 @@ Eigen::SparseMatrix<double> effectiveStiffness(const rt::CosimTrack& track) {
   return sys.K + (4.0 / 4e-10) * sys.M + (2.0 / 2e-5) * sys.C;
 }
 
+// factor's solve of b in its three phases, the parts of each pass on two threads at once.
+void solveInPhasesOnTwoThreads(rt::SparseCholesky& factor, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
+  std::thread other([&] { factor.forwardPart(1, b); });
+  factor.forwardPart(0, b);
+  other.join();
+  factor.solveSeparator(b, x);
+  std::thread other_back([&] { factor.backwardPart(1, x); });
+  factor.backwardPart(0, x);
+  other_back.join();
+}
+
 double largestMagnitude(const std::vector<double>& a) {
   double m = 0.0;
   for (double x : a) m = std::max(m, std::abs(x));
@@ -314,13 +325,7 @@ TEST_P(TwoPartsLayout, SolvedOnTwoThreadsEqualsTheWholeSolve) {
   supernodal.solve(b, x_ref);
   EXPECT_LT((x_whole - x_ref).norm(), 1e-9 * x_ref.norm());
   for (int repeat = 0; repeat < 20; ++repeat) {
-    std::thread other([&] { two.forwardPart(1, b); });
-    two.forwardPart(0, b);
-    other.join();
-    two.solveSeparator(b, x_parts);
-    std::thread other_back([&] { two.backwardPart(1, x_parts); });
-    two.backwardPart(0, x_parts);
-    other_back.join();
+    solveInPhasesOnTwoThreads(two, b, x_parts);
     ASSERT_EQ((x_parts - x_whole).cwiseAbs().maxCoeff(), 0.0) << "repeat " << repeat;
   }
 }
@@ -342,13 +347,7 @@ TEST(SparseCholeskySolves, BlocksInTheCurveAndSimplicialLoopsOnTheStraight) {
     blocked.solve(b, x);
     supernodal.solve(b, x_ref);
     EXPECT_LT((x - x_ref).norm(), 1e-9 * x_ref.norm());
-    std::thread other([&] { blocked.forwardPart(1, b); });
-    blocked.forwardPart(0, b);
-    other.join();
-    blocked.solveSeparator(b, x_parts);
-    std::thread other_back([&] { blocked.backwardPart(1, x_parts); });
-    blocked.backwardPart(0, x_parts);
-    other_back.join();
+    solveInPhasesOnTwoThreads(blocked, b, x_parts);
     EXPECT_EQ((x_parts - x).cwiseAbs().maxCoeff(), 0.0);
     const rt::TrackMesh& mesh = track->trackWindow()->mesh();
     const int node = mesh.rail_nodes[0][mesh.rail_nodes[0].size() / 2];

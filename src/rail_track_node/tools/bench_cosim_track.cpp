@@ -45,19 +45,6 @@ const char* const kUsage =
     "thread), 0 (factor: 0 simplicial, 1 CHOLMOD's supernodal solve (the reference), 2 simplicial in two\n"
     "parts, each solve shared by both threads, 3 in blocks in two parts, the co-simulation's default).\n";
 
-const char* layoutName(rt::CholeskyLayout layout) {
-  switch (layout) {
-    case rt::CholeskyLayout::kSimplicial:
-      return "simplicial";
-    case rt::CholeskyLayout::kSupernodal:
-      return "supernodal";
-    case rt::CholeskyLayout::kSimplicialTwoParts:
-      return "simplicial in two parts";
-    case rt::CholeskyLayout::kBlockedTwoParts:
-      return "blocks in two parts";
-  }
-  return "?";
-}
 }  // namespace
 
 // First to last wheelset of the paper coach (Table 3), m: the track window's vehicle length.
@@ -140,7 +127,7 @@ static void benchWindowSolves(const rt::TrackWindow& w, double h, int repeats) {
     std::printf(
         "%-22s K_eff solves, %s factor (nnz(L) %.0f), median of %d, warm: one right-hand side %.1f us; a rail "
         "node's 6 influence columns one by one %.1f us, in one pass %.1f us\n",
-        "window", layoutName(layout), integ.factor().factorNonZeros(), repeats, one, six, many);
+        "window", rt::choleskyLayoutName(layout), integ.factor().factorNonZeros(), repeats, one, six, many);
   }
 }
 
@@ -262,7 +249,7 @@ int main(int argc, char** argv) {
                                          rt::CholeskyLayout::kSimplicialTwoParts, rt::CholeskyLayout::kBlockedTwoParts};
   g_layout = layouts[factor];
   std::printf("cost clock %s, next solve %s, %s factor\n", g_cost ? "on" : "off",
-              g_beside ? "beside (second thread)" : "in the step", layoutName(g_layout));
+              g_beside ? "beside (second thread)" : "in the step", rt::choleskyLayoutName(g_layout));
   const rail::core::Scene scene =
       rail::core::loadSceneFile(rail::core::fixtures::configDir() + "/scenes/paper_demo.yaml");
   run(scene, rail::core::TrackModel::kRigidFe, rt::CosimCoupling::kExplicit, steps);

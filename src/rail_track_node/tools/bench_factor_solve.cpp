@@ -36,19 +36,6 @@ double evictCaches() {
   return sum;
 }
 
-const char* layoutName(rt::CholeskyLayout layout) {
-  switch (layout) {
-    case rt::CholeskyLayout::kSimplicial:
-      return "simplicial";
-    case rt::CholeskyLayout::kSupernodal:
-      return "supernodal (CHOLMOD solve)";
-    case rt::CholeskyLayout::kSimplicialTwoParts:
-      return "simplicial, two parts";
-    case rt::CholeskyLayout::kBlockedTwoParts:
-      return "blocked, two parts";
-  }
-  return "?";
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -100,7 +87,7 @@ int main(int argc, char** argv) {
         "(|x| %.2g)\n",
         layouts[l] == rt::CholeskyLayout::kBlockedTwoParts && !factors[l]->solvesInBlocks()
             ? "two parts (blocks too sparse)"
-            : layoutName(layouts[l]),
+            : rt::choleskyLayoutName(layouts[l]),
         factors[l]->factorNonZeros(), 1e6 * median(warm[l]), 1e6 * median(evicted[l]), 1e6 * median(columns[l]),
         (x[l] - x[0]).cwiseAbs().maxCoeff(), x[0].cwiseAbs().maxCoeff());
   return sink > 0.0 ? 0 : 1;

@@ -32,6 +32,9 @@ enum class CholeskyLayout {
   kBlockedTwoParts,
 };
 
+/// A layout's name for people ("simplicial in two parts", ...).
+const char* choleskyLayoutName(CholeskyLayout layout);
+
 class SparseCholesky {
  public:
   /// Analyses and factorises A (only its upper triangle is read). Throws std::runtime_error naming the

@@ -741,6 +741,20 @@ void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixX
   }
 }
 
+const char* choleskyLayoutName(CholeskyLayout layout) {
+  switch (layout) {
+    case CholeskyLayout::kSimplicial:
+      return "simplicial";
+    case CholeskyLayout::kSupernodal:
+      return "supernodal (CHOLMOD's solve)";
+    case CholeskyLayout::kSimplicialTwoParts:
+      return "simplicial in two parts";
+    case CholeskyLayout::kBlockedTwoParts:
+      return "blocks in two parts";
+  }
+  return "?";
+}
+
 int SparseCholesky::rows() const { return impl_->n; }
 
 bool SparseCholesky::solvesInBlocks() const { return impl_->blocked; }
