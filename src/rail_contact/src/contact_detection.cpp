@@ -731,22 +731,21 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
     }
     ok = true;
   } else {
-    if constexpr (Deformation::kRigid) {
-      // The last search failed with every sample at least reference_distance from the rail; each sample has
-      // moved since by at most |d centre| + lever |d axle| relative to the rail section, and the grid's
-      // distance changes by at most sqrt(2) per unit of that (bilinear on a distance field).
-      if (work.skip_far_searches && work.has_search_reference && !work.has_warm_start) {
-        sectionPose(pose, track, deformation, wf.c, wf.a, section);
-        const double moved = std::sqrt(2.0) * ((section.centre - work.reference_centre).norm() +
-                                               search_lever_[k] * (section.axle - work.reference_axle).norm());
-        const double clearance = work.reference_distance - moved;
-        if (clearance > opt.skip_clearance && std::abs(section.axle[2]) < 0.3) {
-          ++work.skipped;
-          out.status = DetectionStatus::kOutOfBounds;
-          out.valid = out.in_contact = false;
-          out.penetration = -std::min(clearance, 1.0);
-          return;
-        }
+    // The last search failed with every sample at least reference_distance from the rail; each sample has
+    // moved since by at most |d centre| + lever |d axle| relative to the rail section (the deformed one on
+    // flexible rails: the search measures in that section alone), and the grid's distance changes by at
+    // most sqrt(2) per unit of that (bilinear on a distance field).
+    if (work.skip_far_searches && work.has_search_reference && !work.has_warm_start) {
+      sectionPose(pose, track, deformation, wf.c, wf.a, section);
+      const double moved = std::sqrt(2.0) * ((section.centre - work.reference_centre).norm() +
+                                             search_lever_[k] * (section.axle - work.reference_axle).norm());
+      const double clearance = work.reference_distance - moved;
+      if (clearance > opt.skip_clearance && std::abs(section.axle[2]) < 0.3) {
+        ++work.skipped;
+        out.status = DetectionStatus::kOutOfBounds;
+        out.valid = out.in_contact = false;
+        out.penetration = -std::min(clearance, 1.0);
+        return;
       }
     }
     // A warm start that converges to a penetrating pair past the surface's end keeps it as a candidate: the
@@ -790,13 +789,11 @@ void ContactDetector::detect(WheelSurface surface, const WheelPose& pose, const 
       } else if (!found || (!ok && end_seed)) {
         // No seed, or an end sample that Newton could not move inside the surface nor into the rail past it:
         // no contact of this surface.
-        if constexpr (Deformation::kRigid) {
-          if (!found) {
-            work.has_search_reference = true;
-            work.reference_distance = min_distance;
-            work.reference_centre = section.centre;
-            work.reference_axle = section.axle;
-          }
+        if (!found) {
+          work.has_search_reference = true;
+          work.reference_distance = min_distance;
+          work.reference_centre = section.centre;
+          work.reference_axle = section.axle;
         }
         out.status = DetectionStatus::kOutOfBounds;
         out.valid = out.in_contact = false;

@@ -564,6 +564,51 @@ TEST(ContactDetection, AFarFlangeSkipsItsSearchOnlyWhileItCannotReachTheRail) {
               contact_steps, 1e3 * smallest_skipped_gap);
 }
 
+TEST(ContactDetection, AFarFlangeSkipsItsSearchOnMovingRailsOnlyWhileItCannotReachThem) {
+  // As above on a rail that moves under the wheel at every step (lateral swing of +-1.5 mm, vertical of
+  // +-0.5 mm, roll of +-4 mrad, exact rigid section motion): the skip measures in the moved section, so it
+  // must still skip only evaluations the search finds out of contact, and contact must begin and end at the
+  // same steps either way.
+  Scene& s = scene();
+  const rc::ContactDetector& det = s.table.model().detector();
+  const rc::TrackGeometry& track = s.table.track();
+  rc::DetectionWork skipping, searching;
+  skipping.skip_far_searches = true;
+  rc::ContactGeometry g_skip, g_search;
+  int skipped_steps = 0, contact_steps = 0, contact_changes = 0;
+  bool was_in_contact = false;
+  for (int i = 0; i <= 200; ++i) {
+    const double y = 5e-5 * i;
+    const rc::ContactGeometryRow r = s.table.row(y);
+    rc::WheelState wl, wr;
+    wheelStates(y, r.z - 20e-6, r.roll, wl, wr);
+    const Vector3d u0(0.0, 1.5e-3 * std::sin(0.11 * i), 0.5e-3 * std::cos(0.23 * i));
+    const Vector3d theta(4e-3 * std::sin(0.17 * i), 0.0, 0.0);
+    RigidMotionProvider motion(track, det.sectionCentre(), wl.p_wheel_in_world, u0, theta);
+    const rc::RailDeformation& rails = motion;
+    const long long skipped_before = skipping.skipped;
+    det.detect(rc::WheelSurface::kFlange, poseOf(wl, rc::RailSide::kLeft), track, rails, skipping, g_skip);
+    det.detect(rc::WheelSurface::kFlange, poseOf(wl, rc::RailSide::kLeft), track, rails, searching, g_search);
+    ASSERT_EQ(g_skip.in_contact, g_search.in_contact) << "y = " << y;
+    if (g_search.in_contact) ++contact_steps;
+    if (i > 0 && g_search.in_contact != was_in_contact) ++contact_changes;
+    was_in_contact = g_search.in_contact;
+    if (skipping.skipped > skipped_before) {
+      ++skipped_steps;
+      EXPECT_EQ(g_search.status, rc::DetectionStatus::kOutOfBounds) << "y = " << y;
+      EXPECT_GE(-g_search.penetration, -g_skip.penetration - 1e-12) << "y = " << y;
+    } else if (g_search.in_contact) {
+      EXPECT_EQ(g_skip.penetration, g_search.penetration) << "y = " << y;
+    }
+  }
+  EXPECT_EQ(searching.skipped, 0);
+  EXPECT_GT(skipped_steps, 20);
+  EXPECT_GT(contact_steps, 5);
+  EXPECT_GE(contact_changes, 2);  // the swinging rail makes and breaks the flange contact
+  std::printf("far flange on moving rails: %d of 201 evaluations skipped, %d in contact, %d changes\n",
+              skipped_steps, contact_steps, contact_changes);
+}
+
 TEST(ContactDetection, TheFanOfPlanesAndTheScanClearanceAreValidated) {
   const Scene& s = scene();
   auto message = [&](const rc::DetectionOptions& o) -> std::string {

@@ -91,16 +91,20 @@ void fillFrame(const rc::TrackGeometry& geo, double s_front, double V, long k, l
 struct PathRun {
   std::vector<double> force;       // per step and wheel: x, y, z of the wheel-centre force, N
   std::vector<double> deflection;  // per step: left and right rail at the section, x, y, z, m
+  std::vector<double> gaps;        // every 50th step (exact gaps asked for): each contact slot's penetration, m
   int moves = 0, rebuilds = 0, flange_steps = 0, refused = 0;
+  long long skipped = 0;  // searches skipped by far wheel surfaces
 };
 
 // split: each step as stepForces and finishStep (the run loop's order: the wrenches before the rest).
-PathRun runPath(bool beside, rt::CholeskyLayout layout, long steps, bool split = false) {
+// skip: CosimTrackOptions::skip_far_searches.
+PathRun runPath(bool beside, rt::CholeskyLayout layout, long steps, bool split = false, bool skip = true) {
   const Scene sc = curveScene();
   rt::CosimTrackOptions o;
   o.window.vehicle_length = 21.7;
   o.solve_beside = beside;
   o.factor_layout = layout;
+  o.skip_far_searches = skip;
   rt::CosimTrack track(rt::resolveCosimTrack(sc), o);
   const int section = track.addSection(50.0);
   const double V = 30.0, h = sc.solver.track_step;
@@ -110,6 +114,8 @@ PathRun runPath(bool beside, rt::CholeskyLayout layout, long steps, bool split =
   PathRun r;
   for (long k = 0; k < steps; ++k) {
     fillFrame(track.geometry(), 55.0 + V * k * h, V, k, steps, h, frame);
+    const bool exact_gaps = k % 50 == 0;  // as the run loop does at its output steps
+    track.setExactGaps(exact_gaps);
     if ((split ? track.stepForces(frame, out) : track.step(frame, out)) != rt::CosimStepStatus::kOk) {
       ++r.refused;
       continue;
@@ -121,6 +127,8 @@ PathRun runPath(bool beside, rt::CholeskyLayout layout, long steps, bool split =
         flange = flange || (cp.active && cp.N > 0.0 && cp.surface == rc::kFlange);
     }
     r.flange_steps += flange ? 1 : 0;
+    for (int i = 0; i < 8 && exact_gaps; ++i)
+      for (const rc::ContactPointResult& cp : track.contact(i).contact) r.gaps.push_back(cp.penetration);
     if (split) track.finishStep();
     track.sectionDeflection(section, def);
     for (int j = 0; j < 3; ++j) {
@@ -130,6 +138,8 @@ PathRun runPath(bool beside, rt::CholeskyLayout layout, long steps, bool split =
   }
   r.moves = track.windowMoves();
   r.rebuilds = track.windowRebuilds();
+  for (int i = 0; i < 8; ++i)
+    for (const rc::DetectionWork& d : track.contactWork(i).detection) r.skipped += d.skipped;
   return r;
 }
 
@@ -228,7 +238,17 @@ TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
   EXPECT_LT(db_rail, 1e-9 * peak);
   EXPECT_EQ(largestDifference(blocked.force, blocked_whole.force), 0.0);
   EXPECT_EQ(largestDifference(blocked.deflection, blocked_whole.deflection), 0.0);
-  std::printf("[ figures  ] blocked factor: forces differ by %.3g N, rail displacement by %.3g m\n", db, db_rail);
+  // Far wheel surfaces skip their searches (the default): the same forces, rails and published gaps to the
+  // last bit as every surface searched at every step.
+  const PathRun searched = runPath(true, rt::CholeskyLayout::kBlockedTwoParts, steps, false, false);
+  EXPECT_EQ(searched.skipped, 0);
+  EXPECT_GT(blocked.skipped, steps) << "the far flanges must skip searches";
+  EXPECT_EQ(largestDifference(blocked.force, searched.force), 0.0);
+  EXPECT_EQ(largestDifference(blocked.deflection, searched.deflection), 0.0);
+  EXPECT_EQ(largestDifference(blocked.gaps, searched.gaps), 0.0);
+  std::printf("[ figures  ] blocked factor: forces differ by %.3g N, rail displacement by %.3g m; %lld searches "
+              "skipped\n",
+              db, db_rail, blocked.skipped);
   std::printf(
       "[ figures  ] %ld steps, %d moves (%d rebuilt), %d steps with flange contact, largest wheel force "
       "%.0f N: forces differ by %.3g N (fast) and %.3g N (simplicial in the step), rail displacement by "

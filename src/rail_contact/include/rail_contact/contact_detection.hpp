@@ -67,9 +67,9 @@ struct DetectionOptions {
   /// (rail_vehicle_node doc/simulator.md has the measurements: without it the integrator's step collapses
   /// to ~1e-7 s while a flange-root contact crosses the split).
   double split_overlap = 5e-3;
-  /// Rigid rail, with DetectionWork::skip_far_searches: a surface whose last search found every sample at
-  /// least this much farther from the rail than the wheel can have moved since (relative to the rail
-  /// section) is reported out of contact without a new search, m.
+  /// With DetectionWork::skip_far_searches: a surface whose last search found every sample at least this
+  /// much farther from the rail than the wheel can have moved since (relative to the rail section, deformed
+  /// on flexible rails) is reported out of contact without a new search, m.
   double skip_clearance = 1e-3;
   /// A search whose sampled distance has no interior minimum seeds Newton at the nearer end sample of the
   /// surface when that sample is within this distance of the rail, m; only a converged point inside the
@@ -102,8 +102,8 @@ struct DetectionWork {
   /// there, e.g. at the flange root beside a tread contact (ContactGeometry::past_end)
   long long past_end_contacts = 0;
   long long approximations = 0;  ///< results returned as kApproximate
-  /// Rigid rail only, set by the caller: a surface far from its rail skips the search (a flange off the
-  /// rail searched ~130 profile samples at every evaluation, a quarter of the vehicle's time on a straight).
+  /// Set by the caller: a surface far from its rail skips the search (a flange off the rail searched ~130
+  /// profile samples at every evaluation, a quarter of the vehicle's time on a straight).
   /// Its out-of-contact result then carries a lower bound of the gap, not the gap: callers that publish the
   /// gap turn this off for those evaluations. The force is the same, zero, either way.
   bool skip_far_searches = false;

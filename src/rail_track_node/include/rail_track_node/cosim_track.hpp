@@ -118,6 +118,11 @@ struct CosimTrackOptions {
   /// kSemiImplicit: an influence column K_eff^{-1} e_j is stored over the DOF window where it exceeds this
   /// fraction of its largest entry (the DOFs are numbered plane by plane along the track).
   double influence_tolerance = 1e-12;
+  /// A wheel surface whose last search found it far from its rail skips its searches while the wheel
+  /// cannot have come near (rail_contact's DetectionWork::skip_far_searches): the same forces; its
+  /// out-of-contact gap is then a lower bound, so exact gaps are asked for where they are published
+  /// (setExactGaps, CosimTrackRun at the output steps).
+  bool skip_far_searches = true;
   /// With solver.track_window.enabled: the window settings the scene does not hold (entering_static,
   /// condensed_ends, boundary_length, end_dashpots). behind, ahead, shift and length come from the setup's
   /// window, dt from its track_step, include_gravity from the field above. vehicle_length (m, first
@@ -167,6 +172,10 @@ class CosimTrack {
   CosimStepStatus stepForces(const rail::core::coupling::WheelStateFrame& states,
                              rail::core::coupling::WrenchFrame& out) noexcept;
   void finishStep() noexcept;
+  /// true: the next steps search every wheel surface, so that the gaps of surfaces out of contact are the
+  /// searched ones (for a step whose contacts are published); false: far surfaces skip their searches
+  /// again (with CosimTrackOptions::skip_far_searches). The forces are the same either way.
+  void setExactGaps(bool exact) noexcept;
 
   /// FE track integrated (flexible; full-length or windowed).
   bool flexible() const { return fe_ != nullptr; }
@@ -338,6 +347,7 @@ class CosimTrack {
   enum class BaseSolve { kNone, kRunning, kReady };
   BaseSolve base_ = BaseSolve::kNone;
   bool solve_beside_ = false;
+  bool skip_far_searches_ = false;
   bool columns_beside_ = false;  // influence columns may be solved while the base solve runs (own scratch)
   std::thread worker_;
   std::mutex worker_mutex_;

@@ -60,6 +60,7 @@ class CosimTrackRun {
 
  private:
   TrackRunStatus fail(int exit_code, std::string message);
+  bool reachesOutput(std::uint64_t step) const;  // step k's time reaches the next output instant
 
   core::RunSettings settings_;
   CosimTrack& track_;

@@ -249,6 +249,8 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
   work_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactWork());
   result_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactResult());
   seen_.assign(static_cast<std::size_t>(n_wheels), 0);
+  skip_far_searches_ = options.skip_far_searches;
+  setExactGaps(false);
 
   if (!fe_) return;
 
@@ -632,6 +634,11 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
     out.wheels[static_cast<std::size_t>(i)].id = ws.id;
     writeWrench(i, ws, res, out);
   }
+}
+
+void CosimTrack::setExactGaps(bool exact) noexcept {
+  for (rc::WheelContactWork& w : work_)
+    for (rc::DetectionWork& d : w.detection) d.skip_far_searches = skip_far_searches_ && !exact;
 }
 
 CosimStepStatus CosimTrack::step(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {

@@ -78,6 +78,8 @@ TrackRunStatus CosimTrackRun::step() {
     std::snprintf(text, sizeof(text), " failed at step %llu: ", static_cast<unsigned long long>(coupling_.nextStep()));
     return fail(cc::exitCode(r.status), "exchange with the vehicle node " + options_.peer + text + r.message);
   }
+  // A step whose contacts are published searches every surface (exact gaps).
+  track_.setExactGaps(reachesOutput(coupling_.states().step));
   CosimStepStatus status;
   if (options_.cost != nullptr) {
     core::CostProfile::Scope timing(*options_.cost, core::CostProfile::kTrackStep);
@@ -108,9 +110,13 @@ TrackRunStatus CosimTrackRun::step() {
   return TrackRunStatus::kRunning;
 }
 
+bool CosimTrackRun::reachesOutput(std::uint64_t step) const {
+  const double t = static_cast<double>(step) * track_step_;
+  return t + 1e-9 * track_step_ >= static_cast<double>(outputs_) * settings_.output_period;
+}
+
 bool CosimTrackRun::outputDue() {
-  const double t = static_cast<double>(coupling_.states().step) * track_step_;
-  if (t + 1e-9 * track_step_ < static_cast<double>(outputs_) * settings_.output_period) return false;
+  if (!reachesOutput(coupling_.states().step)) return false;
   ++outputs_;
   return true;
 }
