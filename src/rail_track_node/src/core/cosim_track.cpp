@@ -105,6 +105,12 @@ struct CosimTrack::Implicit {
   Eigen::MatrixXd node_columns;               // the 6 columns of one rail node (n x 6), solve scratch
   long solves = 0, clipped = 0;
 
+  // Contact law at rail contact-point displacement u (eq. 9, creepages, Polach), results into out.
+  struct LawOut {
+    Eigen::Vector3d F_wheel = Eigen::Vector3d::Zero();
+    double N = 0.0, F_long = 0.0, F_lat = 0.0, a = 0.0, b = 0.0, delta = 0.0, delta_dot = 0.0;
+    double nu_x = 0.0, nu_y = 0.0, phi = 0.0;
+  };
   // One contact of this step in the implicit solve: its geometry (point, frame, Hertz and Kalker data)
   // frozen at the predicted state, its force a function of the rail contact point's motion u (world).
   struct Link {
@@ -121,13 +127,8 @@ struct CosimTrack::Implicit {
     Eigen::Vector3d f_p, f;             // force on the rail at the prediction (its loads are in x0) and now, N
     Eigen::Vector3d u, u_start, du;     // Newton iterate of the rail contact-point displacement, m
     Eigen::Vector3d F_wheel, R;         // law's force on the wheel at u; residual of u, m
+    LawOut at_u;                        // the law at u (its force is F_wheel)
     Eigen::Matrix3d J;                  // d F_wheel / d u (Newmark velocity included), N/m
-  };
-  // Contact law at rail contact-point displacement u (eq. 9, creepages, Polach), results into out.
-  struct LawOut {
-    Eigen::Vector3d F_wheel = Eigen::Vector3d::Zero();
-    double N = 0.0, F_long = 0.0, F_lat = 0.0, a = 0.0, b = 0.0, delta = 0.0, delta_dot = 0.0;
-    double nu_x = 0.0, nu_y = 0.0, phi = 0.0;
   };
   std::vector<Link> links;          // capacity kContactSlots per wheel
   std::vector<double> column_load;  // per cached column: the nodal load on its DOF this step, N
@@ -1066,15 +1067,15 @@ void CosimTrack::solveLinkForces() noexcept {
   constexpr int kMaxIterations = 40;
   constexpr double kDu = 1e-11;  // m, difference step of the law Jacobian (rail velocity step 2 kDu / h)
   bool converged = false;
-  Implicit::LawOut lo, lp;
+  Implicit::LawOut lp;
   // known: F_wheel already holds the law at u (the line search's accepted trial): only the Jacobian is new.
   auto residuals = [&](bool jacobian, bool known = false) {
     double merit = 0.0;
     for (int c = 0; c < m; ++c) {
       Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
       if (!known) {
-        im.law(*contact_model_, h, Lc, Lc.u, lo);
-        Lc.F_wheel = lo.F_wheel;
+        im.law(*contact_model_, h, Lc, Lc.u, Lc.at_u);
+        Lc.F_wheel = Lc.at_u.F_wheel;
       }
       if (jacobian)
         for (int k = 0; k < 3; ++k) {
@@ -1172,12 +1173,10 @@ void CosimTrack::solveLinkForces() noexcept {
 // addColumnLoads (finishStep).
 void CosimTrack::applyLinkForces(const cc::WheelStateFrame& states, cc::WrenchFrame& out) noexcept {
   Implicit& im = *implicit_;
-  const double h = integ().dt();
   const int m = static_cast<int>(im.links.size());
-  Implicit::LawOut lo;
   for (int c = 0; c < m; ++c) {
     Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
-    im.law(*contact_model_, h, Lc, Lc.u, lo);
+    const Implicit::LawOut& lo = Lc.at_u;  // Newton's last evaluation, at the final u
     rc::ContactPointResult& cp = result_[static_cast<std::size_t>(Lc.wheel)].contact[Lc.contact];
     cp.N = lo.N;
     cp.F_long = lo.F_long;
