@@ -605,8 +605,8 @@ TEST(ContactDetection, AFarFlangeSkipsItsSearchOnMovingRailsOnlyWhileItCannotRea
   EXPECT_GT(skipped_steps, 20);
   EXPECT_GT(contact_steps, 5);
   EXPECT_GE(contact_changes, 2);  // the swinging rail makes and breaks the flange contact
-  std::printf("far flange on moving rails: %d of 201 evaluations skipped, %d in contact, %d changes\n",
-              skipped_steps, contact_steps, contact_changes);
+  std::printf("far flange on moving rails: %d of 201 evaluations skipped, %d in contact, %d changes\n", skipped_steps,
+              contact_steps, contact_changes);
 }
 
 TEST(ContactDetection, TheFanOfPlanesAndTheScanClearanceAreValidated) {

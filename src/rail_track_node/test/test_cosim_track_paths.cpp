@@ -246,9 +246,10 @@ TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
   EXPECT_EQ(largestDifference(blocked.force, searched.force), 0.0);
   EXPECT_EQ(largestDifference(blocked.deflection, searched.deflection), 0.0);
   EXPECT_EQ(largestDifference(blocked.gaps, searched.gaps), 0.0);
-  std::printf("[ figures  ] blocked factor: forces differ by %.3g N, rail displacement by %.3g m; %lld searches "
-              "skipped\n",
-              db, db_rail, blocked.skipped);
+  std::printf(
+      "[ figures  ] blocked factor: forces differ by %.3g N, rail displacement by %.3g m; %lld searches "
+      "skipped\n",
+      db, db_rail, blocked.skipped);
   std::printf(
       "[ figures  ] %ld steps, %d moves (%d rebuilt), %d steps with flange contact, largest wheel force "
       "%.0f N: forces differ by %.3g N (fast) and %.3g N (simplicial in the step), rail displacement by "
