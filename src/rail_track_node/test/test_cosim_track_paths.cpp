@@ -313,6 +313,26 @@ TEST(SparseCholeskySolves, SimplicialMatchesSupernodalAndUnitColumnsMatchSingleS
     EXPECT_LT((blocked_one.col(0) - x_blocked).cwiseAbs().maxCoeff(), 1e-13 * x.cwiseAbs().maxCoeff()) << c;
     EXPECT_LT((x_blocked - x).cwiseAbs().maxCoeff(), 1e-9 * x.cwiseAbs().maxCoeff()) << "column " << c;
   }
+  // The second column workspace: two threads solving columns at once, each in its lane, beside a solve
+  // on a third, give each lane's columns exactly as one thread does (the co-simulation's worker takes
+  // rail nodes in lane 1 while the loop's thread takes others in lane 0).
+  for (rt::SparseCholesky* factor : {&simplicial, &blocked}) {
+    Eigen::MatrixXd lane0(n, 6), lane1(n, 6), alone(n, 6);
+    int other[6];
+    for (int j = 0; j < 6; ++j) other[j] = mesh.dofIndex(mesh.rail_nodes[0][mesh.rail_nodes[0].size() / 2], j);
+    factor->solveUnitColumns(other, 6, alone);
+    Eigen::VectorXd x_beside(n);
+    for (int repeat = 0; repeat < 5; ++repeat) {
+      std::thread second([&] { factor->solveUnitColumns(other, 6, lane1, 1); });
+      std::thread third([&] { factor->solve(b, x_beside); });
+      factor->solveUnitColumns(dofs, 6, lane0, 0);
+      second.join();
+      third.join();
+      ASSERT_EQ((lane0 - (factor == &blocked ? blocked_many : many)).cwiseAbs().maxCoeff(), 0.0) << repeat;
+      ASSERT_EQ((lane1 - alone).cwiseAbs().maxCoeff(), 0.0) << repeat;
+      ASSERT_EQ((x_beside - (factor == &blocked ? x4 : x1)).cwiseAbs().maxCoeff(), 0.0) << repeat;
+    }
+  }
 }
 
 // The factor in two parts: parts independent in L, a separator of one plane of the track, about the fill of

@@ -306,7 +306,10 @@ class CosimTrack {
   void fillHangingLoads() noexcept;
   void sizeHangingLoads();  // set-up and window moves
   void workerLoop() noexcept;
-  int ensureNodeColumns(int rail, int node) noexcept;
+  int claimNodeColumns(int rail, int node) noexcept;  // slot of the node's columns (queued if not cached)
+  void solveSlotColumns(int slot, int lane) noexcept;
+  void solvePendingColumns() noexcept;  // the queued slots, on both threads when the worker is free
+  void helpPendingColumns() noexcept;   // the worker's side
   void solveColumn(int dof, int& lo, int& len) noexcept;
   void trimColumn(int dof, const double* x, int& lo, int& len) noexcept;
 
@@ -366,6 +369,10 @@ class CosimTrack {
   std::atomic<int> solve_stage_{0};
   std::atomic<bool> part_claimed_[2] = {false, false}, part_done_[2] = {false, false};
   rail::core::CostClock completion_cost_;  // the worker's completion of a step (awaitCompletion takes it)
+  // Influence columns of the rail nodes the links reached (Implicit::pending), solved by both threads: each
+  // takes the next slot (column_next_) until none is left; the worker joins once its base solve is done.
+  std::atomic<bool> columns_posted_{false}, worker_in_columns_{false};
+  std::atomic<int> column_next_{0}, column_done_{0};
   // The loads of the hanging sleepers in the step being solved (the base solve's, or the explicit step's
   // beside the contact loads).
   NodalLoads hanging_loads_{0};

@@ -105,9 +105,10 @@ class NewmarkIntegrator {
   /// x = K_eff^{-1} b (b, x of size n; x preallocated). No allocation.
   void solveEffective(const Eigen::VectorXd& b, Eigen::VectorXd& x) { factor_->solve(b, x); }
   /// Columns K_eff^{-1} e_dofs[c], c < count <= SparseCholesky::kMaxUnitColumns, into x (n x count at least,
-  /// preallocated) in one pass over the factor. No allocation.
-  void solveEffectiveColumns(const int* dofs, int count, Eigen::MatrixXd& x) {
-    factor_->solveUnitColumns(dofs, count, x);
+  /// preallocated) in one pass over the factor, in the factor's column workspace `lane`
+  /// (SparseCholesky::solveUnitColumns). No allocation.
+  void solveEffectiveColumns(const int* dofs, int count, Eigen::MatrixXd& x, int lane = 0) {
+    factor_->solveUnitColumns(dofs, count, x, lane);
   }
 
   double dt() const { return dt_; }

@@ -48,9 +48,12 @@ class SparseCholesky {
   void solve(const Eigen::VectorXd& b, Eigen::VectorXd& x);
   /// The columns of A^{-1} of the count indices in unit (at most kMaxUnitColumns) into the first count
   /// columns of x (rows() x count at least, preallocated): one pass over the factor for all of them. Each
-  /// column equals solve(e_unit[c]) to rounding. No allocation.
+  /// column equals solve(e_unit[c]) to rounding. Each lane (0 .. kColumnLanes - 1) has its own workspace, so
+  /// two threads may solve columns at once in different lanes, and beside solve() or the phases below
+  /// (except with kSupernodal, whose columns use solve()'s workspace). No allocation.
   static constexpr int kMaxUnitColumns = 6;
-  void solveUnitColumns(const int* unit, int count, Eigen::MatrixXd& x);
+  static constexpr int kColumnLanes = 2;
+  void solveUnitColumns(const int* unit, int count, Eigen::MatrixXd& x, int lane = 0);
 
   /// kSimplicialTwoParts, kBlockedTwoParts: the solve of b in three phases. forwardPart(0, b) and forwardPart(1, b) may
   /// run at once on two threads, then solveSeparator(b, x) after both, then backwardPart(0, x) and backwardPart(1, x)
@@ -74,12 +77,12 @@ class SparseCholesky {
  private:
   struct Impl;
   template <int K>
-  static void unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x);
+  static void unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x, int lane);
   static void forwardRows(Impl& s, const Eigen::VectorXd& b, int begin, int end) noexcept;
   static void backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int end) noexcept;
   static void buildBlocks(Impl& s);
   template <int K>
-  static void blockedUnitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x);
+  static void blockedUnitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x, int lane);
   static void forwardBlocks(Impl& s, int region, const Eigen::VectorXd& b) noexcept;
   static void backwardBlocks(Impl& s, int region, Eigen::VectorXd& x) noexcept;
   std::unique_ptr<Impl> impl_;

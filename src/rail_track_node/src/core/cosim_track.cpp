@@ -96,14 +96,15 @@ struct CosimTrack::Implicit {
   int window = 0;  // column capacity, entries
   double tolerance = 1e-12;
   int slots = 0;
-  std::vector<double> values;                 // slot-major: (slot * 6 + j) * window
-  std::vector<int> lo, len;                   // per column: first DOF index, entries
-  std::vector<int> slot_rail, slot_node;      // key of each slot (-1 free)
-  std::vector<long> slot_used;                // frame of last use
-  std::array<std::vector<int>, 2> node_slot;  // per rail node: its slot or -1
-  Eigen::VectorXd unit, column;               // solve scratch
-  Eigen::MatrixXd node_columns;               // the 6 columns of one rail node (n x 6), solve scratch
-  long solves = 0, clipped = 0;
+  std::vector<double> values;                                              // slot-major: (slot * 6 + j) * window
+  std::vector<int> lo, len;                                                // per column: first DOF index, entries
+  std::vector<int> slot_rail, slot_node;                                   // key of each slot (-1 free)
+  std::vector<long> slot_used;                                             // frame of last use
+  std::array<std::vector<int>, 2> node_slot;                               // per rail node: its slot or -1
+  Eigen::VectorXd unit, column;                                            // solve scratch
+  std::array<Eigen::MatrixXd, SparseCholesky::kColumnLanes> node_columns;  // per lane: one node's 6 columns (n x 6)
+  std::atomic<long> solves{0}, clipped{0};
+  std::vector<int> pending;  // slots claimed this frame whose columns are still to be solved
 
   // Contact law at rail contact-point displacement u (eq. 9, creepages, Polach), results into out.
   struct LawOut {
@@ -280,7 +281,7 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
   im.tolerance = options.influence_tolerance;
   im.unit.setZero(im.n);
   im.column.setZero(im.n);
-  im.node_columns.setZero(im.n, kNodeDofs);
+  for (Eigen::MatrixXd& columns : im.node_columns) columns.setZero(im.n, kNodeDofs);
   // Window capacity: the widest column of a rail node at mid-track (both rails, 6 DOFs), plus a quarter
   // and two sleeper bays of DOFs for nodes where the track differs.
   int widest = 0;
@@ -305,6 +306,7 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
   im.slot_rail.assign(static_cast<std::size_t>(im.slots), -1);
   im.slot_node.assign(static_cast<std::size_t>(im.slots), -1);
   im.slot_used.assign(static_cast<std::size_t>(im.slots), -1);
+  im.pending.reserve(static_cast<std::size_t>(2 * rc::kContactSlots * n_wheels));  // two nodes per link at most
   for (int r = 0; r < 2; ++r) im.node_slot[r].assign(mesh.rail_nodes[r].size(), -1);
   // Up to kContactSlots links per wheel, 3 unknowns each.
   const int max_links = rc::kContactSlots * n_wheels;
@@ -410,11 +412,26 @@ void CosimTrack::sizeHangingLoads() {
 
 void CosimTrack::workerLoop() noexcept {
   for (;;) {
-    // The next job usually follows within a Newton solve: wait awake for a while, then asleep.
-    awaitFlag(worker_posted_, true, kJobSpin);
+    // The next job usually follows within a Newton solve: wait awake for a while, then asleep; meanwhile
+    // help with the influence columns of a frame's links when the loop's thread posts them.
+    auto until = std::chrono::steady_clock::now() + kJobSpin;
+    for (int i = 1; !worker_posted_.load(std::memory_order_acquire); ++i) {
+      if (columns_posted_.load(std::memory_order_acquire)) {
+        helpPendingColumns();
+        until = std::chrono::steady_clock::now() + kJobSpin;
+        continue;
+      }
+      __builtin_ia32_pause();
+      if (i % 32 == 0 && std::chrono::steady_clock::now() > until) break;
+    }
     std::unique_lock<std::mutex> lock(worker_mutex_);
-    worker_cv_.wait(lock, [this] { return worker_job_ || worker_stop_; });
+    worker_cv_.wait(lock, [this] { return worker_job_ || worker_stop_ || columns_posted_.load(); });
     if (worker_stop_) return;
+    if (!worker_job_) {
+      lock.unlock();
+      helpPendingColumns();
+      continue;
+    }
     worker_job_ = false;
     worker_posted_.store(false, std::memory_order_relaxed);
     const bool finish = worker_finish_;
@@ -539,7 +556,7 @@ void CosimTrack::onWindowMove() {
       im.n = n;
       im.unit.setZero(n);
       im.column.setZero(n);
-      im.node_columns.setZero(n, kNodeDofs);
+      for (Eigen::MatrixXd& columns : im.node_columns) columns.setZero(n, kNodeDofs);
       if (im.window > n) im.window = n;
     }
     ++cache_drops_;
@@ -573,8 +590,8 @@ const rc::BeamRailDeformation* CosimTrack::railDeformation() const {
 }
 
 const NewmarkState* CosimTrack::state() const { return fe_ ? &st() : nullptr; }
-long CosimTrack::influenceSolves() const { return implicit_ ? implicit_->solves : 0; }
-long CosimTrack::influenceClipped() const { return implicit_ ? implicit_->clipped : 0; }
+long CosimTrack::influenceSolves() const { return implicit_ ? implicit_->solves.load() : 0; }
+long CosimTrack::influenceClipped() const { return implicit_ ? implicit_->clipped.load() : 0; }
 int CosimTrack::influenceWindow() const { return implicit_ ? implicit_->window : 0; }
 long CosimTrack::newtonIterations() const { return implicit_ ? implicit_->newton_iterations : 0; }
 long CosimTrack::newtonUnconverged() const { return implicit_ ? implicit_->unconverged : 0; }
@@ -772,8 +789,9 @@ void CosimTrack::trimColumn(int dof, const double* x, int& lo, int& len) noexcep
   }
 }
 
-// Slot holding the influence columns of rail node (rail, node), solving them if not cached.
-int CosimTrack::ensureNodeColumns(int rail, int node) noexcept {
+// Slot holding the influence columns of rail node (rail, node); a slot newly given to the node is queued
+// for solvePendingColumns.
+int CosimTrack::claimNodeColumns(int rail, int node) noexcept {
   Implicit& im = *implicit_;
   int& cached = im.node_slot[rail][static_cast<std::size_t>(node)];
   if (cached >= 0) {
@@ -790,6 +808,16 @@ int CosimTrack::ensureNodeColumns(int rail, int node) noexcept {
   im.slot_node[static_cast<std::size_t>(slot)] = node;
   im.slot_used[static_cast<std::size_t>(slot)] = frames_;
   cached = slot;
+  im.pending.push_back(slot);
+  return slot;
+}
+
+// Solves the influence columns of the node of slot (its free DOFs in one pass over the factor) with the
+// factor's column workspace `lane`, into the slot.
+void CosimTrack::solveSlotColumns(int slot, int lane) noexcept {
+  Implicit& im = *implicit_;
+  const int rail = im.slot_rail[static_cast<std::size_t>(slot)];
+  const int node = im.slot_node[static_cast<std::size_t>(slot)];
   const TrackMesh& mesh = feMesh();
   const int mesh_node = mesh.rail_nodes[rail][static_cast<std::size_t>(node)];
   // The node's free DOFs solved together (one pass over the factor).
@@ -805,17 +833,61 @@ int CosimTrack::ensureNodeColumns(int rail, int node) noexcept {
     which[static_cast<std::size_t>(count)] = j;
     ++count;
   }
-  if (count == 0) return slot;
-  integ().solveEffectiveColumns(dofs.data(), count, im.node_columns);
-  im.solves += count;
+  if (count == 0) return;
+  Eigen::MatrixXd& columns = im.node_columns[static_cast<std::size_t>(lane)];
+  integ().solveEffectiveColumns(dofs.data(), count, columns, lane);
+  im.solves.fetch_add(count, std::memory_order_relaxed);
   for (int c = 0; c < count; ++c) {
     const std::size_t col = static_cast<std::size_t>(slot) * kNodeDofs + static_cast<std::size_t>(which[c]);
-    const double* x = im.node_columns.col(c).data();
+    const double* x = columns.col(c).data();
     trimColumn(dofs[static_cast<std::size_t>(c)], x, im.lo[col], im.len[col]);
     std::copy(x + im.lo[col], x + im.lo[col] + im.len[col],
               im.values.begin() + static_cast<std::ptrdiff_t>(col * static_cast<std::size_t>(im.window)));
   }
-  return slot;
+}
+
+// The columns of the slots claimed this frame. With the worker beside and more than one slot, both threads
+// take slots in turn (the worker once its base solve is done): the same solves, in other hands.
+void CosimTrack::solvePendingColumns() noexcept {
+  Implicit& im = *implicit_;
+  const int count = static_cast<int>(im.pending.size());
+  if (count == 0) return;
+  if (!solve_beside_ || !columns_beside_ || count < 2) {
+    for (const int slot : im.pending) solveSlotColumns(slot, 0);
+    im.pending.clear();
+    return;
+  }
+  column_next_.store(0, std::memory_order_relaxed);
+  column_done_.store(0, std::memory_order_relaxed);
+  {
+    std::lock_guard<std::mutex> lock(worker_mutex_);
+    columns_posted_.store(true);
+  }
+  worker_cv_.notify_all();
+  for (int i; (i = column_next_.fetch_add(1)) < count;) {
+    solveSlotColumns(im.pending[static_cast<std::size_t>(i)], 0);
+    column_done_.fetch_add(1);
+  }
+  // A slot the worker took is at most one node's columns away.
+  while (column_done_.load() < count) __builtin_ia32_pause();
+  columns_posted_.store(false);
+  while (worker_in_columns_.load()) __builtin_ia32_pause();
+  im.pending.clear();
+}
+
+void CosimTrack::helpPendingColumns() noexcept {
+  worker_in_columns_.store(true);
+  if (columns_posted_.load()) {
+    Implicit& im = *implicit_;
+    const int count = static_cast<int>(im.pending.size());
+    while (column_next_.load(std::memory_order_relaxed) < count) {
+      const int i = column_next_.fetch_add(1);
+      if (i >= count) break;
+      solveSlotColumns(im.pending[static_cast<std::size_t>(i)], 1);
+      column_done_.fetch_add(1);
+    }
+  }
+  worker_in_columns_.store(false);
 }
 
 // The contact law of link L with the rail contact point displaced by u (world) from the start of the step
@@ -974,11 +1046,12 @@ void CosimTrack::gatherLinks(const cc::WheelStateFrame& states) noexcept {
       }
       L.f_p = -cp.force_on_wheel_in_world;
       L.f = L.f_p;
-      ensureNodeColumns(rail, L.element);
-      ensureNodeColumns(rail, L.element + 1);
+      claimNodeColumns(rail, L.element);
+      claimNodeColumns(rail, L.element + 1);
       im.links.push_back(L);
     }
   }
+  solvePendingColumns();
 }
 
 // G = W' K_eff^{-1} W from the influence columns (3 x 3 blocks).

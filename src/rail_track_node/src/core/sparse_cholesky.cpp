@@ -33,7 +33,8 @@ struct SparseCholesky::Impl {
   std::vector<double> l_value;   // entry
   std::vector<double> y;         // permuted solution, reused
   std::vector<int> inverse;      // row of P A P' that holds row i of A
-  std::vector<double> y_many;    // solveUnitColumns: rows x kMaxUnitColumns, row-major
+  std::vector<double>
+      y_many[SparseCholesky::kColumnLanes];  // solveUnitColumns per lane: rows x kMaxUnitColumns, row-major
   // kSimplicialTwoParts: rows [0, part_end[0]) and [part_end[0], part_end[1]) of P A P' are the two
   // independent parts, [part_end[1], n) the separator.
   int part_end[2] = {0, 0};
@@ -55,7 +56,7 @@ struct SparseCholesky::Impl {
   int max_cols = 0, max_below = 0;
   std::vector<double> separator_sum[2];  // the forward updates of the separator's rows by each part
   std::vector<double> scratch[3];        // per region (part 0, part 1, separator): a block's v and t
-  std::vector<double> unit_scratch;      // solveUnitColumns: a block's v, u and t for kMaxUnitColumns
+  std::vector<double> unit_scratch[SparseCholesky::kColumnLanes];  // per lane: a block's v, u and t for kMaxUnitColumns
   // kBlockedTwoParts: solved in blocks; false when the blocks would carry more than kMaxBlockZeros of zeros
   // (a straight track's factor, whose planes' DOFs are partly uncoupled): then the simplicial loops solve
   // the same factor without its zeros.
@@ -151,11 +152,12 @@ void SparseCholesky::buildBlocks(Impl& s) {
   const int separator = s.n - s.part_end[1];
   for (auto& sum : s.separator_sum) sum.assign(static_cast<std::size_t>(separator), 0.0);
   for (auto& work : s.scratch) work.assign(static_cast<std::size_t>(s.max_cols + s.max_below), 0.0);
-  s.unit_scratch.assign(static_cast<std::size_t>(2 * s.max_cols + s.max_below) * SparseCholesky::kMaxUnitColumns, 0.0);
+  for (auto& work : s.unit_scratch)
+    work.assign(static_cast<std::size_t>(2 * s.max_cols + s.max_below) * SparseCholesky::kMaxUnitColumns, 0.0);
   s.y.assign(static_cast<std::size_t>(s.n), 0.0);
   s.inverse.assign(static_cast<std::size_t>(s.n), 0);
   for (int j = 0; j < s.n; ++j) s.inverse[static_cast<std::size_t>(s.perm[static_cast<std::size_t>(j)])] = j;
-  s.y_many.assign(static_cast<std::size_t>(s.n) * SparseCholesky::kMaxUnitColumns, 0.0);
+  for (auto& y : s.y_many) y.assign(static_cast<std::size_t>(s.n) * SparseCholesky::kMaxUnitColumns, 0.0);
 }
 
 SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, CholeskyLayout layout) : impl_(new Impl) {
@@ -307,7 +309,7 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
     s.y.assign(static_cast<std::size_t>(s.n), 0.0);
     s.inverse.assign(static_cast<std::size_t>(s.n), 0);
     for (int j = 0; j < s.n; ++j) s.inverse[static_cast<std::size_t>(s.perm[static_cast<std::size_t>(j)])] = j;
-    s.y_many.assign(static_cast<std::size_t>(s.n) * kMaxUnitColumns, 0.0);
+    for (auto& y : s.y_many) y.assign(static_cast<std::size_t>(s.n) * kMaxUnitColumns, 0.0);
     if (!given.empty()) {
       // The parts must not meet in L: no row of part 1 reads a column of part 0.
       for (int i = s.part_end[0]; i < s.part_end[1]; ++i)
@@ -578,12 +580,12 @@ int SparseCholesky::separatorRows() const {
 // solveUnitColumns on the simplicial factor with K right-hand sides, rows interleaved (y[i * K + c]) so
 // that each factor entry is read once for all of them.
 template <int K>
-void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
+void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x, int lane) {
   const int n = s.n;
   const int* start = s.col_start.data();
   const int* row = s.row.data();
   const double* value = s.value.data();
-  double* y = s.y_many.data();
+  double* y = s.y_many[lane].data();
   std::fill(y, y + static_cast<std::ptrdiff_t>(n) * K, 0.0);
   for (int c = 0; c < K; ++c)
     y[static_cast<std::ptrdiff_t>(s.inverse[static_cast<std::size_t>(unit[c])]) * K + c] = 1.0;
@@ -632,13 +634,13 @@ void SparseCholesky::unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
 // solveUnitColumns on the blocks with K right-hand sides, rows interleaved (y[i * K + c]). The forward pass
 // skips the blocks whose right-hand sides are still zero (those off the unit rows' paths to the root).
 template <int K>
-void SparseCholesky::blockedUnitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x) {
+void SparseCholesky::blockedUnitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x, int lane) {
   const int n = s.n;
-  double* y = s.y_many.data();
+  double* y = s.y_many[lane].data();
   std::fill(y, y + static_cast<std::ptrdiff_t>(n) * K, 0.0);
   for (int c = 0; c < K; ++c)
     y[static_cast<std::ptrdiff_t>(s.inverse[static_cast<std::size_t>(unit[c])]) * K + c] = 1.0;
-  double* v = s.unit_scratch.data();
+  double* v = s.unit_scratch[lane].data();
   double* u = v + static_cast<std::ptrdiff_t>(s.max_cols) * K;
   double* t = u + static_cast<std::ptrdiff_t>(s.max_cols) * K;
   const int* block_row = s.block_row.data();
@@ -698,22 +700,22 @@ void SparseCholesky::blockedUnitColumns(Impl& s, const int* unit, Eigen::MatrixX
   }
 }
 
-void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixXd& x) {
+void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixXd& x, int lane) {
   Impl& s = *impl_;
   if (s.blocked) {
     switch (count) {
       case 1:
-        return blockedUnitColumns<1>(s, unit, x);
+        return blockedUnitColumns<1>(s, unit, x, lane);
       case 2:
-        return blockedUnitColumns<2>(s, unit, x);
+        return blockedUnitColumns<2>(s, unit, x, lane);
       case 3:
-        return blockedUnitColumns<3>(s, unit, x);
+        return blockedUnitColumns<3>(s, unit, x, lane);
       case 4:
-        return blockedUnitColumns<4>(s, unit, x);
+        return blockedUnitColumns<4>(s, unit, x, lane);
       case 5:
-        return blockedUnitColumns<5>(s, unit, x);
+        return blockedUnitColumns<5>(s, unit, x, lane);
       default:
-        return blockedUnitColumns<6>(s, unit, x);
+        return blockedUnitColumns<6>(s, unit, x, lane);
     }
   }
   if (s.layout == CholeskyLayout::kSupernodal) {
@@ -727,17 +729,17 @@ void SparseCholesky::solveUnitColumns(const int* unit, int count, Eigen::MatrixX
   }
   switch (count) {
     case 1:
-      return unitColumns<1>(s, unit, x);
+      return unitColumns<1>(s, unit, x, lane);
     case 2:
-      return unitColumns<2>(s, unit, x);
+      return unitColumns<2>(s, unit, x, lane);
     case 3:
-      return unitColumns<3>(s, unit, x);
+      return unitColumns<3>(s, unit, x, lane);
     case 4:
-      return unitColumns<4>(s, unit, x);
+      return unitColumns<4>(s, unit, x, lane);
     case 5:
-      return unitColumns<5>(s, unit, x);
+      return unitColumns<5>(s, unit, x, lane);
     default:
-      return unitColumns<6>(s, unit, x);
+      return unitColumns<6>(s, unit, x, lane);
   }
 }
 
