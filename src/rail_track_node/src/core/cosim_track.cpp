@@ -141,14 +141,28 @@ struct CosimTrack::Implicit {
   // Links that load each other (a nonzero G block, directly or through others) form a group; the links of
   // group q are order[group_start[q]] .. order[group_start[q + 1] - 1], ascending. Far-apart bogies do
   // not see each other through the truncated columns, so the Newton matrix is solved group by group.
-  std::vector<int> group_of, order, group_start;
+  std::vector<int> group_of, order, group_start, group_index;  // group_index: each link's group q
   int groups = 0;
+  // Per slot: bumped whenever the slot's columns change (a new node, a dropped cache), so that what was read
+  // from them is known to be current.
+  std::vector<long> slot_generation;
+  // K_eff^{-1} between the 12 DOFs of a link's element (rows) and those of another's (columns), as read from
+  // the columns of the second, per pair of (wheel, contact) keys: a pair whose elements and columns are
+  // those of an earlier step reuses the values instead of reading them again from the columns.
+  struct PairBlock {
+    int rail_c = -1, element_c = -1, rail_e = -1, element_e = -1, slot_0 = -1, slot_1 = -1;
+    long generation_0 = -1, generation_1 = -1;
+    std::array<double, 144> a{};  // column j (12), row i (12): a[12 j + i]; 0 where the row is fixed
+  };
+  std::vector<PairBlock> pair_blocks;  // (kContactSlots * wheel + contact) of the row link, then of the column link
+  int keys = 0;                        // kContactSlots * wheels
   rail::contact::PolachOptions polach;
   long newton_iterations = 0, unconverged = 0;
   rail::contact::ContactCost* cost = nullptr;  // creep evaluations of law() (CosimTrackOptions::cost)
 
   void law(const rail::contact::WheelContactModel& model, double h, const Link& L, const Eigen::Vector3d& u,
            LawOut& o) const noexcept;
+  const std::array<double, 144>& pairBlock(const Link& Lc, const Link& Le) noexcept;
   double entry(int col, int row) const {
     const int r = row - lo[static_cast<std::size_t>(col)];
     return (r >= 0 && r < len[static_cast<std::size_t>(col)])
@@ -321,6 +335,11 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
   im.group_of.assign(static_cast<std::size_t>(max_links), 0);
   im.order.assign(static_cast<std::size_t>(max_links), 0);
   im.group_start.assign(static_cast<std::size_t>(max_links) + 1, 0);
+  im.group_index.assign(static_cast<std::size_t>(max_links), 0);
+  im.slot_generation.assign(static_cast<std::size_t>(im.slots), 0);
+  im.keys = max_links;
+  im.pair_blocks.assign(static_cast<std::size_t>(max_links) * static_cast<std::size_t>(max_links),
+                        Implicit::PairBlock());
   im.polach = contact_model_->options().polach;
   im.polach.spin = contact_model_->options().spin;
   im.cost = contact_cost_;
@@ -559,6 +578,7 @@ void CosimTrack::onWindowMove() {
       for (Eigen::MatrixXd& columns : im.node_columns) columns.setZero(n, kNodeDofs);
       if (im.window > n) im.window = n;
     }
+    for (long& generation : im.slot_generation) ++generation;
     ++cache_drops_;
   }
   seen_rebuilds_ = rebuilds;
@@ -808,6 +828,7 @@ int CosimTrack::claimNodeColumns(int rail, int node) noexcept {
   im.slot_node[static_cast<std::size_t>(slot)] = node;
   im.slot_used[static_cast<std::size_t>(slot)] = frames_;
   cached = slot;
+  ++im.slot_generation[static_cast<std::size_t>(slot)];
   im.pending.push_back(slot);
   return slot;
 }
@@ -1054,6 +1075,38 @@ void CosimTrack::gatherLinks(const cc::WheelStateFrame& states) noexcept {
   solvePendingColumns();
 }
 
+// K_eff^{-1} between the element DOFs of Lc (rows) and of Le (columns), from Le's influence columns, or as
+// read in an earlier step for the same elements and the same columns.
+const std::array<double, 144>& CosimTrack::Implicit::pairBlock(const Link& Lc, const Link& Le) noexcept {
+  Implicit& im = *this;
+  const int slot_0 = im.node_slot[Le.rail][static_cast<std::size_t>(Le.element)];  // Le's two nodes
+  const int slot_1 = im.node_slot[Le.rail][static_cast<std::size_t>(Le.element) + 1];
+  const long generation_0 = im.slot_generation[static_cast<std::size_t>(slot_0)];
+  const long generation_1 = im.slot_generation[static_cast<std::size_t>(slot_1)];
+  const int key_c = rc::kContactSlots * Lc.wheel + Lc.contact, key_e = rc::kContactSlots * Le.wheel + Le.contact;
+  Implicit::PairBlock& p = im.pair_blocks[static_cast<std::size_t>(key_c) * static_cast<std::size_t>(im.keys) +
+                                          static_cast<std::size_t>(key_e)];
+  if (p.rail_c == Lc.rail && p.element_c == Lc.element && p.rail_e == Le.rail && p.element_e == Le.element &&
+      p.slot_0 == slot_0 && p.slot_1 == slot_1 && p.generation_0 == generation_0 && p.generation_1 == generation_1)
+    return p.a;
+  for (int j = 0; j < 12; ++j) {
+    const int col = (j < kNodeDofs ? slot_0 : slot_1) * kNodeDofs + j % kNodeDofs;
+    for (int i = 0; i < 12; ++i) {
+      const int row = Lc.dofs[static_cast<std::size_t>(i)];
+      p.a[static_cast<std::size_t>(12 * j + i)] = row >= 0 ? im.entry(col, row) : 0.0;
+    }
+  }
+  p.rail_c = Lc.rail;
+  p.element_c = Lc.element;
+  p.rail_e = Le.rail;
+  p.element_e = Le.element;
+  p.slot_0 = slot_0;
+  p.slot_1 = slot_1;
+  p.generation_0 = generation_0;
+  p.generation_1 = generation_1;
+  return p.a;
+}
+
 // G = W' K_eff^{-1} W from the influence columns (3 x 3 blocks).
 void CosimTrack::buildInfluence() noexcept {
   Implicit& im = *implicit_;
@@ -1087,14 +1140,13 @@ void CosimTrack::buildInfluence() noexcept {
       }
       const int root_c = root(c), root_e = root(e);
       if (root_c != root_e) im.group_of[static_cast<std::size_t>(std::max(root_c, root_e))] = std::min(root_c, root_e);
+      const std::array<double, 144>& a = im.pairBlock(Lc, Le);
       Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
       for (int j = 0; j < 12; ++j) {
-        const int node = Le.element + j / kNodeDofs;
-        const int col = im.node_slot[Le.rail][static_cast<std::size_t>(node)] * kNodeDofs + j % kNodeDofs;
         Eigen::Vector3d a_w = Eigen::Vector3d::Zero();  // W_c' K_eff^{-1} e_j
         for (int i = 0; i < 12; ++i)
           if (Lc.dofs[static_cast<std::size_t>(i)] >= 0)
-            a_w += Lc.W.row(i).transpose() * im.entry(col, Lc.dofs[static_cast<std::size_t>(i)]);
+            a_w += Lc.W.row(i).transpose() * a[static_cast<std::size_t>(12 * j + i)];
         g += a_w * Le.W.row(j);
       }
       im.G.block<3, 3>(3 * c, 3 * e) = g;
@@ -1111,6 +1163,9 @@ void CosimTrack::buildInfluence() noexcept {
   }
   im.group_start[static_cast<std::size_t>(groups)] = placed;
   im.groups = groups;
+  for (int q = 0; q < groups; ++q)
+    for (int k = im.group_start[static_cast<std::size_t>(q)]; k < im.group_start[static_cast<std::size_t>(q) + 1]; ++k)
+      im.group_index[static_cast<std::size_t>(im.order[static_cast<std::size_t>(k)])] = q;
 }
 
 // u0 = W' x_b + G f_p: each contact point's displacement under the base solve and the prediction's forces.
@@ -1125,7 +1180,12 @@ void CosimTrack::baseDisplacement() noexcept {
       const int g = Lc.dofs[static_cast<std::size_t>(j)];
       if (g >= 0) Lc.u0 += Lc.W.row(j).transpose() * x_base(g);
     }
-    for (int e = 0; e < m; ++e) Lc.u0 += im.G.block<3, 3>(3 * c, 3 * e) * im.links[static_cast<std::size_t>(e)].f_p;
+    const int q = im.group_index[static_cast<std::size_t>(c)];
+    for (int k = im.group_start[static_cast<std::size_t>(q)]; k < im.group_start[static_cast<std::size_t>(q) + 1];
+         ++k) {
+      const int e = im.order[static_cast<std::size_t>(k)];  // c's group, ascending (G is zero between groups)
+      Lc.u0 += im.G.block<3, 3>(3 * c, 3 * e) * im.links[static_cast<std::size_t>(e)].f_p;
+    }
   }
 }
 
@@ -1159,7 +1219,11 @@ void CosimTrack::solveLinkForces() noexcept {
     for (int c = 0; c < m; ++c) {
       Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
       Lc.R = Lc.u - Lc.u0;
-      for (int e = 0; e < m; ++e) {
+      // The links of c's group, ascending (G is zero between groups).
+      const int q = im.group_index[static_cast<std::size_t>(c)];
+      for (int k = im.group_start[static_cast<std::size_t>(q)]; k < im.group_start[static_cast<std::size_t>(q) + 1];
+           ++k) {
+        const int e = im.order[static_cast<std::size_t>(k)];
         const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
         Lc.R += im.G.block<3, 3>(3 * c, 3 * e) * (Le.F_wheel + Le.f_p);
       }
