@@ -306,7 +306,7 @@ class CosimTrack {
   void fillHangingLoads() noexcept;
   void sizeHangingLoads();  // set-up and window moves
   void workerLoop() noexcept;
-  int claimNodeColumns(int rail, int node) noexcept;  // slot of the node's columns (queued if not cached)
+  void claimNodeColumns(int rail, int node) noexcept;  // a slot for the node's columns (queued if new)
   void solveSlotColumns(int slot, int lane) noexcept;
   void solvePendingColumns() noexcept;  // the queued slots, on both threads when the worker is free
   void helpPendingColumns() noexcept;   // the worker's side
@@ -351,6 +351,7 @@ class CosimTrack {
   BaseSolve base_ = BaseSolve::kNone;
   bool solve_beside_ = false;
   bool skip_far_searches_ = false;
+  bool exact_gaps_ = false;      // setExactGaps: every surface searched
   bool columns_beside_ = false;  // influence columns may be solved while the base solve runs (own scratch)
   std::thread worker_;
   std::mutex worker_mutex_;

@@ -150,7 +150,7 @@ struct CosimTrack::Implicit {
   // the columns of the second, per pair of (wheel, contact) keys: a pair whose elements and columns are
   // those of an earlier step reuses the values instead of reading them again from the columns.
   struct PairBlock {
-    int rail_c = -1, element_c = -1, rail_e = -1, element_e = -1, slot_0 = -1, slot_1 = -1;
+    int rail_c = -1, element_c = -1, slot_0 = -1, slot_1 = -1;  // slot and generation name the column's node
     long generation_0 = -1, generation_1 = -1;
     std::array<double, 144> a{};  // column j (12), row i (12): a[12 j + i]; 0 where the row is fixed
   };
@@ -163,6 +163,12 @@ struct CosimTrack::Implicit {
   void law(const rail::contact::WheelContactModel& model, double h, const Link& L, const Eigen::Vector3d& u,
            LawOut& o) const noexcept;
   const std::array<double, 144>& pairBlock(const Link& Lc, const Link& Le) noexcept;
+  // f(e) for each link e of link c's group, ascending (G is zero between groups).
+  template <class F>
+  void forGroupOf(int c, F f) const {
+    const std::size_t q = static_cast<std::size_t>(group_index[static_cast<std::size_t>(c)]);
+    for (int k = group_start[q]; k < group_start[q + 1]; ++k) f(order[static_cast<std::size_t>(k)]);
+  }
   double entry(int col, int row) const {
     const int r = row - lo[static_cast<std::size_t>(col)];
     return (r >= 0 && r < len[static_cast<std::size_t>(col)])
@@ -266,7 +272,8 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
   result_.assign(static_cast<std::size_t>(n_wheels), rc::WheelContactResult());
   seen_.assign(static_cast<std::size_t>(n_wheels), 0);
   skip_far_searches_ = options.skip_far_searches;
-  setExactGaps(false);
+  for (rc::WheelContactWork& w : work_)
+    for (rc::DetectionWork& d : w.detection) d.skip_far_searches = skip_far_searches_;
 
   if (!fe_) return;
 
@@ -675,6 +682,8 @@ void CosimTrack::evaluateContacts(const cc::WheelStateFrame& states, cc::WrenchF
 }
 
 void CosimTrack::setExactGaps(bool exact) noexcept {
+  if (exact == exact_gaps_) return;
+  exact_gaps_ = exact;
   for (rc::WheelContactWork& w : work_)
     for (rc::DetectionWork& d : w.detection) d.skip_far_searches = skip_far_searches_ && !exact;
 }
@@ -809,14 +818,14 @@ void CosimTrack::trimColumn(int dof, const double* x, int& lo, int& len) noexcep
   }
 }
 
-// Slot holding the influence columns of rail node (rail, node); a slot newly given to the node is queued
-// for solvePendingColumns.
-int CosimTrack::claimNodeColumns(int rail, int node) noexcept {
+// Gives rail node (rail, node) a slot for its influence columns unless it has one; a slot newly given is
+// queued for solvePendingColumns.
+void CosimTrack::claimNodeColumns(int rail, int node) noexcept {
   Implicit& im = *implicit_;
   int& cached = im.node_slot[rail][static_cast<std::size_t>(node)];
   if (cached >= 0) {
     im.slot_used[static_cast<std::size_t>(cached)] = frames_;
-    return cached;
+    return;
   }
   int slot = 0;
   for (int s = 1; s < im.slots; ++s)
@@ -830,7 +839,6 @@ int CosimTrack::claimNodeColumns(int rail, int node) noexcept {
   cached = slot;
   ++im.slot_generation[static_cast<std::size_t>(slot)];
   im.pending.push_back(slot);
-  return slot;
 }
 
 // Solves the influence columns of the node of slot (its free DOFs in one pass over the factor) with the
@@ -1086,8 +1094,8 @@ const std::array<double, 144>& CosimTrack::Implicit::pairBlock(const Link& Lc, c
   const int key_c = rc::kContactSlots * Lc.wheel + Lc.contact, key_e = rc::kContactSlots * Le.wheel + Le.contact;
   Implicit::PairBlock& p = im.pair_blocks[static_cast<std::size_t>(key_c) * static_cast<std::size_t>(im.keys) +
                                           static_cast<std::size_t>(key_e)];
-  if (p.rail_c == Lc.rail && p.element_c == Lc.element && p.rail_e == Le.rail && p.element_e == Le.element &&
-      p.slot_0 == slot_0 && p.slot_1 == slot_1 && p.generation_0 == generation_0 && p.generation_1 == generation_1)
+  if (p.rail_c == Lc.rail && p.element_c == Lc.element && p.slot_0 == slot_0 && p.slot_1 == slot_1 &&
+      p.generation_0 == generation_0 && p.generation_1 == generation_1)
     return p.a;
   for (int j = 0; j < 12; ++j) {
     const int col = (j < kNodeDofs ? slot_0 : slot_1) * kNodeDofs + j % kNodeDofs;
@@ -1098,8 +1106,6 @@ const std::array<double, 144>& CosimTrack::Implicit::pairBlock(const Link& Lc, c
   }
   p.rail_c = Lc.rail;
   p.element_c = Lc.element;
-  p.rail_e = Le.rail;
-  p.element_e = Le.element;
   p.slot_0 = slot_0;
   p.slot_1 = slot_1;
   p.generation_0 = generation_0;
@@ -1180,12 +1186,8 @@ void CosimTrack::baseDisplacement() noexcept {
       const int g = Lc.dofs[static_cast<std::size_t>(j)];
       if (g >= 0) Lc.u0 += Lc.W.row(j).transpose() * x_base(g);
     }
-    const int q = im.group_index[static_cast<std::size_t>(c)];
-    for (int k = im.group_start[static_cast<std::size_t>(q)]; k < im.group_start[static_cast<std::size_t>(q) + 1];
-         ++k) {
-      const int e = im.order[static_cast<std::size_t>(k)];  // c's group, ascending (G is zero between groups)
-      Lc.u0 += im.G.block<3, 3>(3 * c, 3 * e) * im.links[static_cast<std::size_t>(e)].f_p;
-    }
+    im.forGroupOf(c,
+                  [&](int e) { Lc.u0 += im.G.block<3, 3>(3 * c, 3 * e) * im.links[static_cast<std::size_t>(e)].f_p; });
   }
 }
 
@@ -1219,14 +1221,10 @@ void CosimTrack::solveLinkForces() noexcept {
     for (int c = 0; c < m; ++c) {
       Implicit::Link& Lc = im.links[static_cast<std::size_t>(c)];
       Lc.R = Lc.u - Lc.u0;
-      // The links of c's group, ascending (G is zero between groups).
-      const int q = im.group_index[static_cast<std::size_t>(c)];
-      for (int k = im.group_start[static_cast<std::size_t>(q)]; k < im.group_start[static_cast<std::size_t>(q) + 1];
-           ++k) {
-        const int e = im.order[static_cast<std::size_t>(k)];
+      im.forGroupOf(c, [&](int e) {
         const Implicit::Link& Le = im.links[static_cast<std::size_t>(e)];
         Lc.R += im.G.block<3, 3>(3 * c, 3 * e) * (Le.F_wheel + Le.f_p);
-      }
+      });
       merit += Lc.R.squaredNorm();
     }
     return merit;

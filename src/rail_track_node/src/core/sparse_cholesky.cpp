@@ -33,8 +33,8 @@ struct SparseCholesky::Impl {
   std::vector<double> l_value;   // entry
   std::vector<double> y;         // permuted solution, reused
   std::vector<int> inverse;      // row of P A P' that holds row i of A
-  std::vector<double>
-      y_many[SparseCholesky::kColumnLanes];  // solveUnitColumns per lane: rows x kMaxUnitColumns, row-major
+  // solveUnitColumns, per lane: rows x kMaxUnitColumns, row-major.
+  std::vector<double> y_many[SparseCholesky::kColumnLanes];
   // kSimplicialTwoParts: rows [0, part_end[0]) and [part_end[0], part_end[1]) of P A P' are the two
   // independent parts, [part_end[1], n) the separator.
   int part_end[2] = {0, 0};
@@ -56,7 +56,8 @@ struct SparseCholesky::Impl {
   int max_cols = 0, max_below = 0;
   std::vector<double> separator_sum[2];  // the forward updates of the separator's rows by each part
   std::vector<double> scratch[3];        // per region (part 0, part 1, separator): a block's v and t
-  std::vector<double> unit_scratch[SparseCholesky::kColumnLanes];  // per lane: a block's v, u and t for kMaxUnitColumns
+  // solveUnitColumns, per lane: a block's v, u and t for kMaxUnitColumns.
+  std::vector<double> unit_scratch[SparseCholesky::kColumnLanes];
   // kBlockedTwoParts: solved in blocks; false when the blocks would carry more than kMaxBlockZeros of zeros
   // (a straight track's factor, whose planes' DOFs are partly uncoupled): then the simplicial loops solve
   // the same factor without its zeros.
