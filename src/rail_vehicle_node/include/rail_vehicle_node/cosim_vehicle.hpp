@@ -17,6 +17,7 @@
 #include <rail_core/scene.hpp>
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -64,8 +65,10 @@ class CosimVehicle {
   // (dense output), exchanges them for the wrenches of step k. Returns kRunning, kFinished once
   // solver.end is reached (that step is still exchanged), or why the run stopped (message()); an
   // exchange failure gives kIntegratorFailed and exchangeStatus() says which. No exception, no
-  // allocation on the normal path.
-  RunStatus step();
+  // allocation on the normal path. A step that reaches output_time (or ends the run) completes the
+  // simulator's outputs before the exchange, with the wrenches it integrated with; the other steps
+  // evaluate only the positions their checks read (default: every step completes them).
+  RunStatus step(double output_time = -std::numeric_limits<double>::infinity());
   // Tells the track the run is over (its next receive() returns kPeerClosed).
   void close();
 

@@ -209,17 +209,27 @@ class VehicleSimulator {
   double endTimeEstimate() const;
   bool finished() const;
 
-  // Evaluates kinematics and contact at the current state and fills the output buffers below.
+  // Evaluates kinematics and contact at the current state and fills the output buffers below. With external
+  // wheel wrenches (co-simulation) advanceTo fills only the positions its checks read (wheels, wheelsets,
+  // bodies); measurements() and energy() evaluate the derivatives they need on their first call after it,
+  // or completeOutputs() does (the caller's timing then holds that evaluation).
   void updateOutputs();
+  void completeOutputs() const;
   const std::vector<WheelOutput>& wheels() const { return wheel_out_; }
   const std::vector<contact::WheelContactResult>& contacts() const { return contact_data_->result; }
   const std::vector<WheelsetTrackOutput>& wheelsets() const { return wheelset_out_; }
   const std::vector<BodyPose>& bodies() const { return body_out_; }
   // One per model().measurement_points(), filled only when the scene's effects.floor_acceleration_output
   // is on (otherwise left at zero: no cost).
-  const std::vector<MeasurementOutput>& measurements() const { return measurement_out_; }
+  const std::vector<MeasurementOutput>& measurements() const {
+    completeOutputs();
+    return measurement_out_;
+  }
   // Filled only when the scene's effects.energy_output is on (otherwise zero: no cost).
-  const EnergyOutput& energy() const { return energy_out_; }
+  const EnergyOutput& energy() const {
+    completeOutputs();
+    return energy_out_;
+  }
 
   // Replaces the state (e.g. a test's initial lateral offset); re-initialises the integrator.
   void resetState(const Eigen::VectorXd& y);
@@ -252,6 +262,8 @@ class VehicleSimulator {
              const SimulatorSettings& settings);
   double sumWheelLoads(const Eigen::VectorXd& y);
   RunStatus check();
+  void updatePositionOutputs();
+  void fillPositionOutputs();
 
   // What the run's end needs from the setup (solver.end, the vehicle's start and speed).
   core::End end_;
@@ -280,13 +292,16 @@ class VehicleSimulator {
   double leading_s_ = 0.0;
   bool external_active_ = false;  // wheel wrenches from settings_.wheel_wrench_source
   std::string message_;
-  Eigen::VectorXd y_scratch_, ydot_scratch_;
+  Eigen::VectorXd y_scratch_;  // the state of the outputs, at t_outputs_
+  mutable Eigen::VectorXd ydot_scratch_;
+  double t_outputs_ = 0.0;
+  mutable bool derivatives_current_ = false;  // measurement_out_ and energy_out_ are of y_scratch_
   std::vector<WheelOutput> wheel_out_;
   std::vector<WheelsetTrackOutput> wheelset_out_;
   std::vector<BodyPose> body_out_;
-  std::vector<MeasurementOutput> measurement_out_;
+  mutable std::vector<MeasurementOutput> measurement_out_;
   bool measure_ = false;  // effects.floor_acceleration_output
-  EnergyOutput energy_out_;
+  mutable EnergyOutput energy_out_;
   bool energy_ = false;              // effects.energy_output
   core::CostClock* cost_ = nullptr;  // settings.cost once built
 };

@@ -136,7 +136,7 @@ RunStatus CosimVehicle::start() {
   return s;
 }
 
-RunStatus CosimVehicle::step() {
+RunStatus CosimVehicle::step(double output_time) {
   if (!started_) {
     message_ = "cosim vehicle: Step() before Start()";
     return RunStatus::kIntegratorFailed;
@@ -155,6 +155,7 @@ RunStatus CosimVehicle::step() {
   }
   // The integrator's time is t_next (CV_NORMAL returns the interpolated state at the output time); the dense
   // output at t_next is that same state, and stays valid after a projection re-initialised there.
+  if (run != RunStatus::kRunning || t_next + 1e-9 * config_.track_step >= output_time) sim_->completeOutputs();
   sim_->interpolateAt(t_next, y_interp_);
   fillWheelStates(y_interp_, coupling_->states());
   const RunStatus ex = exchange();

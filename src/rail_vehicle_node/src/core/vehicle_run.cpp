@@ -99,7 +99,7 @@ VehicleRun::Event VehicleRun::nextCosim() {
   } else {
     if (status_ == RunStatus::kFinished) return finish(End::kFinished, core::kExitOk);
     if (options_.stop != nullptr && *options_.stop) return finish(End::kStopped, core::kExitInterrupted);
-    status_ = timed([&] { return v.step(); });
+    status_ = timed([&] { return v.step(static_cast<double>(next_output_) * output_period_); });
   }
   const double h = v.trackStep();
   for (;;) {
@@ -109,7 +109,7 @@ VehicleRun::Event VehicleRun::nextCosim() {
       return Event::kOutput;
     }
     if (options_.stop != nullptr && *options_.stop) return finish(End::kStopped, core::kExitInterrupted);
-    status_ = timed([&] { return v.step(); });
+    status_ = timed([&] { return v.step(static_cast<double>(next_output_) * output_period_); });
   }
 }
 

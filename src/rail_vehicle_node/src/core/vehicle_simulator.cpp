@@ -530,13 +530,23 @@ void VehicleSimulator::resetState(const Eigen::VectorXd& y) {
 
 void VehicleSimulator::updateOutputs() {
   y_scratch_ = integrator_->state();
-  // Kinematics and contact (through the force element) at the current state.
-  {
-    core::CostClock::Scope timing(cost_, core::CostClock::kVehicleRhs);
-    contact_data_->setExactGaps(true);  // the published gaps are the searched ones
-    computeDerivatives(model_, integrator_->time(), y_scratch_, ydot_scratch_, *data_);
-    contact_data_->setExactGaps(!skip_far_searches_);
-  }
+  t_outputs_ = integrator_->time();
+  derivatives_current_ = false;
+  completeOutputs();  // kinematics and contact at the current state, then the outputs they give
+  fillPositionOutputs();
+}
+
+// The co-simulation's check at every exchange: the kinematics and the positions the checks read; the
+// outputs that need the derivatives wait for completeOutputs (one output instant in many exchanges).
+void VehicleSimulator::updatePositionOutputs() {
+  y_scratch_ = integrator_->state();
+  t_outputs_ = integrator_->time();
+  computeKinematics(model_, y_scratch_, *data_);
+  derivatives_current_ = false;
+  fillPositionOutputs();
+}
+
+void VehicleSimulator::fillPositionOutputs() {
   rc::TrackPoint tp;
   for (std::size_t w = 0; w < wheelset_out_.size(); ++w) {
     const int body = wheelset_bodies_[w];
@@ -583,6 +593,17 @@ void VehicleSimulator::updateOutputs() {
     body_out_[b].p_in_world = k.r;
     body_out_[b].orientation = eulerParametersFromRotation(k.A);
   }
+}
+
+void VehicleSimulator::completeOutputs() const {
+  if (derivatives_current_) return;
+  derivatives_current_ = true;
+  {
+    core::CostClock::Scope timing(cost_, core::CostClock::kVehicleRhs);
+    contact_data_->setExactGaps(true);  // the published gaps are the searched ones
+    computeDerivatives(model_, t_outputs_, y_scratch_, ydot_scratch_, *data_);
+    contact_data_->setExactGaps(!skip_far_searches_);
+  }
   if (energy_) {
     core::CostClock::Scope timing(cost_, core::CostClock::kEnergyOutput);
     // From the bodies' kinematics evaluated above (multibody_dynamics.hpp).
@@ -590,7 +611,7 @@ void VehicleSimulator::updateOutputs() {
     energy_out_.potential = potentialEnergy(model_, *data_);
   }
   if (!measure_) return;
-  core::CostClock::Scope timing(cost_, core::CostClock::kFloorAccelerations);
+  core::CostClock::Scope floor_timing(cost_, core::CostClock::kFloorAccelerations);
   // Accelerations from the derivatives evaluated above: v_dot_b = [r_ddot (world); omega_dot' (body)].
   // A point s' of the body: a_P = r_ddot + A (omega_dot' x s' + omega' x (omega' x s')); the accelerometer
   // reads A^T (a_P - g).
@@ -642,7 +663,11 @@ RunStatus VehicleSimulator::check() {
     message_ = os.str();
     return RunStatus::kNonFinite;
   }
-  updateOutputs();
+  if (external_active_) {
+    updatePositionOutputs();
+  } else {
+    updateOutputs();
+  }
   // Derailment: a wheelset far off the centre line, a wheel lifted by more than the flange height, or a
   // wheel whose contact search finds no rail at all.
   for (const WheelsetTrackOutput& o : wheelset_out_) {
