@@ -262,7 +262,7 @@ class VehicleSimulator {
              const SimulatorSettings& settings);
   double sumWheelLoads(const Eigen::VectorXd& y);
   RunStatus check();
-  void updatePositionOutputs();
+  void evaluateOutputs(bool derivatives);
   void fillPositionOutputs();
 
   // What the run's end needs from the setup (solver.end, the vehicle's start and speed).

@@ -528,21 +528,20 @@ void VehicleSimulator::resetState(const Eigen::VectorXd& y) {
   updateOutputs();
 }
 
-void VehicleSimulator::updateOutputs() {
-  y_scratch_ = integrator_->state();
-  t_outputs_ = integrator_->time();
-  derivatives_current_ = false;
-  completeOutputs();  // kinematics and contact at the current state, then the outputs they give
-  fillPositionOutputs();
-}
+void VehicleSimulator::updateOutputs() { evaluateOutputs(true); }
 
-// The co-simulation's check at every exchange: the kinematics and the positions the checks read; the
-// outputs that need the derivatives wait for completeOutputs (one output instant in many exchanges).
-void VehicleSimulator::updatePositionOutputs() {
+// The outputs at the current state. Without the derivatives (the co-simulation's check at every exchange):
+// the kinematics and the positions the checks read; the rest waits for completeOutputs (one output instant
+// in many exchanges).
+void VehicleSimulator::evaluateOutputs(bool derivatives) {
   y_scratch_ = integrator_->state();
   t_outputs_ = integrator_->time();
-  computeKinematics(model_, y_scratch_, *data_);
   derivatives_current_ = false;
+  if (derivatives) {
+    completeOutputs();  // kinematics and contact, then the outputs they give
+  } else {
+    computeKinematics(model_, y_scratch_, *data_);
+  }
   fillPositionOutputs();
 }
 
@@ -663,11 +662,7 @@ RunStatus VehicleSimulator::check() {
     message_ = os.str();
     return RunStatus::kNonFinite;
   }
-  if (external_active_) {
-    updatePositionOutputs();
-  } else {
-    updateOutputs();
-  }
+  evaluateOutputs(!external_active_);
   // Derailment: a wheelset far off the centre line, a wheel lifted by more than the flange height, or a
   // wheel whose contact search finds no rail at all.
   for (const WheelsetTrackOutput& o : wheelset_out_) {
