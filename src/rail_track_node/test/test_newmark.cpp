@@ -88,11 +88,11 @@ Eigen::VectorXd rowByRowRhs(const rt::LinearSystem& sys, const rt::NewmarkState&
 
 }  // namespace
 
-// The blocked right-hand side (M and C in 6 x 6 blocks, two rows per instruction) adds each row's products
-// in the row-by-row order, so it must equal the row-by-row loop to the last bit (a result one rounding
-// away would move the chaotic flange-contact instants of a long run). Checked on a system whose size is
-// not a multiple of 6 and whose pattern is not aligned to blocks, damped and undamped, with and without
-// gravity, and on the paper track.
+// The blocked right-hand side (M and C in 6 x 6 blocks, a block row at once, in the CPU's widest vectors)
+// adds each row's products in the row-by-row order, so it must equal the row-by-row loop to the last bit
+// (a result one rounding away would move the chaotic flange-contact instants of a long run). Checked on a
+// system whose size is not a multiple of 6 and whose pattern is not aligned to blocks, damped and undamped,
+// with and without gravity, and on the paper track.
 TEST(Newmark, BlockedRightHandSideEqualsTheRowByRowProductToTheLastBit) {
   std::vector<rt::LinearSystem> systems(2);
   const int n = 6 * 97 + 5;

@@ -125,7 +125,7 @@ class NewmarkIntegrator {
   int end_dashpots_;
   std::unique_ptr<SparseCholesky> factor_;
   // M and C in 6 x 6 blocks of DOFs (block rows of 6 rows, each block stored column by column): per row the
-  // products add the same terms in the same order as a row-by-row product, two or three rows at once.
+  // products add the same terms in the same order as a row-by-row product, a block row at once.
   struct BlockRows {
     std::vector<int> start, col;  // per block row: its blocks [start[I], start[I + 1]); block column
     std::vector<double> values;   // 36 per block

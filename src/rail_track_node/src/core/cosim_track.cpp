@@ -52,6 +52,13 @@ void addClock(rail::core::CostClock& from, rail::core::CostClock& to) noexcept {
   }
 }
 
+// y += a x over n entries, compiled for AVX2 where the CPU has it and for the baseline: each entry one
+// multiply and one add either way (no fused multiply-add), so the same bits.
+__attribute__((target_clones("avx2", "default"))) void addScaledColumn(double* y, const double* x, double a,
+                                                                       int n) noexcept {
+  for (int i = 0; i < n; ++i) y[i] += a * x[i];
+}
+
 bool awaitFlag(const std::atomic<bool>& flag, bool value, std::chrono::microseconds budget) noexcept {
   const auto until = std::chrono::steady_clock::now() + budget;
   for (int i = 1;; ++i) {
@@ -1361,10 +1368,9 @@ void CosimTrack::addColumnLoads(int begin, int end) noexcept {
     const std::size_t c = static_cast<std::size_t>(col);
     const int first = std::max(im.lo[c], begin), last = std::min(im.lo[c] + im.len[c], end);
     if (first >= last) continue;
-    d_new.segment(first, last - first) +=
-        im.column_load[c] *
-        Eigen::Map<const Eigen::VectorXd>(
-            im.values.data() + c * static_cast<std::size_t>(im.window) + (first - im.lo[c]), last - first);
+    addScaledColumn(d_new.data() + first,
+                    im.values.data() + c * static_cast<std::size_t>(im.window) + (first - im.lo[c]), im.column_load[c],
+                    last - first);
   }
 }
 

@@ -1,7 +1,5 @@
 #include "rail_track_node/newmark.hpp"
 
-#include <emmintrin.h>
-
 #include <algorithm>
 #include <stdexcept>
 #include <string>
@@ -39,20 +37,65 @@ namespace {
 
 constexpr int kBlock = 6;
 
-// acc[r] += sum over the blocks [b0, b1) of A(r, j) x[j], j ascending, for the 6 rows r of a block row:
-// each lane adds its row's products one by one, as a scalar row loop would (no fused multiply-add).
-inline void addBlockRow(const int* col, const double* values, int b0, int b1, const double* x, __m128d acc[3]) {
+// The per-step loops over every DOF, each compiled twice: for AVX2 where the CPU has it (chosen once, at
+// load) and for the baseline x86-64. Each result is its own chain of multiplies and adds in a fixed order
+// (no fused multiply-add, no reordered sums), so both give the same bits; AVX2 does four lanes at once.
+#define RAIL_NEWMARK_KERNEL __attribute__((target_clones("avx2", "default")))
+
+// sum[r] += A(r, j) x[j] over the blocks [b0, b1) of a block row, j ascending, for its 6 rows r (each block
+// stored column by column). Inlined into each compiled version of its caller.
+__attribute__((always_inline)) inline void addBlockRow(const int* col, const double* values, int b0, int b1,
+                                                       const double* x, double sum[kBlock]) {
   for (int b = b0; b < b1; ++b) {
     const double* B = values + static_cast<std::ptrdiff_t>(b) * kBlock * kBlock;
     const double* xb = x + static_cast<std::ptrdiff_t>(col[b]) * kBlock;
-    for (int j = 0; j < kBlock; ++j) {
-      const __m128d xj = _mm_set1_pd(xb[j]);
-      acc[0] = _mm_add_pd(acc[0], _mm_mul_pd(_mm_loadu_pd(B + kBlock * j), xj));
-      acc[1] = _mm_add_pd(acc[1], _mm_mul_pd(_mm_loadu_pd(B + kBlock * j + 2), xj));
-      acc[2] = _mm_add_pd(acc[2], _mm_mul_pd(_mm_loadu_pd(B + kBlock * j + 4), xj));
-    }
+    for (int j = 0; j < kBlock; ++j)
+      for (int r = 0; r < kBlock; ++r) sum[r] += B[kBlock * j + r] * xb[j];
   }
 }
+
+// rhs = f + M x1 + C x2 with x1 = c0 d + c1 v + a and x2 = c2 d + v (c_blocks null: no damping, rhs = f + M
+// x1), f the gravity load g when not null. Per row, the blocks' products add in block and column order, as
+// a row-by-row product would.
+RAIL_NEWMARK_KERNEL
+void rightHandSideRows(int n, double c0, double c1, double c2, const double* d, const double* v, const double* a,
+                       const double* g, const int* m_start, const int* m_col, const double* m_values,
+                       const int* c_start, const int* c_col, const double* c_values, double* x1, double* x2,
+                       double* rhs) {
+  for (int i = 0; i < n; ++i) {
+    x1[i] = c0 * d[i] + c1 * v[i] + a[i];
+    x2[i] = c2 * d[i] + v[i];
+  }
+  const int block_rows = (n + kBlock - 1) / kBlock;
+  for (int I = 0; I < block_rows; ++I) {
+    const int i0 = I * kBlock, rows = std::min(kBlock, n - i0);
+    double sum_m[kBlock] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    if (c_values == nullptr && g != nullptr)  // the sum starts at the gravity load, as a row loop's would
+      for (int r = 0; r < rows; ++r) sum_m[r] = g[i0 + r];
+    addBlockRow(m_col, m_values, m_start[I], m_start[I + 1], x1, sum_m);
+    if (c_values == nullptr) {
+      for (int r = 0; r < rows; ++r) rhs[i0 + r] = sum_m[r];
+      continue;
+    }
+    double sum_c[kBlock] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    addBlockRow(c_col, c_values, c_start[I], c_start[I + 1], x2, sum_c);
+    for (int r = 0; r < rows; ++r) rhs[i0 + r] = (g ? g[i0 + r] : 0.0) + (sum_m[r] + sum_c[r]);
+  }
+}
+
+// a_{n+1} = c0 (d_{n+1} - d_n) - c1 v_n - a_n ;  v_{n+1} = v_n + h/2 (a_n + a_{n+1}) over [begin, end).
+RAIL_NEWMARK_KERNEL
+void completeNewmarkRows(int begin, int end, double c0, double c1, double half_h, const double* d_new, double* d,
+                         double* v, double* a) {
+  for (int i = begin; i < end; ++i) {
+    const double a_new = c0 * (d_new[i] - d[i]) - c1 * v[i] - a[i];
+    v[i] += half_h * (a[i] + a_new);
+    a[i] = a_new;
+    d[i] = d_new[i];
+  }
+}
+
+#undef RAIL_NEWMARK_KERNEL
 
 }  // namespace
 
@@ -140,40 +183,10 @@ void NewmarkIntegrator::buildRhs(const NewmarkState& st, const NodalLoads& loads
   {
     rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackRhs);
     // K_eff d_{n+1} = f_{n+1} + M (c0 d + c1 v + a) + C (c2 d + v), both products in one pass over the rows.
-    const int n = static_cast<int>(rhs_.size());
-    const double* d = st.d.data();
-    const double* v = st.v.data();
-    const double* a = st.a.data();
-    double* x1 = x1_.data();
-    double* x2 = x2_.data();
-    for (int i = 0; i < n; ++i) {
-      x1[i] = c0 * d[i] + c1 * v[i] + a[i];
-      x2[i] = c2 * d[i] + v[i];
-    }
-    const double* g = include_gravity_ ? sys_.f_gravity.data() : nullptr;
-    double* rhs = rhs_.data();
-    const int block_rows = static_cast<int>(m_blocks_.start.size()) - 1;
-    alignas(16) double sum_m[kBlock], sum_c[kBlock];
-    for (int I = 0; I < block_rows; ++I) {
-      const int i0 = I * kBlock, rows = std::min(kBlock, n - i0);
-      __m128d acc_m[3] = {_mm_setzero_pd(), _mm_setzero_pd(), _mm_setzero_pd()};
-      if (!damped_ && g != nullptr) {  // the sum starts at the gravity load, as a row loop's would
-        for (int r = 0; r < rows; ++r) sum_m[r] = g[i0 + r];
-        for (int r = rows; r < kBlock; ++r) sum_m[r] = 0.0;
-        for (int k = 0; k < 3; ++k) acc_m[k] = _mm_load_pd(sum_m + 2 * k);
-      }
-      addBlockRow(m_blocks_.col.data(), m_blocks_.values.data(), m_blocks_.start[I], m_blocks_.start[I + 1], x1, acc_m);
-      for (int k = 0; k < 3; ++k) _mm_store_pd(sum_m + 2 * k, acc_m[k]);
-      if (damped_) {
-        __m128d acc_c[3] = {_mm_setzero_pd(), _mm_setzero_pd(), _mm_setzero_pd()};
-        addBlockRow(c_blocks_.col.data(), c_blocks_.values.data(), c_blocks_.start[I], c_blocks_.start[I + 1], x2,
-                    acc_c);
-        for (int k = 0; k < 3; ++k) _mm_store_pd(sum_c + 2 * k, acc_c[k]);
-        for (int r = 0; r < rows; ++r) rhs[i0 + r] = (g ? g[i0 + r] : 0.0) + (sum_m[r] + sum_c[r]);
-      } else {
-        for (int r = 0; r < rows; ++r) rhs[i0 + r] = sum_m[r];
-      }
-    }
+    rightHandSideRows(static_cast<int>(rhs_.size()), c0, c1, c2, st.d.data(), st.v.data(), st.a.data(),
+                      include_gravity_ ? sys_.f_gravity.data() : nullptr, m_blocks_.start.data(), m_blocks_.col.data(),
+                      m_blocks_.values.data(), c_blocks_.start.data(), c_blocks_.col.data(),
+                      damped_ ? c_blocks_.values.data() : nullptr, x1_.data(), x2_.data(), rhs_.data());
     if (damped_ && cost_ != nullptr) {
       ++cost_->counts[rail::core::CostClock::kDampingProducts];
       cost_->counts[rail::core::CostClock::kEndDashpotForces] += end_dashpots_;
@@ -193,18 +206,7 @@ void NewmarkIntegrator::completeStep(NewmarkState& st) {
 void NewmarkIntegrator::completeRows(NewmarkState& st, int begin, int end) const noexcept {
   const double h = dt_;
   const double c0 = 4.0 / (h * h), c1 = 4.0 / h;
-  // a_{n+1} = c0 (d_{n+1} - d_n) - c1 v_n - a_n ;  v_{n+1} = v_n + h/2 (a_n + a_{n+1})
-  const double half_h = 0.5 * h;
-  double* d = st.d.data();
-  double* v = st.v.data();
-  double* a = st.a.data();
-  const double* d_new = d_new_.data();
-  for (int i = begin; i < end; ++i) {
-    const double a_new = c0 * (d_new[i] - d[i]) - c1 * v[i] - a[i];
-    v[i] += half_h * (a[i] + a_new);
-    a[i] = a_new;
-    d[i] = d_new[i];
-  }
+  completeNewmarkRows(begin, end, c0, c1, 0.5 * h, d_new_.data(), st.d.data(), st.v.data(), st.a.data());
 }
 
 Eigen::VectorXd solveStatic(const LinearSystem& sys, const Eigen::VectorXd& f) {
