@@ -17,6 +17,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 #include <string>
 #include <thread>
@@ -94,6 +95,7 @@ struct PathRun {
   std::vector<double> gaps;        // every 50th step (exact gaps asked for): each contact slot's penetration, m
   int moves = 0, rebuilds = 0, flange_steps = 0, refused = 0;
   long long skipped = 0;  // searches skipped by far wheel surfaces
+  long first_rows = 0;    // steps whose Newton started on the base solve's first rows
 };
 
 // split: each step as stepForces and finishStep (the run loop's order: the wrenches before the rest).
@@ -137,6 +139,7 @@ PathRun runPath(bool beside, rt::CholeskyLayout layout, long steps, bool split =
     }
   }
   r.moves = track.windowMoves();
+  r.first_rows = track.firstRowsSteps();
   r.rebuilds = track.windowRebuilds();
   for (int i = 0; i < 8; ++i)
     for (const rc::DetectionWork& d : track.contactWork(i).detection) r.skipped += d.skipped;
@@ -238,6 +241,12 @@ TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
   EXPECT_LT(db_rail, 1e-9 * peak);
   EXPECT_EQ(largestDifference(blocked.force, blocked_whole.force), 0.0);
   EXPECT_EQ(largestDifference(blocked.deflection, blocked_whole.deflection), 0.0);
+  // ... with the Newton started on the first rows of the backward pass (not after a move, when a wheel
+  // reaches a node beyond the marked ones, or when the worker was held up for 0.4 ms: so not at every step
+  // on a loaded machine), never with the solve inside the step.
+  EXPECT_GT(blocked.first_rows, 0);
+  EXPECT_GT(two.first_rows, 0);
+  EXPECT_EQ(blocked_whole.first_rows, 0);
   // Far wheel surfaces skip their searches (the default): the same forces, rails and published gaps to the
   // last bit as every surface searched at every step.
   const PathRun searched = runPath(true, rt::CholeskyLayout::kBlockedTwoParts, steps, false, false);
@@ -248,8 +257,8 @@ TEST(CosimTrackPaths, TheFastPathGivesTheReferencePathsForcesAndRails) {
   EXPECT_EQ(largestDifference(blocked.gaps, searched.gaps), 0.0);
   std::printf(
       "[ figures  ] blocked factor: forces differ by %.3g N, rail displacement by %.3g m; %lld searches "
-      "skipped\n",
-      db, db_rail, blocked.skipped);
+      "skipped; %ld steps of %ld started the Newton on the first rows\n",
+      db, db_rail, blocked.skipped, blocked.first_rows, steps);
   std::printf(
       "[ figures  ] %ld steps, %d moves (%d rebuilt), %d steps with flange contact, largest wheel force "
       "%.0f N: forces differ by %.3g N (fast) and %.3g N (simplicial in the step), rail displacement by "
@@ -368,6 +377,55 @@ TEST_P(TwoPartsLayout, SolvedOnTwoThreadsEqualsTheWholeSolve) {
   for (int repeat = 0; repeat < 20; ++repeat) {
     solveInPhasesOnTwoThreads(two, b, x_parts);
     ASSERT_EQ((x_parts - x_whole).cwiseAbs().maxCoeff(), 0.0) << "repeat " << repeat;
+  }
+}
+
+// The backward pass in two sweeps (markFirstRows): the first gives x at the marked rows of A, and the
+// second the rest, together the whole solve to the last bit; on the curve's window (blocks) and on the
+// straight's (simplicial loops). The marked rows are two wheels' worth: a rail node a quarter along the
+// left rail and one three quarters along the right, each with its neighbours.
+TEST_P(TwoPartsLayout, FirstRowsOfTheBackwardPassGiveTheirSolutionFirst) {
+  const std::unique_ptr<rt::CosimTrack> curve = curveWindowTrack();
+  const std::unique_ptr<rt::CosimTrack> straight = curveWindowTrack(straightScene());
+  for (const rt::CosimTrack* track : {curve.get(), straight.get()}) {
+    const Eigen::SparseMatrix<double> K_eff = effectiveStiffness(*track);
+    rt::SparseCholesky two(K_eff, GetParam());
+    const int n = K_eff.rows();
+    const rt::TrackMesh& mesh = track->trackWindow()->mesh();
+    std::vector<int> dofs;
+    for (int r = 0; r < 2; ++r) {
+      const int k = static_cast<int>(mesh.rail_nodes[r].size()) * (r == 0 ? 1 : 3) / 4;
+      for (int node = k - 1; node <= k + 2; ++node)
+        for (int j = 0; j < 6; ++j) {
+          const int g = mesh.dofIndex(mesh.rail_nodes[r][static_cast<std::size_t>(node)], j);
+          if (g >= 0) dofs.push_back(g);
+        }
+    }
+    two.markFirstRows(dofs.data(), static_cast<int>(dofs.size()));
+    int covered = 0;
+    for (int i = 0; i < n; ++i) covered += two.firstCovers(i);
+    for (const int g : dofs) EXPECT_TRUE(two.firstCovers(g)) << "DOF " << g;
+    // The wheels' rows and their ancestors: a minor share of the rows, else the first sweep would gain nothing.
+    EXPECT_LT(covered, n / 2);
+    const Eigen::VectorXd b = Eigen::VectorXd::Random(n) * 1e5;
+    Eigen::VectorXd x_whole(n), x = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::quiet_NaN());
+    two.solve(b, x_whole);
+    two.forwardPart(0, b);
+    two.forwardPart(1, b);
+    two.solveSeparator(b, x);
+    two.backwardPart(0, x, rt::SparseCholesky::Sweep::kFirst);
+    two.backwardPart(1, x, rt::SparseCholesky::Sweep::kFirst);
+    int differ = 0;
+    for (const int g : dofs) differ += !(x(g) == x_whole(g));
+    EXPECT_EQ(differ, 0) << "marked DOFs whose x differs after the first sweeps";
+    two.backwardPart(0, x, rt::SparseCholesky::Sweep::kRest);
+    two.backwardPart(1, x, rt::SparseCholesky::Sweep::kRest);
+    differ = 0;
+    for (int i = 0; i < n; ++i) differ += !(x(i) == x_whole(i));
+    EXPECT_EQ(differ, 0) << "rows whose x differs from the whole solve";
+    std::printf("[ figures  ] %s, %s: %zu DOFs marked, %d of %d rows solved first\n",
+                rt::choleskyLayoutName(GetParam()), track == curve.get() ? "curve" : "straight", dofs.size(), covered,
+                n);
   }
 }
 

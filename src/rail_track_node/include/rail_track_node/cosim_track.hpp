@@ -203,6 +203,9 @@ class CosimTrack {
   /// without reaching the tolerance (contact points within 1e-12 m, forces within 1e-9 relative).
   long newtonIterations() const;
   long newtonUnconverged() const;
+  /// kSemiImplicit with the solve beside and a factor in two parts: steps whose Newton started once the
+  /// base solve's backward rows it reads were done, before the rest of that pass.
+  long firstRowsSteps() const { return first_rows_steps_; }
 
   const rail::contact::TrackGeometry& geometry() const { return *geometry_; }
   const rail::contact::WheelContactModel& contactModel() const { return *contact_model_; }
@@ -302,6 +305,13 @@ class CosimTrack {
   void startBaseSolve(bool finish) noexcept;
   void awaitCompletion() noexcept;
   void awaitBaseSolve() noexcept;
+  // The Newton reads the base solve at its links' DOFs only. With a factor in two parts, the worker solves
+  // first the backward rows those DOFs read (marked by markFirstRows() from the last step's links and their
+  // neighbouring rail nodes), says so (first_ready_), then the other rows; awaitFirstRows() waits for the
+  // first ones when they cover every link DOF (false: the caller waits for the whole solve), and finishStep
+  // for the rest before the completion.
+  void markFirstRows() noexcept;
+  bool awaitFirstRows() noexcept;
   void takeWorkerCost() noexcept;
   void fillHangingLoads() noexcept;
   void sizeHangingLoads();  // set-up and window moves
@@ -363,12 +373,18 @@ class CosimTrack {
   // worker_job_, worker_completed_ and worker_done_ as each side spins on them before it sleeps (no lock).
   std::atomic<bool> worker_posted_{false}, worker_completed_flag_{false}, worker_done_flag_{false};
   rail::core::CostClock worker_cost_;
-  // A base solve shared by both threads (CholeskyLayout::kSimplicialTwoParts): the worker opens phase 0
-  // (forward) after the right-hand side and phase 1 (backward) after the separator (solve_stage_ = 1, 2);
-  // the second part of each phase goes to whichever thread claims it first.
+  // A base solve shared by both threads (factor in two parts): the worker opens phase 0 (forward) after the
+  // right-hand side and phase 1 (backward, or its first rows) after the separator (solve_stage_ = 1, 2), and
+  // with first rows phase 2 (the other rows) once they are done (3); the second part of each phase goes to
+  // whichever thread claims it first.
   bool split_solve_ = false;
   std::atomic<int> solve_stage_{0};
-  std::atomic<bool> part_claimed_[2] = {false, false}, part_done_[2] = {false, false};
+  std::atomic<bool> part_claimed_[3] = {false, false, false}, part_done_[3] = {false, false, false};
+  std::vector<int> first_dofs_, first_candidate_;  // marked in the factor; this step's (both preallocated)
+  bool first_marked_ = false;                      // first_dofs_ are marked in the current factor
+  bool solve_first_ = false;                       // the posted base solve solves the marked rows first
+  std::atomic<bool> first_ready_{false};
+  long first_rows_steps_ = 0;
   rail::core::CostClock completion_cost_;  // the worker's completion of a step (awaitCompletion takes it)
   // Influence columns of the rail nodes the links reached (Implicit::pending), solved by both threads: each
   // takes the next slot (column_next_) until none is left; the worker joins once its base solve is done.

@@ -91,6 +91,11 @@ class NewmarkIntegrator {
   void forwardPart(int part) noexcept { factor_->forwardPart(part, rhs_); }
   void solveSeparator() noexcept { factor_->solveSeparator(rhs_, d_new_); }
   void backwardPart(int part) noexcept { factor_->backwardPart(part, d_new_); }
+  /// The backward part in two sweeps: the rows marked by markFirstRows() (DOFs whose stepDisplacement() a
+  /// caller needs first), then the others (SparseCholesky::markFirstRows). No allocation.
+  void backwardPart(int part, SparseCholesky::Sweep sweep) noexcept { factor_->backwardPart(part, d_new_, sweep); }
+  void markFirstRows(const int* dofs, int count) noexcept { factor_->markFirstRows(dofs, count); }
+  bool firstCovers(int dof) const noexcept { return factor_->firstCovers(dof); }
   /// The right-hand side of the last buildRhs() or solveStep() (N, N m over the free DOFs).
   const Eigen::VectorXd& rightHandSide() const { return rhs_; }
   /// d_{n+1} of the last solveStep() (m, rad over the free DOFs), writable.

@@ -62,6 +62,17 @@ class SparseCholesky {
   void forwardPart(int part, const Eigen::VectorXd& b) noexcept;
   void solveSeparator(const Eigen::VectorXd& b, Eigen::VectorXd& x) noexcept;
   void backwardPart(int part, Eigen::VectorXd& x) noexcept;
+  /// kSimplicialTwoParts, kBlockedTwoParts: the backward pass of a part in two sweeps, for a caller that needs
+  /// x at a few rows early. markFirstRows() marks the rows (blocks) of the parts whose backward results those
+  /// rows of A read: theirs and their ancestors in the elimination tree. backwardPart(part, x, kFirst) then
+  /// solves only the marked ones, which gives x at the given rows; backwardPart(part, x, kRest) the others.
+  /// kFirst then kRest equals backwardPart(part, x) to the last bit (each row from the same values by the
+  /// same operations). markFirstRows() allocates nothing; call it while no solve runs. firstCovers(i): x(i)
+  /// is final after the kFirst sweeps (marked, or in the separator).
+  enum class Sweep { kAll, kFirst, kRest };
+  void backwardPart(int part, Eigen::VectorXd& x, Sweep sweep) noexcept;
+  void markFirstRows(const int* rows_of_a, int count) noexcept;
+  bool firstCovers(int row_of_a) const noexcept;
   /// Rows of the two parts and of the separator (0 for the other layouts).
   int partRows(int part) const;
   int separatorRows() const;
@@ -79,12 +90,12 @@ class SparseCholesky {
   template <int K>
   static void unitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x, int lane);
   static void forwardRows(Impl& s, const Eigen::VectorXd& b, int begin, int end) noexcept;
-  static void backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int end) noexcept;
+  static void backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int end, Sweep sweep = Sweep::kAll) noexcept;
   static void buildBlocks(Impl& s);
   template <int K>
   static void blockedUnitColumns(Impl& s, const int* unit, Eigen::MatrixXd& x, int lane);
   static void forwardBlocks(Impl& s, int region, const Eigen::VectorXd& b) noexcept;
-  static void backwardBlocks(Impl& s, int region, Eigen::VectorXd& x) noexcept;
+  static void backwardBlocks(Impl& s, int region, Eigen::VectorXd& x, Sweep sweep = Sweep::kAll) noexcept;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -352,6 +352,8 @@ CosimTrack::CosimTrack(CosimTrackSetup setup, const CosimTrackOptions& options)
   im.group_index.assign(static_cast<std::size_t>(max_links), 0);
   im.slot_generation.assign(static_cast<std::size_t>(im.slots), 0);
   im.keys = max_links;
+  first_dofs_.reserve(static_cast<std::size_t>(max_links) * 4 * kNodeDofs);  // 4 nodes a link (markFirstRows)
+  first_candidate_.reserve(first_dofs_.capacity());
   im.pair_blocks.assign(static_cast<std::size_t>(max_links) * static_cast<std::size_t>(max_links),
                         Implicit::PairBlock());
   im.polach = contact_model_->options().polach;
@@ -399,16 +401,34 @@ void CosimTrack::solveBase(bool shared) noexcept {
   sharePart(0);
   ig.solveSeparator();
   solve_stage_.store(2, std::memory_order_release);
+  if (solve_first_) {
+    ig.backwardPart(0, SparseCholesky::Sweep::kFirst);
+    sharePart(1);
+    first_ready_.store(true, std::memory_order_release);
+    solve_stage_.store(3, std::memory_order_release);
+    ig.backwardPart(0, SparseCholesky::Sweep::kRest);
+    sharePart(2);
+    return;
+  }
   ig.backwardPart(0);
   sharePart(1);
 }
 
-// Solves the second part of a phase (0 forward, 1 backward) if no thread has claimed it yet. True if it did.
+// Solves the second part of a phase (0 forward, 1 backward or its first rows, 2 the backward's other rows)
+// if no thread has claimed it yet. True if it did.
 bool CosimTrack::claimSecondPart(int phase) noexcept {
   const std::size_t k = static_cast<std::size_t>(phase);
   if (part_claimed_[k].load(std::memory_order_relaxed) || part_claimed_[k].exchange(true, std::memory_order_acq_rel))
     return false;
-  phase == 0 ? integ().forwardPart(1) : integ().backwardPart(1);
+  NewmarkIntegrator& ig = integ();
+  if (phase == 0)
+    ig.forwardPart(1);
+  else if (phase == 2)
+    ig.backwardPart(1, SparseCholesky::Sweep::kRest);
+  else if (solve_first_)
+    ig.backwardPart(1, SparseCholesky::Sweep::kFirst);
+  else
+    ig.backwardPart(1);
   part_done_[k].store(true, std::memory_order_release);
   return true;
 }
@@ -508,9 +528,11 @@ void CosimTrack::startBaseSolve(bool finish) noexcept {
     worker_completed_ = false;
     worker_completed_flag_.store(false, std::memory_order_relaxed);
     worker_finish_ = finish;
+    solve_first_ = split_solve_ && first_marked_;
+    first_ready_.store(false, std::memory_order_relaxed);
     lower_completed_.store(false, std::memory_order_relaxed);
     solve_stage_.store(0, std::memory_order_relaxed);
-    for (std::size_t k = 0; k < 2; ++k) {
+    for (std::size_t k = 0; k < 3; ++k) {
       part_claimed_[k].store(false, std::memory_order_relaxed);
       part_done_[k].store(false, std::memory_order_relaxed);
     }
@@ -558,6 +580,45 @@ void CosimTrack::awaitBaseSolve() noexcept {
   takeWorkerCost();
 }
 
+// The DOFs of the links' element nodes and of the nodes either side (the next step's links usually lie on
+// the same elements or their neighbours), marked in the factor when they differ from the marked ones.
+void CosimTrack::markFirstRows() noexcept {
+  const Implicit& im = *implicit_;
+  const TrackMesh& mesh = feMesh();
+  first_candidate_.clear();
+  for (const Implicit::Link& L : im.links) {
+    const int nodes = static_cast<int>(mesh.rail_nodes[L.rail].size());
+    for (int node = std::max(0, L.element - 1); node <= std::min(nodes - 1, L.element + 2); ++node)
+      for (int j = 0; j < kNodeDofs; ++j) {
+        const int g = mesh.dofIndex(mesh.rail_nodes[L.rail][static_cast<std::size_t>(node)], j);
+        if (g >= 0 && first_candidate_.size() < first_candidate_.capacity()) first_candidate_.push_back(g);
+      }
+  }
+  if (first_candidate_.empty() || (first_marked_ && first_candidate_ == first_dofs_)) return;
+  first_dofs_.swap(first_candidate_);
+  integ().markFirstRows(first_dofs_.data(), static_cast<int>(first_dofs_.size()));
+  first_marked_ = true;
+}
+
+bool CosimTrack::awaitFirstRows() noexcept {
+  if (base_ != BaseSolve::kRunning || !solve_first_ || implicit_->links.empty()) return false;
+  for (const Implicit::Link& L : implicit_->links)
+    for (const int g : L.dofs)
+      if (g >= 0 && !integ().firstCovers(g)) return false;
+  rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolveWait);
+  auto until = std::chrono::steady_clock::now() + kSolveSpin;
+  for (int i = 1; !first_ready_.load(std::memory_order_acquire); ++i) {
+    if (helpBaseSolve()) {
+      until = std::chrono::steady_clock::now() + kSolveSpin;
+      continue;
+    }
+    __builtin_ia32_pause();
+    if (i % 32 == 0 && std::chrono::steady_clock::now() > until) return false;
+  }
+  ++first_rows_steps_;
+  return true;
+}
+
 // Adds the worker's clock to cost_; called while the worker waits for its next job.
 void CosimTrack::takeWorkerCost() noexcept {
   if (cost_ != nullptr && solve_beside_) addClock(worker_cost_, *cost_);
@@ -573,6 +634,7 @@ void CosimTrack::buildRails() { buildRailLayout(feMesh(), rail_dofs_, deformatio
 // exact for its local node; a move that refactorised drops them all (they are solved again when a wheel
 // needs them). Allocates.
 void CosimTrack::onWindowMove() {
+  first_marked_ = false;  // another factor, or other DOF numbers
   sizeHangingLoads();
   buildRails();
   rails_current_ = false;
@@ -769,6 +831,11 @@ void CosimTrack::finishStep() noexcept {
         break;
       case CosimCoupling::kSemiImplicit:
         if (solve_beside_) {
+          if (base_ == BaseSolve::kRunning) {  // the Newton started on the first rows: the rest of the pass
+            awaitBaseSolve();
+            base_ = BaseSolve::kNone;
+          }
+          if (split_solve_) markFirstRows();
           // Both threads complete this step, half of the DOFs each; the worker then solves the next base step.
           startBaseSolve(true);
           const auto t0 = std::chrono::steady_clock::now();
@@ -992,9 +1059,11 @@ void CosimTrack::implicitCorrection(const cc::WheelStateFrame& states, cc::Wrenc
     gatherLinks(states);
     buildInfluence();
   }
-  awaitBaseSolve();
-  if (base_ != BaseSolve::kReady) solveBase();
-  base_ = BaseSolve::kNone;
+  if (!(columns_beside_ && awaitFirstRows())) {
+    awaitBaseSolve();
+    if (base_ != BaseSolve::kReady) solveBase();
+    base_ = BaseSolve::kNone;
+  }
   ForcesTime timing(contact_cost_);
   if (!columns_beside_) {
     gatherLinks(states);

@@ -62,6 +62,9 @@ struct SparseCholesky::Impl {
   // (a straight track's factor, whose planes' DOFs are partly uncoupled): then the simplicial loops solve
   // the same factor without its zeros.
   bool blocked = false;
+  // Two parts: the rows (blocked: the blocks) that backwardPart's kFirst sweep solves (markFirstRows).
+  std::vector<char> first;
+  std::vector<int> block_of_row;  // kBlockedTwoParts solved in blocks: the block of each row of P A P'
 };
 
 namespace {
@@ -148,6 +151,11 @@ void SparseCholesky::buildBlocks(Impl& s) {
     s.block_value = {};
     return;
   }
+  s.block_of_row.assign(static_cast<std::size_t>(s.n), 0);
+  for (std::size_t k = 0; k < s.blocks.size(); ++k)
+    for (int i = 0; i < s.blocks[k].cols; ++i)
+      s.block_of_row[static_cast<std::size_t>(s.blocks[k].first + i)] = static_cast<int>(k);
+  s.first.assign(s.blocks.size(), 0);
   s.block_end[1] = std::max(s.block_end[1], s.block_end[0]);
   s.block_end[2] = std::max(s.block_end[2], s.block_end[1]);
   const int separator = s.n - s.part_end[1];
@@ -311,6 +319,7 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& A_in, Cholesky
     s.inverse.assign(static_cast<std::size_t>(s.n), 0);
     for (int j = 0; j < s.n; ++j) s.inverse[static_cast<std::size_t>(s.perm[static_cast<std::size_t>(j)])] = j;
     for (auto& y : s.y_many) y.assign(static_cast<std::size_t>(s.n) * kMaxUnitColumns, 0.0);
+    if (two_parts) s.first.assign(static_cast<std::size_t>(s.n), 0);
     if (!given.empty()) {
       // The parts must not meet in L: no row of part 1 reads a column of part 0.
       for (int i = s.part_end[0]; i < s.part_end[1]; ++i)
@@ -470,15 +479,19 @@ void SparseCholesky::forwardBlocks(Impl& s, int region, const Eigen::VectorXd& b
 
 // kBlockedTwoParts, L' z = y over the rows of one region, blocks descending (the rows below a block are
 // solved: its own region's and the separator's), then x = P' z over those rows.
-void SparseCholesky::backwardBlocks(Impl& s, int region, Eigen::VectorXd& x) noexcept {
+void SparseCholesky::backwardBlocks(Impl& s, int region, Eigen::VectorXd& x, Sweep sweep) noexcept {
   const int row_begin = region == 0 ? 0 : s.part_end[region - 1];
   const int row_end = region == 2 ? s.n : s.part_end[region];
+  const char* marked = sweep == Sweep::kAll ? nullptr : s.first.data();
+  const char wanted = sweep == Sweep::kFirst ? 1 : 0;
+  const int* perm = s.perm.data();
   double* y = s.y.data();
   double* u = s.scratch[region].data();
   double* t = u + s.max_cols;
   const int* block_row = s.block_row.data();
   const int k_begin = region == 0 ? 0 : s.block_end[region - 1], k_end = s.block_end[region];
   for (int k = k_end - 1; k >= k_begin; --k) {
+    if (marked != nullptr && marked[k] != wanted) continue;
     prefetchBlock(s, k - kPrefetchAhead, k_begin, k_end);
     const Impl::Block& blk = s.blocks[static_cast<std::size_t>(k)];
     const int nc = blk.cols, nb = blk.below;
@@ -510,9 +523,11 @@ void SparseCholesky::backwardBlocks(Impl& s, int region, Eigen::VectorXd& x) noe
       yk[i] = sum0 + sum1;
       inverse += nc - i;
     }
+    if (marked != nullptr)
+      for (int i = 0; i < nc; ++i) x[perm[blk.first + i]] = yk[i];
   }
-  const int* perm = s.perm.data();
-  for (int i = row_begin; i < row_end; ++i) x[perm[i]] = y[i];
+  if (marked == nullptr)
+    for (int i = row_begin; i < row_end; ++i) x[perm[i]] = y[i];
 }
 
 // L y = P b over rows [begin, end), each unknown a dot product with its row (rows before begin that it reads
@@ -531,15 +546,25 @@ void SparseCholesky::forwardRows(Impl& s, const Eigen::VectorXd& b, int begin, i
 
 // L' z = y over rows [begin, end), descending, each a dot product with its column (rows after it that it
 // reads are solved); then x = P' z over those rows.
-void SparseCholesky::backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int end) noexcept {
+void SparseCholesky::backwardRows(Impl& s, Eigen::VectorXd& x, int begin, int end, Sweep sweep) noexcept {
   const int* perm = s.perm.data();
   const int* start = s.col_start.data();
   const int* row = s.row.data();
   const double* value = s.value.data();
   double* y = s.y.data();
-  for (int j = end - 1; j >= begin; --j)
+  if (sweep == Sweep::kAll) {
+    for (int j = end - 1; j >= begin; --j)
+      y[j] = minusDot(y[j], value, row, start[j] + 1, start[j + 1], y) * value[start[j]];
+    for (int k = begin; k < end; ++k) x[perm[k]] = y[k];
+    return;
+  }
+  const char* marked = s.first.data();
+  const char wanted = sweep == Sweep::kFirst ? 1 : 0;
+  for (int j = end - 1; j >= begin; --j) {
+    if (marked[j] != wanted) continue;
     y[j] = minusDot(y[j], value, row, start[j] + 1, start[j + 1], y) * value[start[j]];
-  for (int k = begin; k < end; ++k) x[perm[k]] = y[k];
+    x[perm[j]] = y[j];
+  }
 }
 
 void SparseCholesky::forwardPart(int part, const Eigen::VectorXd& b) noexcept {
@@ -559,10 +584,48 @@ void SparseCholesky::solveSeparator(const Eigen::VectorXd& b, Eigen::VectorXd& x
   backwardRows(s, x, s.part_end[1], s.n);
 }
 
-void SparseCholesky::backwardPart(int part, Eigen::VectorXd& x) noexcept {
+void SparseCholesky::backwardPart(int part, Eigen::VectorXd& x) noexcept { backwardPart(part, x, Sweep::kAll); }
+
+void SparseCholesky::backwardPart(int part, Eigen::VectorXd& x, Sweep sweep) noexcept {
   Impl& s = *impl_;
-  if (s.blocked) return backwardBlocks(s, part, x);
-  backwardRows(s, x, part == 0 ? 0 : s.part_end[0], s.part_end[part]);
+  if (s.blocked) return backwardBlocks(s, part, x, sweep);
+  backwardRows(s, x, part == 0 ? 0 : s.part_end[0], s.part_end[part], sweep);
+}
+
+// A row's (block's) backward result reads those of the rows below it in its column of L (its block's rows
+// below): marked in one ascending pass, each marked row (block) marks them.
+void SparseCholesky::markFirstRows(const int* rows_of_a, int count) noexcept {
+  Impl& s = *impl_;
+  if (s.first.empty()) return;
+  std::fill(s.first.begin(), s.first.end(), 0);
+  char* marked = s.first.data();
+  if (s.blocked) {
+    for (int c = 0; c < count; ++c)
+      if (rows_of_a[c] >= 0 && rows_of_a[c] < s.n)
+        marked[s.block_of_row[static_cast<std::size_t>(s.inverse[static_cast<std::size_t>(rows_of_a[c])])]] = 1;
+    for (std::size_t k = 0; k < s.blocks.size(); ++k) {
+      if (!marked[k]) continue;
+      const Impl::Block& blk = s.blocks[k];
+      for (int i = 0; i < blk.below; ++i)
+        marked[s.block_of_row[static_cast<std::size_t>(s.block_row[static_cast<std::size_t>(blk.row_at + i)])]] = 1;
+    }
+    return;
+  }
+  for (int c = 0; c < count; ++c)
+    if (rows_of_a[c] >= 0 && rows_of_a[c] < s.n) marked[s.inverse[static_cast<std::size_t>(rows_of_a[c])]] = 1;
+  for (int j = 0; j < s.n; ++j) {
+    if (!marked[j]) continue;
+    for (int q = s.col_start[static_cast<std::size_t>(j)] + 1; q < s.col_start[static_cast<std::size_t>(j) + 1]; ++q)
+      marked[s.row[static_cast<std::size_t>(q)]] = 1;
+  }
+}
+
+bool SparseCholesky::firstCovers(int row_of_a) const noexcept {
+  const Impl& s = *impl_;
+  if (s.first.empty() || row_of_a < 0 || row_of_a >= s.n) return false;
+  const int i = s.inverse[static_cast<std::size_t>(row_of_a)];
+  if (i >= s.part_end[1]) return true;  // the separator: solved before both parts
+  return s.first[static_cast<std::size_t>(s.blocked ? s.block_of_row[static_cast<std::size_t>(i)] : i)] != 0;
 }
 
 int SparseCholesky::partRows(int part) const {
