@@ -300,6 +300,7 @@ class CosimTrack {
   bool claimSecondPart(int phase) noexcept;
   void sharePart(int phase) noexcept;
   bool helpBaseSolve() noexcept;
+  bool awaitHelping(const std::atomic<bool>& flag) noexcept;
   // The loop's thread completes the DOFs below, the worker the rest (the DOF count changes only at a move).
   int completionSplit() const noexcept { return static_cast<int>(st().d.size()) / 2; }
   void startBaseSolve(bool finish) noexcept;

@@ -559,20 +559,10 @@ void CosimTrack::awaitBaseSolve() noexcept {
   if (base_ != BaseSolve::kRunning) return;
   {
     rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolveWait);
-    if (split_solve_) {
-      // Awake, taking a part of the solve when one is open, for kSolveSpin after the last part taken.
-      auto until = std::chrono::steady_clock::now() + kSolveSpin;
-      for (int i = 1; !worker_done_flag_.load(std::memory_order_acquire); ++i) {
-        if (helpBaseSolve()) {
-          until = std::chrono::steady_clock::now() + kSolveSpin;
-          continue;
-        }
-        __builtin_ia32_pause();
-        if (i % 32 == 0 && std::chrono::steady_clock::now() > until) break;
-      }
-    } else {
+    if (split_solve_)
+      awaitHelping(worker_done_flag_);
+    else
       awaitFlag(worker_done_flag_, true, kSolveSpin);
-    }
     std::unique_lock<std::mutex> lock(worker_mutex_);
     worker_cv_.wait(lock, [this] { return worker_done_; });
   }
@@ -606,8 +596,16 @@ bool CosimTrack::awaitFirstRows() noexcept {
     for (const int g : L.dofs)
       if (g >= 0 && !integ().firstCovers(g)) return false;
   rail::core::CostClock::Scope timing(cost_, rail::core::CostClock::kTrackSolveWait);
+  if (!awaitHelping(first_ready_)) return false;
+  ++first_rows_steps_;
+  return true;
+}
+
+// Awake until flag is set, taking a part of the base solve when one is open, for kSolveSpin after the last
+// part taken. True if the flag was set.
+bool CosimTrack::awaitHelping(const std::atomic<bool>& flag) noexcept {
   auto until = std::chrono::steady_clock::now() + kSolveSpin;
-  for (int i = 1; !first_ready_.load(std::memory_order_acquire); ++i) {
+  for (int i = 1; !flag.load(std::memory_order_acquire); ++i) {
     if (helpBaseSolve()) {
       until = std::chrono::steady_clock::now() + kSolveSpin;
       continue;
@@ -615,7 +613,6 @@ bool CosimTrack::awaitFirstRows() noexcept {
     __builtin_ia32_pause();
     if (i % 32 == 0 && std::chrono::steady_clock::now() > until) return false;
   }
-  ++first_rows_steps_;
   return true;
 }
 
